@@ -1,0 +1,92 @@
+#include "facets/beam.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace glint {
+namespace {
+// ρ/w at which 2P/(πw²)·exp(−2ρ²/w²) has fallen to 1e-15 of its peak: √(ln(1e15)/2).
+const double kGaussianReach = std::sqrt(std::log(1e15) / 2.0);
+}  // namespace
+
+double Beam::reachFactor() const { return profile == BeamProfile::Gaussian ? kGaussianReach : 1.0; }
+
+double Beam::radiusAt(double z_m) const {
+  const double spread = 0.5 * divergence_rad * std::max(z_m, 0.0);
+  return std::hypot(radius_m, spread);
+}
+
+double Beam::peakIrradiance() const {
+  const double area = kPi * radius_m * radius_m;
+  return profile == BeamProfile::Gaussian ? 2.0 * power_w / area : power_w / area;
+}
+
+Beam::Sample Beam::at(const Vec3& x_m) const {
+  const Vec3 rel = x_m - origin_m;
+  const double z = glm::dot(rel, direction);
+  if (z < 0.0) return {0.0, -direction};
+  const Vec3 radial = rel - z * direction;
+  const double rho2 = glm::dot(radial, radial);
+  const double r = radiusAt(z);
+  const double reach = reachFactor() * r;
+  if (rho2 > reach * reach) return {0.0, -direction};
+
+  const double r2 = r * r;
+  double e = 0.0;
+  if (profile == BeamProfile::Gaussian) {
+    e = 2.0 * power_w / (kPi * r2) * std::exp(-2.0 * rho2 / r2);
+  } else {
+    e = power_w / (kPi * r2);
+  }
+  if (divergence_rad == 0.0) return {e, -direction};
+  const double half = 0.5 * divergence_rad;
+  const Vec3 ray = direction + radial * (z * half * half / r2);
+  return {e, -glm::normalize(ray)};
+}
+
+double Beam::maxIrradianceInBall(const Vec3& center_m, double radius_m_ball) const {
+  const Vec3 rel = center_m - origin_m;
+  const double zc = glm::dot(rel, direction);
+  if (zc + radius_m_ball < 0.0) return 0.0;
+  const double rho_c = glm::length(rel - zc * direction);
+  const double rho_min = std::max(rho_c - radius_m_ball, 0.0);
+  // The beam is narrowest (brightest) at the near end of the ball and widest at the far end;
+  // combining the two extremes bounds every point in between.
+  const double r_near = radiusAt(zc - radius_m_ball);
+  const double r_far = radiusAt(zc + radius_m_ball);
+  if (rho_min > reachFactor() * r_far) return 0.0;
+  const double area_near = kPi * r_near * r_near;
+  if (profile == BeamProfile::Gaussian) {
+    return 2.0 * power_w / area_near * std::exp(-2.0 * rho_min * rho_min / (r_far * r_far));
+  }
+  return power_w / area_near;
+}
+
+bool Beam::edgeMayCrossBall(const Vec3& center_m, double radius_m_ball) const {
+  const Vec3 rel = center_m - origin_m;
+  const double zc = glm::dot(rel, direction);
+  if (zc - radius_m_ball < 0.0 && zc + radius_m_ball >= 0.0) return true;
+  if (profile != BeamProfile::FlatTop) return false;
+  const double rho_c = glm::length(rel - zc * direction);
+  const double r_near = radiusAt(zc - radius_m_ball);
+  const double r_far = radiusAt(zc + radius_m_ball);
+  return rho_c - radius_m_ball <= r_far && rho_c + radius_m_ball > r_near;
+}
+
+double Beam::directionSpreadInBall(double radius_m_ball) const {
+  if (divergence_rad == 0.0) return 0.0;
+  // The ray is dir + ρ⃗ k(z) with k = z h² / r(z)², h = φ/2. Across the ball ρ⃗ moves by at most
+  // its radius (k ≤ h / 2r₀) and k by at most |dk/dz| ≤ h² / r(z)² per metre, times ρ ≤ reach·r(z).
+  // The chord between the two unnormalised rays bounds the angle up to a factor π/2.
+  const double h = 0.5 * divergence_rad;
+  const double tilt_rate = h / (2.0 * radius_m) + reachFactor() * h * h / radius_m;
+  return 0.5 * kPi * radius_m_ball * tilt_rate;
+}
+
+Beam Beam::relativeTo(const Vec3& frame_origin_m) const {
+  Beam local = *this;
+  local.origin_m = origin_m - frame_origin_m;
+  return local;
+}
+
+}  // namespace glint

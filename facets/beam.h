@@ -1,0 +1,69 @@
+#pragma once
+/// @file
+/// @brief The laser beam: where it is, how much irradiance it puts on a surface point, and
+/// bounds of both over a ball (for culling and the contribution bound).
+
+#include "facets/vec3.h"
+
+namespace glint {
+
+/// @brief Transverse irradiance profile of the beam.
+enum class BeamProfile {
+  FlatTop,   ///< uniform P / (π a²) inside radius a, 0 outside
+  Gaussian,  ///< 2P / (π w²) · exp(−2ρ² / w²), w the 1/e² radius
+};
+
+/// @brief A beam along the ray from @c origin_m in @c direction, as in PHYSICS.md.
+///
+/// The radius grows with the distance z along the axis as r(z) = √(r₀² + (z φ/2)²) with φ the
+/// full divergence angle: the beam-diameter law ANSI Z136.1 uses for the nominal hazard zone
+/// (D_L = √(a² + r²φ²)). Power is conserved, so irradiance falls as 1/r(z)². Rays of a
+/// diverging beam tilt away from the axis in proportion to their offset, the tilt of that
+/// law's wavefront: dr/dz · ρ / r.
+///
+/// A Gaussian beam is truncated where it falls below 1e-15 of its on-axis value, so that
+/// "outside the beam" means exactly zero both for evaluation and for culling.
+struct Beam {
+  Vec3 origin_m{0.0};             ///< laser position (m)
+  Vec3 direction{1.0, 0.0, 0.0};  ///< unit propagation direction
+  double power_w = 1.0;           ///< total beam power (W), > 0
+  BeamProfile profile = BeamProfile::FlatTop;
+  double radius_m = 1.0;        ///< a (flat top) or w (Gaussian) at the laser, > 0
+  double divergence_rad = 0.0;  ///< full-angle divergence φ, ≥ 0; 0 is collimated
+
+  /// @brief Irradiance on a plane perpendicular to the beam (W/m²), and the unit vector from
+  /// the point toward the laser along the local ray (ωi).
+  struct Sample {
+    double irradiance_w_m2;
+    Vec3 toward_laser;
+  };
+
+  /// @brief The beam at point @p x_m. Points behind the laser (z < 0) get 0.
+  [[nodiscard]] Sample at(const Vec3& x_m) const;
+
+  /// @brief Beam radius parameter (a or w) at distance @p z_m ≥ 0 along the axis.
+  [[nodiscard]] double radiusAt(double z_m) const;
+
+  /// @brief Irradiance on the axis at the laser: P / (π a²) or 2P / (π w²).
+  [[nodiscard]] double peakIrradiance() const;
+
+  /// @brief An upper bound of the irradiance over the ball (@p center_m, @p radius_m); 0 when
+  /// no point of the ball is lit.
+  [[nodiscard]] double maxIrradianceInBall(const Vec3& center_m, double radius_m) const;
+
+  /// @brief True when a discontinuity of the beam (a flat-top edge, or the laser's own plane)
+  /// may pass through the ball, so that samples inside it cannot be trusted to be smooth.
+  [[nodiscard]] bool edgeMayCrossBall(const Vec3& center_m, double radius_m) const;
+
+  /// @brief An upper bound, in radians, of the angle between ωi at the centre of a ball of
+  /// radius @p radius_m and ωi anywhere in it (0 for a collimated beam).
+  [[nodiscard]] double directionSpreadInBall(double radius_m) const;
+
+  /// @brief This beam seen from a frame whose origin sits at @p frame_origin_m.
+  [[nodiscard]] Beam relativeTo(const Vec3& frame_origin_m) const;
+
+ private:
+  [[nodiscard]] double reachFactor() const;
+};
+
+}  // namespace glint

@@ -1,0 +1,368 @@
+#include "facets/integrator.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "facets/detail/patch_models.h"
+#include "facets/sum.h"
+
+namespace glint {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// A leaf of one observer's refinement: a sub-facet, its own centre estimate and, once
+// refined, the estimates of its four children (whose positions split() regenerates on demand,
+// which is cheaper than storing them).
+//
+// A leaf's error is accounted in one of two ways. Resolved leaves with children (their
+// samples resolve a smooth integrand) contribute their signed change ΔE = E'_O − E_O; the
+// observer's error estimate takes |Σ ΔE|, the change of the total under one more level, in
+// which the alternating midpoint errors across a resolved lobe cancel as they do in the true
+// total. Every other leaf contributes a magnitude: its bound U until it has children, then
+// max(|ΔE|, U_unresolved), U_unresolved bounding the terms its samples may have missed. A resolved
+// leaf whose |ΔE| is negligible even summed over every leaf also counts as a magnitude: it
+// needs no credit for cancellation, and the level-by-level sweep of the signed leaves (see
+// HeapEntry) is spared the places that do not matter.
+struct Leaf {
+  SubFacet facet;
+  double estimate = 0.0;    // E_O at this facet's centre
+  double refined = 0.0;     // Σ E_On of the children, once has_children
+  double upper = 0.0;       // bound of the facet's true contribution (+∞ if unbounded)
+  double unresolved = 0.0;  // bound of the terms its samples do not resolve (0: resolved)
+  double error = 0.0;       // magnitude used for priority (and for the sum if not signed)
+  std::array<double, 4> child_estimate{};
+  std::array<double, 4> child_upper{};
+  std::array<double, 4> child_unresolved{};
+  bool has_children = false;
+  bool significant = false;  // resolved and |ΔE| not negligible: accounted signed
+
+  [[nodiscard]] double value() const { return has_children ? refined : estimate; }
+  [[nodiscard]] bool signedError() const {
+    return has_children && unresolved == 0.0 && significant;
+  }
+};
+
+// Heap priority: larger first. Leaves with a magnitude error are ranked by it; leaves with a
+// signed error shallowest first (ties by |ΔE|), so a resolved region is refined a whole level
+// at a time and its change of total stays the classical two-level estimate: refining only the
+// largest |ΔE| would push a lobe's peak deeper than its tails and leave their same-signed
+// O(h²) differences uncancelled.
+struct HeapEntry {
+  int rank;         // compared first: 0 for magnitudes, −depth for signed errors
+  double priority;  // then the error
+  std::uint32_t leaf;
+};
+
+// Ties broken by slot, so the order never depends on anything but the input.
+bool heapLess(const HeapEntry& a, const HeapEntry& b) {
+  if (a.rank != b.rank) return a.rank < b.rank;
+  if (a.priority != b.priority) return a.priority < b.priority;
+  return a.leaf > b.leaf;
+}
+
+class LeafHeap {
+ public:
+  void clear() { entries_.clear(); }
+  [[nodiscard]] bool empty() const { return entries_.empty(); }
+  [[nodiscard]] const std::vector<HeapEntry>& entries() const { return entries_; }
+  void push(int rank, double priority, std::uint32_t slot) {
+    entries_.push_back({rank, priority, slot});
+    std::push_heap(entries_.begin(), entries_.end(), heapLess);
+  }
+  std::uint32_t pop() {
+    std::pop_heap(entries_.begin(), entries_.end(), heapLess);
+    const std::uint32_t slot = entries_.back().leaf;
+    entries_.pop_back();
+    return slot;
+  }
+
+ private:
+  std::vector<HeapEntry> entries_;
+};
+
+// The observer's running error budget: Σ value, |Σ signed ΔE| + Σ magnitudes, and the number
+// of leaves whose error is unbounded.
+struct Totals {
+  double value = 0.0;
+  double signed_change = 0.0;
+  double magnitude = 0.0;
+  std::int64_t unbounded = 0;
+
+  void account(const Leaf& leaf, int sign) {
+    value += sign * leaf.value();
+    if (leaf.signedError()) {
+      signed_change += sign * (leaf.refined - leaf.estimate);
+    } else if (leaf.error == kInf) {
+      unbounded += sign;
+    } else {
+      magnitude += sign * leaf.error;
+    }
+  }
+  [[nodiscard]] double error() const { return std::abs(signed_change) + magnitude; }
+};
+
+}  // namespace
+
+struct IntegratorWorkspace::Impl {
+  std::vector<Leaf> leaves;
+  std::vector<std::uint32_t> free_slots;
+  LeafHeap bounded;                    // leaves with a magnitude error
+  LeafHeap resolved;                   // leaves with a signed error
+  std::vector<std::uint32_t> frozen;   // leaves that may not split further (depth limit)
+  std::vector<SubFacet> stack;         // the uniform twin's traversal
+  std::vector<Vec3> observer_local_m;  // the observer in each object's frame
+
+  void reset() {
+    leaves.clear();
+    free_slots.clear();
+    bounded.clear();
+    resolved.clear();
+    frozen.clear();
+    stack.clear();
+  }
+
+  std::uint32_t store(const Leaf& leaf) {
+    if (!free_slots.empty()) {
+      const std::uint32_t slot = free_slots.back();
+      free_slots.pop_back();
+      leaves[slot] = leaf;
+      return slot;
+    }
+    leaves.push_back(leaf);
+    return static_cast<std::uint32_t>(leaves.size() - 1);
+  }
+
+  void push(std::uint32_t slot) {
+    const Leaf& leaf = leaves[slot];
+    if (leaf.signedError()) {
+      resolved.push(-static_cast<int>(leaf.facet.depth), leaf.error, slot);
+    } else {
+      bounded.push(0, leaf.error, slot);
+    }
+  }
+
+  // Exact totals over every live leaf, compensated, to confirm what the running sums suggest.
+  Totals exactTotals() const {
+    CompensatedSum value, change, magnitude;
+    Totals t;
+    auto add = [&](std::uint32_t slot) {
+      const Leaf& leaf = leaves[slot];
+      value.add(leaf.value());
+      if (leaf.signedError()) {
+        change.add(leaf.refined - leaf.estimate);
+      } else if (leaf.error == kInf) {
+        ++t.unbounded;
+      } else {
+        magnitude.add(leaf.error);
+      }
+    };
+    for (const HeapEntry& h : bounded.entries()) add(h.leaf);
+    for (const HeapEntry& h : resolved.entries()) add(h.leaf);
+    for (std::uint32_t slot : frozen) add(slot);
+    t.value = value.value();
+    t.signed_change = change.value();
+    t.magnitude = magnitude.value();
+    return t;
+  }
+};
+
+IntegratorWorkspace::IntegratorWorkspace() : impl_(std::make_unique<Impl>()) {}
+IntegratorWorkspace::~IntegratorWorkspace() = default;
+IntegratorWorkspace::IntegratorWorkspace(IntegratorWorkspace&&) noexcept = default;
+IntegratorWorkspace& IntegratorWorkspace::operator=(IntegratorWorkspace&&) noexcept = default;
+
+FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const IntegratorOptions& options)
+    : target_(std::move(target)), beam_(beam), options_(options) {
+  if (!(options_.tolerance >= 0.0) || !(options_.floor_w_m2 >= 0.0) ||
+      !std::isfinite(options_.floor_w_m2) || options_.max_depth < 0 || options_.max_depth > 30 ||
+      options_.max_evaluations < 1) {
+    throw std::invalid_argument("FacetIntegrator: accuracy options out of range");
+  }
+  object_beams_.reserve(target_.objects.size());
+  for (const TargetObject& obj : target_.objects) {
+    object_beams_.push_back(beam_.relativeTo(obj.origin_m));
+  }
+  cull_.coarse_facets = target_.facetCount();
+  for (std::uint32_t i = 0; i < target_.facetCount(); ++i) {
+    const std::uint32_t obj = target_.object[i];
+    const PatchGeometry g = patchGeometry(target_, coarseSubFacet(target_, i), options_.normals);
+    if (!(g.area_m2 > 0.0)) {
+      ++cull_.degenerate;
+      continue;
+    }
+    switch (lightVerdict(g, object_beams_[obj])) {
+      case LightVerdict::OutsideBeam:
+        ++cull_.outside_beam;
+        break;
+      case LightVerdict::FacesAway:
+        ++cull_.facing_away;
+        break;
+      case LightVerdict::MayBeLit:
+        lit_.push_back({i, obj, g});
+        break;
+    }
+  }
+  cull_.lit = lit_.size();
+}
+
+void FacetIntegrator::prepareObserver(const Vec3& observer_m, IntegratorWorkspace::Impl& ws) const {
+  ws.reset();
+  ws.observer_local_m.resize(target_.objects.size());
+  for (std::size_t k = 0; k < target_.objects.size(); ++k) {
+    ws.observer_local_m[k] = observer_m - target_.objects[k].origin_m;
+  }
+}
+
+ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
+                                         IntegratorWorkspace& workspace) const {
+  IntegratorWorkspace::Impl& ws = *workspace.impl_;
+  prepareObserver(observer_m, ws);
+  const IntegratorOptions& opt = options_;
+  ObserverResult result;
+  Totals totals;  // running; confirmed by exactTotals() before stopping
+  auto budget = [&](double total) {
+    return std::max(opt.tolerance * std::abs(total), opt.floor_w_m2);
+  };
+  auto done = [&](const Totals& t) { return t.unbounded == 0 && t.error() <= budget(t.value); };
+
+  for (const LitFacet& lit : lit_) {
+    const Vec3& x = ws.observer_local_m[lit.object];
+    if (!mayFaceObserver(lit.geometry, x)) continue;
+    const Beam& beam = object_beams_[lit.object];
+    const Material& material = target_.materials[target_.objects[lit.object].material];
+    Leaf leaf;
+    leaf.facet = coarseSubFacet(target_, lit.facet);
+    leaf.estimate = facetIrradiance(lit.geometry, x, beam, material);
+    const ContributionBound b = contributionBound(lit.geometry, x, beam, material, opt.resolution);
+    leaf.upper = b.upper_w_m2;
+    leaf.unresolved = b.unresolved_w_m2;
+    leaf.error = b.upper_w_m2;
+    ++result.evaluations;
+    totals.account(leaf, 1);
+    ws.push(ws.store(leaf));
+  }
+
+  Totals frozen;  // what leaves at the depth limit hold: no further work can reduce it
+  auto freeze = [&](std::uint32_t slot) {
+    ws.frozen.push_back(slot);
+    frozen.account(ws.leaves[slot], 1);
+    result.depth_limited = true;
+  };
+
+  while (true) {
+    if (done(totals)) {
+      totals = ws.exactTotals();
+      if (done(totals)) break;
+    }
+    if (result.evaluations >= opt.max_evaluations) break;
+    if (frozen.unbounded > 0 || frozen.magnitude > budget(totals.value)) break;
+    // Work on whichever part of the error stands in the way.
+    const bool magnitude_first =
+        totals.unbounded > 0 || totals.magnitude >= std::abs(totals.signed_change);
+    LeafHeap* heap = magnitude_first ? &ws.bounded : &ws.resolved;
+    if (heap->empty()) heap = magnitude_first ? &ws.resolved : &ws.bounded;
+    if (heap->empty()) break;  // everything left is frozen at the depth limit
+
+    const std::uint32_t slot = heap->pop();
+    Leaf& leaf = ws.leaves[slot];
+    const std::uint32_t obj = target_.object[leaf.facet.coarse];
+    const Vec3& x = ws.observer_local_m[obj];
+    const Beam& beam = object_beams_[obj];
+    const Material& material = target_.materials[target_.objects[obj].material];
+
+    if (!leaf.has_children) {
+      // The paper's step: evaluate the four children, E'_O = Σ E_On, ΔE_O = E'_O − E_O.
+      if (leaf.facet.depth >= opt.max_depth) {
+        freeze(slot);
+        continue;
+      }
+      totals.account(leaf, -1);
+      detail::withPatchModel(target_, leaf.facet.coarse, [&](const auto& model) {
+        const std::array<SubFacet, 4> children = model.split(leaf.facet);
+        leaf.refined = 0.0;
+        for (int k = 0; k < 4; ++k) {
+          const PatchGeometry g = model.template geometry<true>(children[k], opt.normals);
+          leaf.child_estimate[k] = facetIrradiance(g, x, beam, material);
+          const ContributionBound b = contributionBound(g, x, beam, material, opt.resolution);
+          leaf.child_upper[k] = b.upper_w_m2;
+          leaf.child_unresolved[k] = b.unresolved_w_m2;
+          leaf.refined += leaf.child_estimate[k];
+        }
+      });
+      result.evaluations += 4;
+      leaf.has_children = true;
+      const double delta = std::abs(leaf.refined - leaf.estimate);
+      leaf.error = std::max(delta, leaf.unresolved);
+      const std::size_t live = ws.leaves.size() - ws.free_slots.size();
+      leaf.significant = delta > 0.1 * budget(totals.value) / static_cast<double>(live);
+      totals.account(leaf, 1);
+      ws.push(slot);
+      continue;
+    }
+
+    // Replace the leaf by its children; each is refined in turn when its error (its bound,
+    // until it has children of its own) is among the largest.
+    if (leaf.facet.depth + 1 >= opt.max_depth) {
+      freeze(slot);
+      continue;
+    }
+    totals.account(leaf, -1);
+    const Leaf parent = leaf;
+    ws.free_slots.push_back(slot);
+    const std::array<SubFacet, 4> children = split(target_, parent.facet);
+    for (int k = 0; k < 4; ++k) {
+      Leaf child;
+      child.facet = children[k];
+      child.estimate = parent.child_estimate[k];
+      child.upper = parent.child_upper[k];
+      child.unresolved = parent.child_unresolved[k];
+      child.error = child.upper;
+      totals.account(child, 1);
+      ws.push(ws.store(child));
+    }
+  }
+
+  totals = ws.exactTotals();
+  result.irradiance_w_m2 = totals.value;
+  result.error_estimate_w_m2 = totals.error();
+  result.converged = done(totals);
+  return result;
+}
+
+ObserverResult FacetIntegrator::uniform(const Vec3& observer_m, int level,
+                                        IntegratorWorkspace& workspace) const {
+  if (level < 0 || level > 30) throw std::invalid_argument("uniform level out of range");
+  IntegratorWorkspace::Impl& ws = *workspace.impl_;
+  prepareObserver(observer_m, ws);
+  ObserverResult result;
+  CompensatedSum total;
+  for (const LitFacet& lit : lit_) {
+    const Vec3& x = ws.observer_local_m[lit.object];
+    if (!mayFaceObserver(lit.geometry, x)) continue;
+    const Beam& beam = object_beams_[lit.object];
+    const Material& material = target_.materials[target_.objects[lit.object].material];
+    detail::withPatchModel(target_, lit.facet, [&](const auto& model) {
+      ws.stack.clear();
+      ws.stack.push_back(coarseSubFacet(target_, lit.facet));
+      while (!ws.stack.empty()) {
+        const SubFacet f = ws.stack.back();
+        ws.stack.pop_back();
+        if (f.depth == level) {
+          total.add(facetIrradiance(model.template geometry<false>(f, options_.normals), x, beam,
+                                    material));
+          ++result.evaluations;
+        } else {
+          for (const SubFacet& c : model.split(f)) ws.stack.push_back(c);
+        }
+      }
+    });
+  }
+  result.irradiance_w_m2 = total.value();
+  return result;
+}
+
+}  // namespace glint

@@ -1,0 +1,103 @@
+#pragma once
+/// @file
+/// @brief Irradiance at one observer from the whole target: the paper's adaptive 1→4 facet
+/// refinement (Bailey et al. 2010, §2), made safe by bounds, and its uniform twin.
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "facets/beam.h"
+#include "facets/patch.h"
+#include "facets/reflection.h"
+#include "facets/target.h"
+
+namespace glint {
+
+/// @brief Accuracy settings of the per-observer integration.
+///
+/// The tolerance is relative to the observer's total: refinement stops once the sum of the
+/// per-facet error estimates is at most max(tolerance × |E|, floor_w_m2). A facet's error
+/// estimate is the paper's ΔE = |E_O − Σ E_On| where its centre sample resolves the lobe and the
+/// distance (ResolutionLimits), and otherwise the larger of ΔE and a rigorous upper bound of
+/// its contribution, so a glint that falls between samples is refined, never missed.
+struct IntegratorOptions {
+  double tolerance = 1e-3;  ///< relative accuracy asked of each observer's total
+  double floor_w_m2 = 0.0;  ///< absolute accuracy for observers that see almost nothing
+  int max_depth = 16;       ///< deepest 1→4 level of a coarse facet (4^16 sub-facets)
+  std::int64_t max_evaluations = 4'000'000;    ///< per observer; beyond it: flagged unconverged
+  NormalModel normals = NormalModel::Surface;  ///< normal the BRDF sees
+  ResolutionLimits resolution;                 ///< when a centre sample stands for its facet
+};
+
+/// @brief The irradiance at one observer and how it was obtained.
+struct ObserverResult {
+  double irradiance_w_m2 = 0.0;
+  double error_estimate_w_m2 = 0.0;  ///< Σ per-facet error estimates (see IntegratorOptions)
+  std::int64_t evaluations = 0;      ///< reflection calculations (kernel evaluations)
+  bool converged = true;             ///< error estimate within the requested accuracy
+  bool depth_limited = false;        ///< some facet wanted to split beyond max_depth
+};
+
+/// @brief What the observer-independent culling did with the coarse facets.
+struct CullStats {
+  std::size_t coarse_facets = 0;
+  std::size_t degenerate = 0;    ///< zero area: nothing to reflect
+  std::size_t facing_away = 0;   ///< no normal of the facet can see the laser
+  std::size_t outside_beam = 0;  ///< no point of the facet is inside the beam
+  std::size_t lit = 0;           ///< kept for the observers
+};
+
+/// @brief Per-thread scratch space of FacetIntegrator: reused between observers, so the hot
+/// loop does not allocate once it has grown to the largest observer's needs.
+class IntegratorWorkspace {
+ public:
+  IntegratorWorkspace();
+  ~IntegratorWorkspace();
+  IntegratorWorkspace(IntegratorWorkspace&&) noexcept;
+  IntegratorWorkspace& operator=(IntegratorWorkspace&&) noexcept;
+
+ private:
+  friend class FacetIntegrator;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// @brief The lit coarse facets of a target under a beam, ready to be integrated at any
+/// number of observers (from any number of threads, each with its own workspace).
+class FacetIntegrator {
+ public:
+  /// @brief Culls the facets that no observer can receive light from (facing away from the
+  /// laser, outside the beam, zero area), once.
+  FacetIntegrator(Target target, const Beam& beam, const IntegratorOptions& options);
+
+  /// @brief Adaptive integration at @p observer_m (world coordinates).
+  ObserverResult adaptive(const Vec3& observer_m, IntegratorWorkspace& ws) const;
+
+  /// @brief The uniform twin: every lit coarse facet split to @p level, each sub-facet
+  /// evaluated once by the same kernel. Its error estimate is not computed (reported as 0).
+  ObserverResult uniform(const Vec3& observer_m, int level, IntegratorWorkspace& ws) const;
+
+  [[nodiscard]] const CullStats& cullStats() const { return cull_; }
+  [[nodiscard]] const IntegratorOptions& options() const { return options_; }
+  [[nodiscard]] const Target& target() const { return target_; }
+  [[nodiscard]] const Beam& beam() const { return beam_; }
+
+ private:
+  struct LitFacet {
+    std::uint32_t facet;
+    std::uint32_t object;
+    PatchGeometry geometry;  // of the coarse facet, with bounds
+  };
+
+  void prepareObserver(const Vec3& observer_m, IntegratorWorkspace::Impl& ws) const;
+
+  Target target_;
+  Beam beam_;
+  IntegratorOptions options_;
+  std::vector<Beam> object_beams_;  // the beam in each object's frame
+  std::vector<LitFacet> lit_;
+  CullStats cull_;
+};
+
+}  // namespace glint

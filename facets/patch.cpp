@@ -1,0 +1,24 @@
+#include "facets/patch.h"
+
+#include "facets/detail/patch_models.h"
+
+namespace glint {
+
+SubFacet coarseSubFacet(const Target& target, std::uint32_t facet) {
+  return {target.corners_m[facet],
+          {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)},
+          facet,
+          0,
+          target.rim_edges[facet]};
+}
+
+std::array<SubFacet, 4> split(const Target& target, const SubFacet& f) {
+  return detail::withPatchModel(target, f.coarse, [&](const auto& m) { return m.split(f); });
+}
+
+PatchGeometry patchGeometry(const Target& target, const SubFacet& f, NormalModel normals) {
+  return detail::withPatchModel(
+      target, f.coarse, [&](const auto& m) { return m.template geometry<true>(f, normals); });
+}
+
+}  // namespace glint

@@ -1,0 +1,124 @@
+#include "facets/pn_triangle.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace glint {
+namespace {
+
+// Control point index for exponents (i, j, k) of (b0, b1, b2), i + j + k = 3.
+int controlIndex(int i, int j, int k) {
+  if (i == 3) return 0;
+  if (j == 3) return 1;
+  if (k == 3) return 2;
+  if (i == 2 && j == 1) return 3;
+  if (i == 1 && j == 2) return 4;
+  if (j == 2 && k == 1) return 5;
+  if (j == 1 && k == 2) return 6;
+  if (i == 1 && k == 2) return 7;
+  if (i == 2 && k == 1) return 8;
+  return 9;  // (1, 1, 1)
+}
+
+}  // namespace
+
+PNTriangle::PNTriangle(const std::array<Vec3, 3>& p, const std::array<Vec3, 3>& n) {
+  // Edge control point near vertex i toward vertex j: a third of the way along the edge,
+  // projected into the tangent plane of vertex i.
+  auto edgeControl = [&](int i, int j) {
+    const double w = glm::dot(p[j] - p[i], n[i]);
+    return (2.0 * p[i] + p[j] - w * n[i]) / 3.0;
+  };
+  b_[0] = p[0];
+  b_[1] = p[1];
+  b_[2] = p[2];
+  b_[3] = edgeControl(0, 1);  // b210
+  b_[4] = edgeControl(1, 0);  // b120
+  b_[5] = edgeControl(1, 2);  // b021
+  b_[6] = edgeControl(2, 1);  // b012
+  b_[7] = edgeControl(2, 0);  // b102
+  b_[8] = edgeControl(0, 2);  // b201
+  Vec3 e(0.0);
+  for (int k = 3; k < 9; ++k) e += b_[k];
+  e /= 6.0;
+  const Vec3 v = (p[0] + p[1] + p[2]) / 3.0;
+  b_[9] = e + 0.5 * (e - v);
+
+  // Mid-edge normal: the average normal reflected across the plane perpendicular to the edge,
+  // which lets the normal field capture inflections the position cannot.
+  auto midNormal = [&](int i, int j) {
+    const Vec3 d = p[j] - p[i];
+    const double len2 = glm::dot(d, d);
+    const double vij = len2 > 0.0 ? 2.0 * glm::dot(d, n[i] + n[j]) / len2 : 0.0;
+    if (auto m = tryNormalize(n[i] + n[j] - vij * d)) return *m;
+    return n[i];
+  };
+  n_ = {n[0], n[1], n[2], midNormal(0, 1), midNormal(1, 2), midNormal(0, 2)};
+
+  // Largest second difference of the net in the two parameter directions and their mix.
+  double m = 0.0;
+  const int basis[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (const auto& beta : basis) {
+    auto ctrl = [&](int i, int j, int k) {
+      return b_[controlIndex(beta[0] + i, beta[1] + j, beta[2] + k)];
+    };
+    const Vec3 ss = ctrl(0, 2, 0) - 2.0 * ctrl(1, 1, 0) + ctrl(2, 0, 0);
+    const Vec3 tt = ctrl(0, 0, 2) - 2.0 * ctrl(1, 0, 1) + ctrl(2, 0, 0);
+    const Vec3 st = ctrl(0, 1, 1) - ctrl(1, 1, 0) - ctrl(1, 0, 1) + ctrl(2, 0, 0);
+    m = std::max({m, glm::length(ss), glm::length(tt), glm::length(st)});
+  }
+  second_derivative_bound_m_ = 6.0 * m;
+}
+
+Vec3 PNTriangle::position(const Vec3& t) const {
+  const double w = t[0], u = t[1], v = t[2];
+  return b_[0] * (w * w * w) + b_[1] * (u * u * u) + b_[2] * (v * v * v) +
+         3.0 * (b_[3] * (w * w * u) + b_[4] * (w * u * u) + b_[5] * (u * u * v) +
+                b_[6] * (u * v * v) + b_[7] * (w * v * v) + b_[8] * (w * w * v)) +
+         6.0 * b_[9] * (w * u * v);
+}
+
+Vec3 PNTriangle::derivative(const Vec3& t, const Vec3& d) const {
+  // Partial derivatives of the homogeneous cubic in (w, u, v), contracted with d.
+  const double w = t[0], u = t[1], v = t[2];
+  const Vec3 dw = 3.0 * (b_[0] * (w * w) + b_[3] * (2 * w * u) + b_[4] * (u * u) + b_[7] * (v * v) +
+                         b_[8] * (2 * w * v)) +
+                  6.0 * b_[9] * (u * v);
+  const Vec3 du = 3.0 * (b_[1] * (u * u) + b_[3] * (w * w) + b_[4] * (2 * w * u) +
+                         b_[5] * (2 * u * v) + b_[6] * (v * v)) +
+                  6.0 * b_[9] * (w * v);
+  const Vec3 dv = 3.0 * (b_[2] * (v * v) + b_[5] * (u * u) + b_[6] * (2 * u * v) +
+                         b_[7] * (2 * w * v) + b_[8] * (w * w)) +
+                  6.0 * b_[9] * (w * u);
+  return d[0] * dw + d[1] * du + d[2] * dv;
+}
+
+Vec3 PNTriangle::normalField(const Vec3& t) const {
+  const double w = t[0], u = t[1], v = t[2];
+  return n_[0] * (w * w) + n_[1] * (u * u) + n_[2] * (v * v) + n_[3] * (w * u) + n_[4] * (u * v) +
+         n_[5] * (w * v);
+}
+
+double PNTriangle::normalConeHalfAngle(const std::array<Vec3, 3>& c, const Vec3& axis) const {
+  // The field is a homogeneous quadratic N; its blossom is B(x, y) = (N(x + y) − N(x) − N(y))/2
+  // and the sub-triangle's Bernstein controls are N(cᵢ) and B(cᵢ, cⱼ).
+  const std::array<Vec3, 3> at = {normalField(c[0]), normalField(c[1]), normalField(c[2])};
+  auto blossom = [&](int i, int j) { return 0.5 * (normalField(c[i] + c[j]) - at[i] - at[j]); };
+  const std::array<Vec3, 6> controls = {at[0],         at[1],         at[2],
+                                        blossom(0, 1), blossom(1, 2), blossom(0, 2)};
+  double half_angle = 0.0;
+  for (const Vec3& m : controls) {
+    if (glm::dot(m, m) == 0.0) continue;
+    half_angle = std::max(half_angle, angleBetween(axis, m));
+  }
+  // Beyond 90° the cone is no longer convex and the hull argument fails.
+  return half_angle < 0.5 * kPi ? half_angle : kPi;
+}
+
+double PNTriangle::sagBound(int depth) const {
+  // In (s, t) = (b1, b2) coordinates two points of the unit triangle differ by |Δs| + |Δt| ≤ 2.
+  const double size = std::ldexp(2.0, -depth);
+  return 0.5 * second_derivative_bound_m_ * size * size;
+}
+
+}  // namespace glint

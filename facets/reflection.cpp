@@ -1,0 +1,130 @@
+#include "facets/reflection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace glint {
+namespace {
+
+// The largest angle by which a unit vector can turn when moved by a chord of length e from a
+// vector of length `len` (for the sum ωi + ωo, whose parts each turn by known angles).
+double turnAngle(double e, double len) { return e < len ? std::asin(e / len) : kPi; }
+
+}  // namespace
+
+ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer_m,
+                                    const Beam& beam, const Material& material,
+                                    const ResolutionLimits& limits) {
+  const Vec3 v = observer_m - g.centre_m;
+  const double d = glm::length(v);
+  if (!(d > g.radius_m)) {
+    const double inf = std::numeric_limits<double>::infinity();
+    return {inf, inf};
+  }
+  const double e_max = beam.maxIrradianceInBall(g.centre_m, g.radius_m);
+  if (e_max == 0.0 || g.area_bound_m2 == 0.0) return {0.0, 0.0};
+
+  // Half-vector spread: ωo turns by at most asin(r/d) over the ball, ωi by the beam's spread;
+  // their sum moves by at most the two chords.
+  const double eps_o = std::asin(g.radius_m / d);
+  const double eps_i = beam.directionSpreadInBall(g.radius_m);
+  const Vec3 wi = beam.at(g.centre_m).toward_laser;
+  const Vec3 h = wi + v / d;
+  const double chord = 2.0 * std::sin(0.5 * eps_o) + 2.0 * std::sin(0.5 * eps_i);
+  const double h_turn = turnAngle(chord, glm::length(h));
+  const double spread = g.cone_rad + h_turn;
+
+  const double theta_n = angleBetween(g.normal, h);
+  auto tan2 = [](double theta) {
+    return theta < 0.5 * kPi ? std::tan(theta) * std::tan(theta)
+                             : std::numeric_limits<double>::infinity();
+  };
+  const double tan2_min = tan2(std::max(0.0, theta_n - spread));
+  const double d_min = d - g.radius_m;
+  const double scale = e_max * g.area_bound_m2 / (d_min * d_min);
+  double specular = 0.0;
+  if (material.specular_reflectance > 0.0) {
+    specular = scale * 0.25 * material.specular_reflectance * material.lobe.maxXiBeyond(tan2_min);
+  }
+  const double diffuse = scale * material.diffuse_reflectance / kPi;
+
+  // Both terms are smooth in a patch that is small against the distance and free of beam
+  // edges; the specular term also varies on the scale σ of the lobe. Where cos θi or cos θr
+  // may change sign the kernel clips the facet, and there the lobe must be nearly flat too.
+  const bool smooth =
+      g.radius_m <= limits.near_field * d && !beam.edgeMayCrossBall(g.centre_m, g.radius_m);
+  const bool may_be_clipped =
+      std::abs(angleBetween(g.normal, wi) - 0.5 * kPi) <= g.cone_rad + eps_i ||
+      std::abs(angleBetween(g.normal, v) - 0.5 * kPi) <= g.cone_rad + eps_o;
+  const bool specular_smooth =
+      smooth && spread <= limits.lobe * material.lobe.sigma &&
+      (!may_be_clipped ||
+       material.lobe.logRatio(tan2_min, tan2(theta_n + spread)) <= limits.clipped_log_variation);
+  ContributionBound b;
+  b.upper_w_m2 = specular + diffuse;
+  b.unresolved_w_m2 = (specular_smooth ? 0.0 : specular) + (smooth ? 0.0 : diffuse);
+  return b;
+}
+
+ClippedTriangle clipTriangle(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  // Sutherland–Hodgman in the (λ1, λ2) plane of the unit triangle, one half-plane at a time.
+  struct P {
+    double s, t, fa, fb;  // position and the two functions there
+  };
+  std::array<P, 8> poly{{{0, 0, a[0], b[0]}, {1, 0, a[1], b[1]}, {0, 1, a[2], b[2]}}};
+  int n = 3;
+  auto clip = [&](bool first) {
+    std::array<P, 8> out;
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+      const P& p = poly[i];
+      const P& q = poly[(i + 1) % n];
+      const double fp = first ? p.fa : p.fb, fq = first ? q.fa : q.fb;
+      if (fp > 0.0) out[m++] = p;
+      if ((fp > 0.0) != (fq > 0.0)) {
+        const double t = fp / (fp - fq);
+        out[m++] = {p.s + t * (q.s - p.s), p.t + t * (q.t - p.t), p.fa + t * (q.fa - p.fa),
+                    p.fb + t * (q.fb - p.fb)};
+      }
+    }
+    poly = out;
+    n = m;
+  };
+  clip(true);
+  clip(false);
+  if (n < 3) return {0.0, Vec3(1.0 / 3.0)};
+  // Shoelace area and centroid; the unit triangle has area ½.
+  double area2 = 0.0, cs = 0.0, ct = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const P& p = poly[i];
+    const P& q = poly[(i + 1) % n];
+    const double cross = p.s * q.t - q.s * p.t;
+    area2 += cross;
+    cs += (p.s + q.s) * cross;
+    ct += (p.t + q.t) * cross;
+  }
+  if (!(area2 > 0.0)) return {0.0, Vec3(1.0 / 3.0)};
+  const double s = cs / (3.0 * area2), t = ct / (3.0 * area2);
+  return {std::min(area2, 1.0), Vec3(1.0 - s - t, s, t)};
+}
+
+bool mayFaceObserver(const PatchGeometry& g, const Vec3& observer_m) {
+  // max over the ball and the cone of n·(x_O − x) ≤ d cos(max(0, θ − cone)) + r.
+  const Vec3 v = observer_m - g.centre_m;
+  const double d = glm::length(v);
+  if (!(d > g.radius_m)) return true;
+  const double excess = angleBetween(g.normal, v) - g.cone_rad;
+  if (excess < 0.5 * kPi) return true;
+  return d * std::cos(excess) + g.radius_m > 0.0;
+}
+
+LightVerdict lightVerdict(const PatchGeometry& g, const Beam& beam) {
+  if (beam.maxIrradianceInBall(g.centre_m, g.radius_m) == 0.0) return LightVerdict::OutsideBeam;
+  const Vec3 wi = beam.at(g.centre_m).toward_laser;
+  const double excess =
+      angleBetween(g.normal, wi) - g.cone_rad - beam.directionSpreadInBall(g.radius_m);
+  return excess < 0.5 * kPi ? LightVerdict::MayBeLit : LightVerdict::FacesAway;
+}
+
+}  // namespace glint

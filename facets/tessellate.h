@@ -1,0 +1,76 @@
+#pragma once
+/// @file
+/// @brief Coarse tessellation of the analytic shapes into facets that carry their exact
+/// quadric, and of triangle meshes into PN, fitted-quadric or flat facets.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "facets/target.h"
+
+namespace glint {
+
+/// @brief The open side surface of a right circular cylinder (no caps), reflecting outward.
+struct CylinderShape {
+  Vec3 center_m{0.0};
+  Vec3 axis{0.0, 0.0, 1.0};  ///< unit
+  double radius_m = 1.0;
+  double length_m = 1.0;
+};
+
+/// @brief A sphere, reflecting outward.
+struct SphereShape {
+  Vec3 center_m{0.0};
+  double radius_m = 1.0;
+};
+
+/// @brief A one-sided disk: only the side its normal points to reflects.
+struct DiskShape {
+  Vec3 center_m{0.0};
+  Vec3 normal{0.0, 0.0, 1.0};  ///< unit
+  double radius_m = 1.0;
+};
+
+/// @brief Adds a cylinder as one object: @p segments facets around, rings along the axis so
+/// that facets are about as long as wide. @p reference (unit) fixes the azimuth of the
+/// tessellation, so that passing a scene-derived direction (toward the laser) makes the
+/// tessellation rotate with the scene. With segments a multiple of 4 the terminator of a beam
+/// across the axis runs along facet edges.
+/// @return the object index.
+std::uint32_t addCylinder(Target& target, const CylinderShape& shape, std::uint32_t material,
+                          int segments, const Vec3& reference);
+
+/// @brief Adds a sphere as latitude bands around the pole @p reference (toward the laser), so
+/// the lit hemisphere is whole bands: @p segments around, segments/2 bands pole to pole.
+std::uint32_t addSphere(Target& target, const SphereShape& shape, std::uint32_t material,
+                        int segments, const Vec3& reference);
+
+/// @brief Adds a disk as a central fan and rings, @p segments around; its rim edges are
+/// flagged so subdivision follows the true circle.
+std::uint32_t addDisk(Target& target, const DiskShape& shape, std::uint32_t material, int segments,
+                      const Vec3& reference);
+
+/// @brief The surface a mesh's facets are given.
+enum class MeshSurface { Flat, PN, QuadricFit };
+
+/// @brief What happened to a mesh's triangles: counts for the run summary.
+struct MeshStats {
+  std::size_t triangles = 0;           ///< triangles offered
+  std::size_t facets = 0;              ///< facets added
+  std::size_t degenerate_dropped = 0;  ///< zero-area or non-finite triangles
+  std::size_t normals_repaired = 0;    ///< vertex normals that were zero, non-finite or
+                                       ///< facing away from the face, replaced by the face normal
+  std::size_t quadric_fits = 0;        ///< facets on a fitted quadric
+  std::size_t fit_fallbacks = 0;       ///< fits refused (singular, ill-conditioned, ...) → PN
+};
+
+/// @brief Adds a triangle mesh as one object. Positions are relative to @p origin_m; triangles
+/// index into @p positions_m and @p normals (per vertex) and are counter-clockwise seen from the
+/// reflecting side.
+MeshStats addMesh(Target& target, const Vec3& origin_m, std::uint32_t material,
+                  const std::vector<Vec3>& positions_m, const std::vector<Vec3>& normals,
+                  const std::vector<std::array<std::uint32_t, 3>>& triangles, MeshSurface surface);
+
+}  // namespace glint

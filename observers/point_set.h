@@ -1,0 +1,35 @@
+#pragma once
+/// @file
+/// @brief Irradiance at a list of observer points, computed in parallel over the points.
+
+#include <atomic>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "facets/integrator.h"
+
+namespace glint {
+
+/// @brief Progress of a long computation, updated by worker threads and read by a reporter.
+struct WorkCounter {
+  std::atomic<std::size_t> items_done{0};
+  std::atomic<std::int64_t> evaluations{0};
+};
+
+/// @brief Which integration every point gets.
+struct PointScheme {
+  bool uniform = false;   ///< false: adaptive (the default); true: the uniform twin
+  int uniform_level = 0;  ///< subdivision level of the uniform twin
+};
+
+/// @brief E at each of @p points_m (world coordinates), in input order, with TBB across
+/// points. Each thread reuses one workspace, so no allocation happens per point once the
+/// workspaces have grown. Results do not depend on the number of threads.
+/// @param counter optional; advanced as points complete.
+std::vector<ObserverResult> evaluatePoints(const FacetIntegrator& integrator,
+                                           std::span<const Vec3> points_m,
+                                           const PointScheme& scheme,
+                                           WorkCounter* counter = nullptr);
+
+}  // namespace glint

@@ -1,0 +1,81 @@
+#include "pipeline/cli.h"
+
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "export/atomic_file.h"
+#include "glint/version.h"
+#include "pipeline/input_error.h"
+#include "pipeline/points_command.h"
+
+namespace glint {
+
+int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
+  CLI::App app{
+      "glint: where laser light reflected off a shiny target can hurt an eye.\n"
+      "Adaptive facet reflection modelling (Bailey et al., AFRL 2010) and beyond.",
+      "glint"};
+  app.set_version_flag("--version", std::string("glint ") + GLINT_VERSION);
+  app.require_subcommand(1);
+
+  PointsArgs points;
+  CLI::App* points_cmd = app.add_subcommand(
+      "points", "Irradiance at observer points listed in a CSV file (header x,y,z)");
+  points_cmd->add_option("scene", points.scene_path, "Scene file (JSON)")->required();
+  points_cmd->add_option("--points", points.points_path, "Observer points: CSV with header x,y,z")
+      ->required();
+  points_cmd->add_option("-o,--out", points.out_path,
+                         "Output CSV; '-' (the default) writes to standard output");
+  double tolerance = 0.0;
+  CLI::Option* tolerance_opt =
+      points_cmd
+          ->add_option("--tolerance", tolerance,
+                       "Relative accuracy of each observer's total (overrides the scene)")
+          ->check(CLI::Range(1e-12, 0.999999));
+  int level = 0;
+  CLI::Option* uniform_opt =
+      points_cmd
+          ->add_option("--uniform", level,
+                       "Uniform twin instead of adaptive: every facet split to LEVEL (0-12)")
+          ->check(CLI::Range(0, 12));
+  std::string normals;
+  CLI::Option* normals_opt =
+      points_cmd
+          ->add_option("--normals", normals,
+                       "Facet normals for the BRDF: surface (default) or flat (the paper's)")
+          ->check(CLI::IsMember({"surface", "flat"}));
+  points_cmd->add_option("--threads", points.threads, "Worker threads (default: all cores)")
+      ->check(CLI::Range(1, 4096));
+  points_cmd->add_flag("-q,--quiet", points.quiet, "No progress and no summary on standard error");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version are successes; everything else is a usage error (status 2).
+    return app.exit(e, out, err) == 0 ? 0 : 2;
+  }
+
+  try {
+    if (app.got_subcommand(points_cmd)) {
+      if (*tolerance_opt) points.tolerance = tolerance;
+      if (*uniform_opt) points.uniform_level = level;
+      if (*normals_opt) points.normals = normals;
+      points.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
+      runPoints(points, out, err);
+    }
+    return 0;
+  } catch (const InputError& e) {
+    err << "glint: error: " << e.what() << "\n";
+    return 2;
+  } catch (const OutputError& e) {
+    err << "glint: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    err << "glint: internal error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace glint

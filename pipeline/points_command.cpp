@@ -1,0 +1,127 @@
+#include "pipeline/points_command.h"
+
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+
+#include "export/atomic_file.h"
+#include "export/points_csv.h"
+#include "observers/point_set.h"
+#include "pipeline/points_file.h"
+#include "pipeline/progress.h"
+#include "pipeline/scene.h"
+#include "pipeline/target_builder.h"
+
+namespace glint {
+namespace {
+
+std::string format(const char* fmt, double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, fmt, x);
+  return buf;
+}
+
+void printSummary(std::ostream& err, const PointsArgs& args, const FacetIntegrator& integrator,
+                  std::span<const Vec3> points, std::span<const ObserverResult> results,
+                  double seconds, int threads) {
+  const IntegratorOptions& opt = integrator.options();
+  const CullStats& cull = integrator.cullStats();
+  std::int64_t total = 0, lo = results.empty() ? 0 : results[0].evaluations, hi = 0;
+  std::size_t unconverged = 0, depth_limited = 0, peak = 0;
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const ObserverResult& r = results[i];
+    total += r.evaluations;
+    lo = std::min(lo, r.evaluations);
+    hi = std::max(hi, r.evaluations);
+    unconverged += r.converged ? 0 : 1;
+    depth_limited += r.depth_limited ? 1 : 0;
+    if (r.irradiance_w_m2 > results[peak].irradiance_w_m2) peak = i;
+  }
+  const std::string scheme = args.uniform_level
+                                 ? "uniform twin, level " + std::to_string(*args.uniform_level)
+                                 : "adaptive, tolerance " + format("%g", opt.tolerance) +
+                                       ", floor " + format("%.3g", opt.floor_w_m2) + " W/m²";
+  err << "glint points: " << points.size() << " observers, " << scheme << ", " << threads
+      << (threads == 1 ? " thread\n" : " threads\n");
+  err << "  target: " << cull.coarse_facets << " coarse facets; " << cull.lit << " lit, "
+      << cull.facing_away << " facing away from the laser, " << cull.outside_beam
+      << " outside the beam, " << cull.degenerate << " degenerate\n";
+  err << "  evaluations: " << format("%.4g", static_cast<double>(total)) << " in all; per observer "
+      << format("%.4g", static_cast<double>(total) / static_cast<double>(results.size()))
+      << " on average, " << lo << " to " << hi << "\n";
+  const Vec3& p = points[peak];
+  err << "  peak irradiance: " << format("%.6g", results[peak].irradiance_w_m2) << " W/m² at ("
+      << p.x << ", " << p.y << ", " << p.z << ")\n";
+  err << "  time: " << formatDuration(seconds) << " ("
+      << format("%.3g", static_cast<double>(total) / std::max(seconds, 1e-9))
+      << " evaluations/s)\n";
+  if (!args.uniform_level) {
+    if (unconverged == 0) {
+      err << "  accuracy: all observers within the tolerance\n";
+    } else {
+      err << "  warning: " << unconverged << " of " << results.size()
+          << " observers did not reach the tolerance (converged = 0 in the output; "
+          << depth_limited << " hit accuracy.max_depth); raise accuracy.max_evaluations or "
+          << "accuracy.max_depth, or loosen the tolerance\n";
+    }
+  }
+  if (args.out_path != "-") err << "  wrote " << args.out_path << "\n";
+}
+
+}  // namespace
+
+void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
+  const Scene scene = loadScene(args.scene_path);
+  const std::vector<Vec3> points = loadPoints(args.points_path);
+  IntegratorOptions options = integratorOptions(scene);
+  if (args.tolerance) options.tolerance = *args.tolerance;
+  if (args.normals)
+    options.normals = *args.normals == "flat" ? NormalModel::Flat : NormalModel::Surface;
+
+  // Open the output first: a missing folder should stop the run before the work, not after.
+  std::unique_ptr<AtomicFile> file;
+  if (args.out_path != "-") file = std::make_unique<AtomicFile>(args.out_path);
+
+  std::unique_ptr<tbb::global_control> thread_limit;
+  if (args.threads > 0) {
+    thread_limit = std::make_unique<tbb::global_control>(
+        tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(args.threads));
+  }
+  const int threads = args.threads > 0 ? args.threads : tbb::info::default_concurrency();
+
+  const FacetIntegrator integrator(buildTarget(scene), beamOf(scene), options);
+  PointScheme scheme;
+  if (args.uniform_level) {
+    scheme.uniform = true;
+    scheme.uniform_level = *args.uniform_level;
+  }
+
+  WorkCounter counter;
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<ObserverResult> results;
+  {
+    std::unique_ptr<ProgressReporter> progress;
+    if (!args.quiet) {
+      progress = std::make_unique<ProgressReporter>(err, args.terminal, "observers", points.size(),
+                                                    counter);
+    }
+    results = evaluatePoints(integrator, points, scheme, &counter);
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  if (file) {
+    writePointsCsv(file->stream(), points, results);
+    file->commit();
+  } else {
+    writePointsCsv(out, points, results);
+    out.flush();
+  }
+  if (!args.quiet) printSummary(err, args, integrator, points, results, seconds, threads);
+}
+
+}  // namespace glint

@@ -1,0 +1,28 @@
+#pragma once
+/// @file
+/// @brief `glint points`: irradiance at observer points from a CSV file.
+
+#include <optional>
+#include <ostream>
+#include <string>
+
+namespace glint {
+
+/// @brief The arguments of `glint points`.
+struct PointsArgs {
+  std::string scene_path;
+  std::string points_path;
+  std::string out_path = "-";          ///< "-" writes the table to standard output
+  std::optional<double> tolerance;     ///< overrides the scene's accuracy.tolerance
+  std::optional<int> uniform_level;    ///< the uniform twin instead of adaptive refinement
+  std::optional<std::string> normals;  ///< "surface" or "flat", overrides the scene
+  int threads = 0;                     ///< 0: all cores
+  bool quiet = false;                  ///< no progress, no summary
+  bool terminal = false;               ///< standard error is a terminal (progress redraws)
+};
+
+/// @brief Runs the command. Inputs are validated and the output file opened before any work.
+/// @throw InputError, OutputError on bad input or unwritable output (no file is left behind).
+void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err);
+
+}  // namespace glint

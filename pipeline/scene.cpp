@@ -1,0 +1,382 @@
+#include "pipeline/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "pipeline/input_error.h"
+
+namespace glint {
+namespace {
+
+using nlohmann::json;
+
+// JSON-pointer escaping of one reference token (RFC 6901).
+std::string escapeToken(std::string_view key) {
+  std::string out;
+  for (char ch : key) {
+    if (ch == '~') {
+      out += "~0";
+    } else if (ch == '/') {
+      out += "~1";
+    } else {
+      out += ch;
+    }
+  }
+  return out;
+}
+
+std::string joinKeys(const std::vector<std::string>& keys) {
+  std::string out;
+  for (const auto& k : keys) out += (out.empty() ? "" : ", ") + k;
+  return out;
+}
+
+// One JSON object of the scene with its pointer. Reading a key marks it as known; finish()
+// refuses every key that was not read, so a misspelt optional key never goes unnoticed.
+class ObjectReader {
+ public:
+  ObjectReader(const json& j, std::string pointer, const std::string& source)
+      : j_(j), pointer_(std::move(pointer)), source_(source) {
+    if (!j_.is_object()) failHere("must be an object");
+  }
+
+  [[noreturn]] void failHere(std::string_view message) const {
+    throw InputError(source_ + ": " + (pointer_.empty() ? "/" : pointer_) + ": " +
+                     std::string(message));
+  }
+  [[noreturn]] void fail(std::string_view key, std::string_view message) const {
+    throw InputError(source_ + ": " + at(key) + ": " + std::string(message));
+  }
+  [[nodiscard]] std::string at(std::string_view key) const {
+    return pointer_ + "/" + escapeToken(key);
+  }
+
+  bool has(const std::string& key) {
+    known_.push_back(key);
+    return j_.contains(key);
+  }
+
+  const json& require(const std::string& key) {
+    if (!has(key)) fail(key, "missing (required)");
+    return j_.at(key);
+  }
+
+  double number(const std::string& key) { return checkedNumber(key, require(key)); }
+  double number(const std::string& key, double fallback) {
+    return has(key) ? checkedNumber(key, j_.at(key)) : fallback;
+  }
+  std::optional<double> optionalNumber(const std::string& key) {
+    if (!has(key)) return std::nullopt;
+    return checkedNumber(key, j_.at(key));
+  }
+
+  std::int64_t integer(const std::string& key, std::int64_t fallback) {
+    if (!has(key)) return fallback;
+    const json& v = j_.at(key);
+    if (!v.is_number_integer()) fail(key, "must be an integer");
+    return v.get<std::int64_t>();
+  }
+
+  std::string string(const std::string& key) {
+    const json& v = require(key);
+    if (!v.is_string()) fail(key, "must be a string");
+    return v.get<std::string>();
+  }
+  std::string string(const std::string& key, const std::string& fallback) {
+    if (!has(key)) return fallback;
+    const json& v = j_.at(key);
+    if (!v.is_string()) fail(key, "must be a string");
+    return v.get<std::string>();
+  }
+
+  // One of `choices`, returned as its index.
+  std::size_t choice(const std::string& key, const std::vector<std::string>& choices,
+                     std::optional<std::size_t> fallback = std::nullopt) {
+    if (fallback && !has(key)) return *fallback;
+    const std::string value = string(key);
+    const auto it = std::find(choices.begin(), choices.end(), value);
+    if (it == choices.end()) fail(key, "must be one of: " + joinKeys(choices));
+    return static_cast<std::size_t>(it - choices.begin());
+  }
+
+  Vec3 vec3(const std::string& key) {
+    const json& v = require(key);
+    if (!v.is_array() || v.size() != 3) fail(key, "must be an array of 3 numbers");
+    Vec3 out;
+    for (int i = 0; i < 3; ++i) {
+      const json& c = v[static_cast<std::size_t>(i)];
+      if (!c.is_number()) fail(key, "must be an array of 3 numbers");
+      out[i] = c.get<double>();
+      if (!std::isfinite(out[i])) fail(key, "must be finite");
+    }
+    return out;
+  }
+
+  // A direction: any non-zero length, returned normalised.
+  Vec3 direction(const std::string& key) {
+    const Vec3 v = vec3(key);
+    const auto unit = tryNormalize(v);
+    if (!unit) fail(key, "must not be zero-length");
+    return *unit;
+  }
+
+  ObjectReader object(const std::string& key) {
+    return ObjectReader(require(key), at(key), source_);
+  }
+
+  // Refuses keys nobody asked for.
+  void finish() const {
+    for (const auto& item : j_.items()) {
+      if (std::find(known_.begin(), known_.end(), item.key()) == known_.end()) {
+        fail(item.key(), "unknown key (expected one of: " + joinKeys(known_) + ")");
+      }
+    }
+  }
+
+  [[nodiscard]] const json& raw() const { return j_; }
+  [[nodiscard]] const std::string& pointer() const { return pointer_; }
+  [[nodiscard]] const std::string& source() const { return source_; }
+
+ private:
+  double checkedNumber(const std::string& key, const json& v) const {
+    if (!v.is_number()) fail(key, "must be a number");
+    const double x = v.get<double>();
+    if (!std::isfinite(x)) fail(key, "must be finite");
+    return x;
+  }
+
+  const json& j_;
+  std::string pointer_;
+  const std::string& source_;
+  std::vector<std::string> known_;
+};
+
+// Range checks, each naming the key.
+double positive(ObjectReader& r, const std::string& key, double x) {
+  if (!(x > 0.0)) r.fail(key, "must be > 0");
+  return x;
+}
+double unitInterval(ObjectReader& r, const std::string& key, double x) {
+  if (!(x >= 0.0 && x <= 1.0)) r.fail(key, "must be in [0, 1]");
+  return x;
+}
+
+// Follows the parser through the document so errors it meets can name their JSON path, and
+// refuses duplicate keys: nlohmann keeps the last of two equal keys without a word, and a scene
+// that says "power_w" twice must not silently mean the second.
+class PathTracker {
+ public:
+  explicit PathTracker(const std::string& source) : source_(source) {}
+
+  bool onEvent(json::parse_event_t event, const json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start:
+        countValueInArray();
+        frames_.push_back({false, {}, {}, -1});
+        break;
+      case json::parse_event_t::array_start:
+        countValueInArray();
+        frames_.push_back({true, {}, {}, -1});
+        break;
+      case json::parse_event_t::object_end:
+      case json::parse_event_t::array_end:
+        frames_.pop_back();
+        break;
+      case json::parse_event_t::key: {
+        Frame& f = frames_.back();
+        f.current_key = parsed.get<std::string>();
+        if (!f.keys.insert(f.current_key).second) {
+          throw InputError(source_ + ": " + path() + ": duplicate key");  // innermost is an object
+        }
+        break;
+      }
+      case json::parse_event_t::value:
+        countValueInArray();
+        break;
+    }
+    return true;
+  }
+
+  // Where the parser is: the key or element being read. Containers in an array are counted
+  // when they start, scalars when they end, so in the innermost array the element being read
+  // is the one after the last counted.
+  [[nodiscard]] std::string path() const {
+    std::string p;
+    for (std::size_t i = 0; i < frames_.size(); ++i) {
+      const Frame& f = frames_[i];
+      const long element = f.index + (i + 1 == frames_.size() ? 1 : 0);
+      p += "/" + (f.is_array ? std::to_string(element) : escapeToken(f.current_key));
+    }
+    return p.empty() ? "/" : p;
+  }
+
+ private:
+  struct Frame {
+    bool is_array;
+    std::set<std::string> keys;
+    std::string current_key;
+    long index;  // of the last element counted (see path())
+  };
+  void countValueInArray() {
+    if (!frames_.empty() && frames_.back().is_array) ++frames_.back().index;
+  }
+
+  const std::string& source_;
+  std::vector<Frame> frames_;
+};
+
+LaserSpec readLaser(ObjectReader r) {
+  LaserSpec laser;
+  laser.position_m = r.vec3("position");
+  laser.direction = r.direction("direction");
+  laser.power_w = positive(r, "power_w", r.number("power_w"));
+  laser.wavelength_nm = positive(r, "wavelength_nm", r.number("wavelength_nm"));
+  if (auto t = r.optionalNumber("exposure_s")) laser.exposure_s = positive(r, "exposure_s", *t);
+
+  ObjectReader beam = r.object("beam");
+  const std::size_t profile = beam.choice("profile", {"flat_top", "gaussian"});
+  laser.profile = profile == 0 ? BeamProfile::FlatTop : BeamProfile::Gaussian;
+  const std::string radius_key = profile == 0 ? "radius_m" : "w_m";
+  laser.radius_m = positive(beam, radius_key, beam.number(radius_key));
+  laser.divergence_rad = beam.number("divergence_rad", 0.0);
+  if (!(laser.divergence_rad >= 0.0 && laser.divergence_rad < kPi)) {
+    beam.fail("divergence_rad", "must be in [0, π) (a full angle in radians)");
+  }
+  beam.finish();
+  r.finish();
+  return laser;
+}
+
+MaterialSpec readMaterial(ObjectReader r, const std::string& name) {
+  MaterialSpec m;
+  m.name = name;
+  m.specular_reflectance =
+      unitInterval(r, "specular_reflectance", r.number("specular_reflectance"));
+  m.sigma = positive(r, "sigma", r.number("sigma"));
+  m.diffuse_reflectance =
+      unitInterval(r, "diffuse_reflectance", r.number("diffuse_reflectance", 0.0));
+  if (m.specular_reflectance + m.diffuse_reflectance > 1.0) {
+    r.failHere("specular_reflectance + diffuse_reflectance must be ≤ 1 (energy conservation)");
+  }
+  r.finish();
+  return m;
+}
+
+ObjectSpec readObject(ObjectReader r, const std::vector<MaterialSpec>& materials) {
+  ObjectSpec o;
+  const std::vector<std::string> shapes = {"cylinder", "sphere", "disk", "mesh"};
+  const std::size_t shape = r.choice("shape", shapes);
+  if (shapes[shape] == "mesh") {
+    r.fail("shape", "\"mesh\" objects (glTF) are not supported in this version yet");
+  }
+  o.shape = shape == 0 ? ShapeKind::Cylinder : shape == 1 ? ShapeKind::Sphere : ShapeKind::Disk;
+  o.center_m = r.vec3("center");
+  o.radius_m = positive(r, "radius", r.number("radius"));
+  if (o.shape == ShapeKind::Cylinder) {
+    o.axis = r.direction("axis");
+    o.length_m = positive(r, "length", r.number("length"));
+  } else if (o.shape == ShapeKind::Disk) {
+    o.axis = r.direction("normal");
+  }
+  const std::string material = r.string("material");
+  const auto it = std::find_if(materials.begin(), materials.end(),
+                               [&](const MaterialSpec& m) { return m.name == material; });
+  if (it == materials.end()) {
+    std::vector<std::string> names;
+    for (const auto& m : materials) names.push_back("\"" + m.name + "\"");
+    r.fail("material", "no material named \"" + material + "\" (defined: " + joinKeys(names) + ")");
+  }
+  o.material = static_cast<std::uint32_t>(it - materials.begin());
+  const std::int64_t segments = r.integer("segments", 16);
+  if (segments < 3 || segments > 4096) r.fail("segments", "must be an integer in [3, 4096]");
+  o.segments = static_cast<int>(segments);
+  r.finish();
+  return o;
+}
+
+AccuracySpec readAccuracy(ObjectReader r) {
+  AccuracySpec a;
+  a.tolerance = r.number("tolerance", a.tolerance);
+  if (!(a.tolerance > 0.0 && a.tolerance < 1.0)) r.fail("tolerance", "must be in (0, 1)");
+  if (auto floor = r.optionalNumber("floor_w_m2")) {
+    if (!(*floor >= 0.0)) r.fail("floor_w_m2", "must be ≥ 0");
+    a.floor_w_m2 = *floor;
+  }
+  const std::int64_t depth = r.integer("max_depth", a.max_depth);
+  if (depth < 0 || depth > 24) r.fail("max_depth", "must be an integer in [0, 24]");
+  a.max_depth = static_cast<int>(depth);
+  a.max_evaluations = r.integer("max_evaluations", a.max_evaluations);
+  if (a.max_evaluations < 1) r.fail("max_evaluations", "must be an integer ≥ 1");
+  a.normals =
+      r.choice("normals", {"surface", "flat"}, 0) == 0 ? NormalModel::Surface : NormalModel::Flat;
+  r.finish();
+  return a;
+}
+
+}  // namespace
+
+Scene parseScene(std::string_view text, const std::string& source) {
+  json root;
+  PathTracker tracker(source);
+  try {
+    root = json::parse(text.begin(), text.end(),
+                       [&tracker](int, json::parse_event_t event, json& parsed) {
+                         return tracker.onEvent(event, parsed);
+                       });
+  } catch (const json::parse_error& e) {
+    // nlohmann's message starts with "[json.exception.parse_error.101] ": keep the rest.
+    std::string what = e.what();
+    if (const auto pos = what.find("] "); pos != std::string::npos) what.erase(0, pos + 2);
+    throw InputError(source + ": invalid JSON: " + what);
+  } catch (const json::out_of_range& e) {
+    // A number beyond the range of a double (1e999): the only way JSON spells infinity.
+    throw InputError(source + ": " + tracker.path() + ": must be finite");
+  }
+
+  Scene scene;
+  scene.source = source;
+  ObjectReader r(root, "", source);
+  scene.description = r.string("description", "");
+  scene.laser = readLaser(r.object("laser"));
+
+  ObjectReader materials = r.object("materials");
+  if (materials.raw().empty()) materials.failHere("must define at least one material");
+  for (const auto& [name, value] : materials.raw().items()) {
+    materials.has(name);
+    scene.materials.push_back(readMaterial(ObjectReader(value, materials.at(name), source), name));
+  }
+  materials.finish();
+
+  const json& objects = r.require("objects");
+  if (!objects.is_array() || objects.empty()) {
+    r.fail("objects", "must be a non-empty array of objects");
+  }
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    scene.objects.push_back(readObject(
+        ObjectReader(objects[i], "/objects/" + std::to_string(i), source), scene.materials));
+  }
+
+  if (r.has("accuracy")) scene.accuracy = readAccuracy(r.object("accuracy"));
+  r.finish();
+  return scene;
+}
+
+Scene loadScene(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string name = path.string();
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(name + ": is a folder, not a scene file");
+  if (!in) throw InputError(name + ": cannot open the scene file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError(name + ": cannot read the scene file");
+  return parseScene(text.str(), name);
+}
+
+}  // namespace glint

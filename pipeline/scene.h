@@ -1,0 +1,81 @@
+#pragma once
+/// @file
+/// @brief The scene file: laser, materials, objects and accuracy settings, loaded and
+/// validated at the boundary (PHYSICS.md "Scene file", README "Scene file reference").
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "facets/beam.h"
+#include "facets/patch.h"
+#include "facets/vec3.h"
+
+namespace glint {
+
+/// @brief The laser of a scene (key `laser`).
+struct LaserSpec {
+  Vec3 position_m{0.0};
+  Vec3 direction{1.0, 0.0, 0.0};  ///< unit (the file's vector, normalised)
+  double power_w = 0.0;
+  double wavelength_nm = 0.0;
+  std::optional<double> exposure_s;  ///< only the hazard needs it
+  BeamProfile profile = BeamProfile::FlatTop;
+  double radius_m = 0.0;        ///< flat_top `radius_m` or gaussian `w_m`
+  double divergence_rad = 0.0;  ///< full angle
+};
+
+/// @brief One named material (key `materials/<name>`).
+struct MaterialSpec {
+  std::string name;
+  double specular_reflectance = 0.0;
+  double diffuse_reflectance = 0.0;
+  double sigma = 0.0;
+};
+
+/// @brief The analytic shapes (`mesh` comes with glTF support).
+enum class ShapeKind { Cylinder, Sphere, Disk };
+
+/// @brief One object (key `objects/<i>`).
+struct ObjectSpec {
+  ShapeKind shape = ShapeKind::Sphere;
+  Vec3 center_m{0.0};
+  Vec3 axis{0.0, 0.0, 1.0};  ///< unit: cylinder `axis` or disk `normal`
+  double radius_m = 0.0;
+  double length_m = 0.0;       ///< cylinder only
+  std::uint32_t material = 0;  ///< index into Scene::materials
+  int segments = 16;           ///< coarse facets around the circumference
+};
+
+/// @brief Accuracy settings (key `accuracy`, all optional).
+struct AccuracySpec {
+  double tolerance = 1e-3;                   ///< relative accuracy of each observer's total
+  std::optional<double> floor_w_m2;          ///< default: 1e-9 × the beam's peak irradiance
+  int max_depth = 16;                        ///< deepest 1→4 subdivision level
+  std::int64_t max_evaluations = 4'000'000;  ///< per observer
+  NormalModel normals = NormalModel::Surface;
+};
+
+/// @brief A validated scene: every number finite and in range, every reference resolved.
+struct Scene {
+  std::string source;  ///< the file name as given, for messages
+  std::string description;
+  LaserSpec laser;
+  std::vector<MaterialSpec> materials;
+  std::vector<ObjectSpec> objects;
+  AccuracySpec accuracy;
+};
+
+/// @brief Reads and validates a scene file.
+/// @throw InputError naming the file and the JSON pointer of the first problem, e.g.
+/// `scene.json: /materials/polished/sigma: must be > 0`.
+Scene loadScene(const std::filesystem::path& path);
+
+/// @brief Validates scene JSON text; @p source names it in messages.
+/// @throw InputError as loadScene.
+Scene parseScene(std::string_view json_text, const std::string& source);
+
+}  // namespace glint

@@ -1,0 +1,148 @@
+#include "facets/reflection.h"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <random>
+
+#include "facets/tessellate.h"
+#include "support/scenes.h"
+
+namespace glint {
+namespace {
+
+void forEachDescendant(const Target& t, const SubFacet& f, int levels,
+                       const std::function<void(const SubFacet&)>& visit) {
+  if (levels == 0) {
+    visit(f);
+    return;
+  }
+  for (const SubFacet& c : split(t, f)) forEachDescendant(t, c, levels - 1, visit);
+}
+
+// A target with every surface model: quadric cylinder, sphere and disk, and a PN-triangle
+// sphere built from exact vertex normals.
+Target mixedTarget(const Vec3& toward_laser) {
+  Target t;
+  t.addMaterial(test::mirror(0.9, 0.02, 0.05));
+  addCylinder(t, {Vec3(0, 0, 0), Vec3(0, 0, 1), 0.5, 1.5}, 0, 12, toward_laser);
+  addSphere(t, {Vec3(0, 2, 0), 0.4}, 0, 12, toward_laser);
+  addDisk(t, {Vec3(0, -2, 0), glm::normalize(Vec3(-1, 0, 0.3)), 0.5}, 0, 12, toward_laser);
+  // PN sphere: the UV sphere's vertices with their exact normals.
+  Target uv;
+  uv.addMaterial({});
+  addSphere(uv, {Vec3(0), 0.4}, 0, 8, toward_laser);
+  std::vector<Vec3> pos, nrm;
+  std::vector<std::array<std::uint32_t, 3>> tris;
+  for (const auto& c : uv.corners_m) {
+    std::array<std::uint32_t, 3> tri;
+    for (int k = 0; k < 3; ++k) {
+      tri[k] = static_cast<std::uint32_t>(pos.size());
+      pos.push_back(c[k]);
+      nrm.push_back(glm::normalize(c[k]));
+    }
+    tris.push_back(tri);
+  }
+  addMesh(t, Vec3(0, 0, 2), 0, pos, nrm, tris, MeshSurface::PN);
+  return t;
+}
+
+TEST(ContributionBound, BoundsThePointwiseIntegrandOfEveryDescendant) {
+  const Beam beam = test::flatTop(Vec3(0), Vec3(1, 0.2, -0.1), 50.0, 5.0);
+  const Target t = mixedTarget(-beam.direction);
+  const Material& m = t.materials[0];
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::size_t checked = 0;
+  for (std::uint32_t i = 0; i < t.facetCount(); i += 3) {
+    const Beam local = beam.relativeTo(t.objects[t.object[i]].origin_m);
+    for (int depth = 0; depth <= 2; ++depth) {
+      SubFacet f = coarseSubFacet(t, i);
+      for (int d = 0; d < depth; ++d) f = split(t, f)[static_cast<std::size_t>(rng() % 4)];
+      const PatchGeometry g = patchGeometry(t, f, NormalModel::Surface);
+      for (int trial = 0; trial < 4; ++trial) {
+        // Observers from 2 cm to 20 m away, all around.
+        const Vec3 dir = glm::normalize(Vec3(u(rng), u(rng), u(rng)));
+        const double dist = g.radius_m + std::pow(10.0, -1.7 + 3.0 * (u(rng) + 1.0) / 2.0);
+        const Vec3 obs = g.centre_m + dist * dir;
+        const ContributionBound b = contributionBound(g, obs, local, m, ResolutionLimits{});
+        const bool faces = mayFaceObserver(g, obs);
+        const bool lit = lightVerdict(g, local) == LightVerdict::MayBeLit;
+        forEachDescendant(t, f, 3, [&](const SubFacet& leaf) {
+          const PatchGeometry lg = patchGeometry(t, leaf, NormalModel::Surface);
+          const double e = facetIrradiance(lg, obs, local, m);
+          if (e == 0.0) return;
+          ++checked;
+          // The integrand at the leaf's centre times the whole patch's area bound may not
+          // exceed the patch bound, and a patch ruled out may not contribute at all.
+          ASSERT_LE(e / lg.area_m2 * g.area_bound_m2, b.upper_w_m2 * (1 + 1e-9))
+              << "facet " << i << " depth " << depth << " observer at " << dist << " m";
+          ASSERT_TRUE(faces) << "facet " << i << " was said to face away";
+          ASSERT_TRUE(lit) << "facet " << i << " was said to be unlit";
+        });
+      }
+    }
+  }
+  EXPECT_GT(checked, 1000u) << "the property was exercised";
+}
+
+TEST(ClipTriangle, KeepsWhereBothLinearFunctionsArePositive) {
+  // Reference by sampling the triangle on a fine barycentric grid.
+  auto reference = [](const std::array<double, 3>& a, const std::array<double, 3>& b) {
+    const int n = 600;
+    double inside = 0.0, total = 0.0;
+    Vec3 centroid(0.0);
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; i + j < n; ++j) {
+        const Vec3 w(1.0 - (i + j + 2.0 / 3.0) / n, (i + 1.0 / 3.0) / n, (j + 1.0 / 3.0) / n);
+        total += 1.0;
+        if (glm::dot(w, Vec3(a[0], a[1], a[2])) > 0.0 &&
+            glm::dot(w, Vec3(b[0], b[1], b[2])) > 0.0) {
+          inside += 1.0;
+          centroid += w;
+        }
+      }
+    }
+    return ClippedTriangle{inside / total, inside > 0 ? centroid / inside : Vec3(1.0 / 3.0)};
+  };
+  const std::vector<std::pair<std::array<double, 3>, std::array<double, 3>>> cases = {
+      {{1, 1, 1}, {1, 2, 3}},
+      {{1, -1, -1}, {1, 1, 1}},
+      {{1, 1, -1}, {1, -1, 1}},
+      {{-0.2, 0.5, 0.9}, {0.7, 0.3, -0.4}},
+      {{-1, -1, -1}, {1, 1, 1}}};
+  for (const auto& [a, b] : cases) {
+    const ClippedTriangle got = clipTriangle(a, b);
+    const ClippedTriangle ref = reference(a, b);
+    // The grid reference is exact to O(1/n) near the cut lines.
+    EXPECT_NEAR(got.fraction, ref.fraction, 5e-3) << a[0] << "," << a[1] << "," << a[2];
+    if (ref.fraction > 0.0) {
+      EXPECT_NEAR(glm::length(got.centroid_bary - ref.centroid_bary), 0.0, 5e-3) << a[0];
+    }
+  }
+  // Exact cases: a corner quarter, and nothing.
+  const ClippedTriangle corner = clipTriangle({1, -1, -1}, {1, 1, 1});
+  EXPECT_NEAR(corner.fraction, 0.25, 1e-15);
+  EXPECT_NEAR(glm::length(corner.centroid_bary - Vec3(2.0 / 3, 1.0 / 6, 1.0 / 6)), 0.0, 1e-15);
+  EXPECT_EQ(clipTriangle({-1, -1, -1}, {1, 1, 1}).fraction, 0.0);
+}
+
+TEST(ContributionBound, IsTightOnceTheLobeIsResolved) {
+  // A small flat patch at the glint of a far observer: the bound may only exceed the value by
+  // what the lobe can change over the patch (a few σ), not by orders of magnitude.
+  Target t;
+  t.addMaterial(test::mirror(1.0, 0.05));
+  addDisk(t, {Vec3(0), Vec3(0, 0, 1), 0.01}, 0, 8, Vec3(1, 0, 0));
+  const Beam beam = test::flatTop(Vec3(0), Vec3(0, 0, -1), 10.0, 1.0);
+  const Vec3 obs(0.0, 0.0, 100.0);
+  for (std::uint32_t i = 0; i < t.facetCount(); ++i) {
+    const PatchGeometry g = patchGeometry(t, coarseSubFacet(t, i), NormalModel::Surface);
+    const ContributionBound b = contributionBound(g, obs, beam, t.materials[0], ResolutionLimits{});
+    const double e = facetIrradiance(g, obs, beam, t.materials[0]);
+    EXPECT_TRUE(b.resolved()) << "facet " << i;
+    EXPECT_LT(b.upper_w_m2, 1.01 * e) << "facet " << i;
+  }
+}
+
+}  // namespace
+}  // namespace glint

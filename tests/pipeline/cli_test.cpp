@@ -1,0 +1,179 @@
+#include "pipeline/cli.h"
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace glint {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Outcome {
+  int status;
+  std::string out, err;
+};
+
+Outcome glint(std::vector<std::string> args) {
+  args.insert(args.begin(), "glint");
+  std::vector<const char*> argv;
+  for (const auto& a : args) argv.push_back(a.c_str());
+  std::ostringstream out, err;
+  const int status = runGlint(static_cast<int>(argv.size()), argv.data(), out, err);
+  return {status, out.str(), err.str()};
+}
+
+// A fresh folder per test, removed afterwards.
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("glint_cli_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name) << text;
+    return (dir_ / name).string();
+  }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  std::size_t filesInDir() const {
+    return static_cast<std::size_t>(
+        std::distance(fs::directory_iterator(dir_), fs::directory_iterator()));
+  }
+  static std::string example(const std::string& name) {
+    return std::string(GLINT_EXAMPLES_DIR) + "/" + name;
+  }
+
+  fs::path dir_;
+};
+
+std::string readFile(const std::string& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+TEST_F(CliTest, VersionAndHelpSucceed) {
+  const Outcome v = glint({"--version"});
+  EXPECT_EQ(v.status, 0);
+  EXPECT_NE(v.out.find("glint 0."), std::string::npos) << v.out;
+  const Outcome h = glint({"--help"});
+  EXPECT_EQ(h.status, 0);
+  EXPECT_NE(h.out.find("points"), std::string::npos) << h.out;
+  const Outcome ph = glint({"points", "--help"});
+  EXPECT_EQ(ph.status, 0);
+  EXPECT_NE(ph.out.find("--tolerance"), std::string::npos) << ph.out;
+}
+
+TEST_F(CliTest, UsageErrorsExitWithStatusTwo) {
+  EXPECT_EQ(glint({}).status, 2) << "no command";
+  EXPECT_EQ(glint({"paint"}).status, 2) << "unknown command";
+  EXPECT_EQ(glint({"points", example("cylinder.json")}).status, 2) << "--points missing";
+  EXPECT_EQ(glint({"points", example("cylinder.json"), "--points", example("cylinder_186.csv"),
+                   "--tolerance", "5"})
+                .status,
+            2)
+      << "tolerance out of range";
+  EXPECT_EQ(glint({"points", example("cylinder.json"), "--points", example("cylinder_186.csv"),
+                   "--normals", "bent"})
+                .status,
+            2)
+      << "unknown normal model";
+}
+
+TEST_F(CliTest, BadSceneExitsTwoWithItsPathAndWritesNothing) {
+  std::string scene = readFile(example("cylinder.json"));
+  scene.replace(scene.find("\"sigma\": 0.003"), 14, "\"sigma\": 0");
+  const std::string scene_path = write("scene.json", scene);
+  const std::string points = write("p.csv", "x,y,z\n1,2,3\n");
+  const Outcome r = glint({"points", scene_path, "--points", points, "--out", path("out.csv")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find(scene_path + ": /materials/polished/sigma: must be > 0"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(path("out.csv")));
+  EXPECT_EQ(filesInDir(), 2u) << "no temporary file left behind";
+}
+
+TEST_F(CliTest, BadPointsFileExitsTwoWithItsLineAndWritesNothing) {
+  const std::string points = write("p.csv", "x,y,z\n1,2,3\n4,five,6\n");
+  const Outcome r =
+      glint({"points", example("cylinder.json"), "--points", points, "--out", path("out.csv")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find(points + ":3: column 2 (y): \"five\" is not a number"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(path("out.csv")));
+}
+
+TEST_F(CliTest, MissingOutputFolderIsRefusedBeforeTheWork) {
+  const std::string points = write("p.csv", "x,y,z\n1,2,3\n");
+  const Outcome r = glint({"points", example("cylinder.json"), "--points", points, "--out",
+                           path("no/such/folder/out.csv"), "--quiet"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("cannot create"), std::string::npos) << r.err;
+}
+
+TEST_F(CliTest, PointsWritesOneRowPerObserverInInputOrder) {
+  const std::string points = write("p.csv", "x,y,z\n-3,0,0.1\n0.1,-7.25,0.5\n2.5e1,3,-0.25\n");
+  const Outcome r =
+      glint({"points", example("cylinder.json"), "--points", points, "--out", path("out.csv")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::istringstream csv(readFile(path("out.csv")));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "x,y,z,irradiance_w_m2,error_estimate_w_m2,evaluations,converged");
+  std::vector<std::string> rows;
+  while (std::getline(csv, line)) rows.push_back(line);
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0].rfind("-3,0,0.1,", 0), 0u) << rows[0];
+  EXPECT_EQ(rows[1].rfind("0.1,-7.25,0.5,", 0), 0u) << rows[1];
+  EXPECT_EQ(rows[2].rfind("25,3,-0.25,", 0), 0u) << rows[2];
+  for (const auto& row : rows) EXPECT_EQ(row.substr(row.size() - 2), ",1") << "converged: " << row;
+  EXPECT_NE(r.err.find("glint points: 3 observers"), std::string::npos) << "summary: " << r.err;
+}
+
+TEST_F(CliTest, WritesToStandardOutputWithoutAnOutputFile) {
+  const std::string points = write("p.csv", "x,y,z\n-3,0,0.1\n");
+  const Outcome r = glint({"points", example("cylinder.json"), "--points", points, "--quiet"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.out.rfind("x,y,z,irradiance_w_m2", 0), 0u) << r.out;
+  EXPECT_EQ(r.err, "") << "--quiet";
+}
+
+TEST_F(CliTest, UniformOptionRunsTheUniformTwin) {
+  const std::string points = write("p.csv", "x,y,z\n-3,0,0.1\n");
+  const Outcome r =
+      glint({"points", example("cylinder.json"), "--points", points, "--uniform", "2", "--quiet"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::istringstream csv(r.out);
+  std::string line;
+  std::getline(csv, line);
+  std::getline(csv, line);
+  // Columns: x,y,z,E,err,evaluations,converged — 4² sub-facets per facet seen.
+  std::vector<std::string> cells;
+  std::stringstream cs(line);
+  for (std::string c; std::getline(cs, c, ',');) cells.push_back(c);
+  ASSERT_EQ(cells.size(), 7u) << line;
+  EXPECT_EQ(std::stol(cells[5]) % 16, 0) << line;
+}
+
+TEST_F(CliTest, TheBuiltCommandExitsTwoOnBadInput) {
+  const std::string cmd = std::string(GLINT_EXE) + " points " + path("missing.json") +
+                          " --points " + path("missing.csv") + " 2> " + path("err.txt");
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  EXPECT_NE(readFile(path("err.txt")).find("missing.json: cannot open the scene file"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace glint

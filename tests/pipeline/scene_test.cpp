@@ -1,0 +1,175 @@
+#include "pipeline/scene.h"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "pipeline/input_error.h"
+#include "pipeline/target_builder.h"
+
+namespace glint {
+namespace {
+
+using nlohmann::json;
+
+// The minimal scene of PHYSICS.md.
+json minimal() {
+  return json::parse(R"({
+    "laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "power_w": 1000.0,
+              "wavelength_nm": 1064, "exposure_s": 0.25,
+              "beam": {"profile": "flat_top", "radius_m": 2.0}},
+    "materials": {"polished": {"specular_reflectance": 0.9, "sigma": 0.003,
+                               "diffuse_reflectance": 0.0}},
+    "objects": [{"shape": "cylinder", "center": [0, 0, 0], "axis": [0, 0, 1],
+                 "radius": 0.5, "length": 2.0, "material": "polished"}]
+  })");
+}
+
+// The message parseScene refuses `scene` with.
+std::string refusal(const std::string& text) {
+  try {
+    parseScene(text, "scene.json");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+std::string refusal(const json& scene) { return refusal(scene.dump()); }
+
+TEST(Scene, MinimalSceneLoadsWithDefaults) {
+  json j = minimal();
+  j["laser"].erase("exposure_s");
+  j["materials"]["polished"].erase("diffuse_reflectance");
+  const Scene s = parseScene(j.dump(), "scene.json");
+  EXPECT_FALSE(s.laser.exposure_s.has_value());
+  EXPECT_EQ(s.materials.at(0).diffuse_reflectance, 0.0);
+  EXPECT_EQ(s.laser.divergence_rad, 0.0);
+  EXPECT_EQ(s.objects.at(0).segments, 16);
+  EXPECT_EQ(s.accuracy.tolerance, 1e-3);
+  EXPECT_EQ(s.accuracy.normals, NormalModel::Surface);
+  // The floor defaults to 1e-9 of the beam's peak irradiance P / (π a²).
+  EXPECT_NEAR(integratorOptions(s).floor_w_m2, 1e-9 * 1000.0 / (kPi * 4.0), 1e-20);
+}
+
+TEST(Scene, DirectionsAreNormalised) {
+  json j = minimal();
+  j["laser"]["direction"] = {3, 0, 4};
+  j["objects"][0]["axis"] = {0, 0, 7};
+  const Scene s = parseScene(j.dump(), "scene.json");
+  EXPECT_NEAR(s.laser.direction.x, 0.6, 1e-15);
+  EXPECT_NEAR(s.laser.direction.z, 0.8, 1e-15);
+  EXPECT_NEAR(s.objects[0].axis.z, 1.0, 1e-15);
+}
+
+TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
+  struct Case {
+    std::function<void(json&)> edit;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {[](json& j) { j["laser"]["colour"] = "green"; },
+       "scene.json: /laser/colour: unknown key (expected one of: position, direction, power_w, "
+       "wavelength_nm, exposure_s, beam)"},
+      {[](json& j) { j["extra"] = 1; }, "scene.json: /extra: unknown key"},
+      {[](json& j) { j["laser"].erase("power_w"); },
+       "scene.json: /laser/power_w: missing (required)"},
+      {[](json& j) { j.erase("objects"); }, "scene.json: /objects: missing (required)"},
+      {[](json& j) { j["laser"]["power_w"] = "1000"; },
+       "scene.json: /laser/power_w: must be a number"},
+      {[](json& j) {
+         j["laser"]["position"] = {1, 2};
+       },
+       "scene.json: /laser/position: must be an array of 3 numbers"},
+      {[](json& j) { j["laser"]["power_w"] = 0.0; }, "scene.json: /laser/power_w: must be > 0"},
+      {[](json& j) { j["laser"]["power_w"] = -5.0; }, "scene.json: /laser/power_w: must be > 0"},
+      {[](json& j) { j["materials"]["polished"]["sigma"] = 0.0; },
+       "scene.json: /materials/polished/sigma: must be > 0"},
+      {[](json& j) { j["materials"]["polished"]["specular_reflectance"] = 1.2; },
+       "scene.json: /materials/polished/specular_reflectance: must be in [0, 1]"},
+      {[](json& j) { j["materials"]["polished"]["diffuse_reflectance"] = -0.1; },
+       "scene.json: /materials/polished/diffuse_reflectance: must be in [0, 1]"},
+      {[](json& j) { j["materials"]["polished"]["diffuse_reflectance"] = 0.2; },
+       "scene.json: /materials/polished: specular_reflectance + diffuse_reflectance must be ≤ 1"},
+      {[](json& j) {
+         j["laser"]["direction"] = {0, 0, 0};
+       },
+       "scene.json: /laser/direction: must not be zero-length"},
+      {[](json& j) {
+         j["objects"][0]["axis"] = {0, 0, 0};
+       },
+       "scene.json: /objects/0/axis: must not be zero-length"},
+      {[](json& j) { j["objects"][0]["material"] = "chrome"; },
+       "scene.json: /objects/0/material: no material named \"chrome\" (defined: \"polished\")"},
+      {[](json& j) { j["objects"][0]["shape"] = "cone"; },
+       "scene.json: /objects/0/shape: must be one of: cylinder, sphere, disk, mesh"},
+      {[](json& j) { j["objects"][0]["shape"] = "mesh"; },
+       "scene.json: /objects/0/shape: \"mesh\" objects (glTF) are not supported in this version"},
+      {[](json& j) { j["objects"][0]["segments"] = 2; },
+       "scene.json: /objects/0/segments: must be an integer in [3, 4096]"},
+      {[](json& j) { j["objects"][0]["segments"] = 16.5; },
+       "scene.json: /objects/0/segments: must be an integer"},
+      {[](json& j) { j["objects"] = json::array(); },
+       "scene.json: /objects: must be a non-empty array of objects"},
+      {[](json& j) { j["laser"]["beam"]["profile"] = "tophat"; },
+       "scene.json: /laser/beam/profile: must be one of: flat_top, gaussian"},
+      {[](json& j) {
+         j["laser"]["beam"] = {{"profile", "gaussian"}, {"radius_m", 1.0}};
+       },
+       "scene.json: /laser/beam/w_m: missing (required)"},
+      {[](json& j) { j["laser"]["beam"]["divergence_rad"] = -0.001; },
+       "scene.json: /laser/beam/divergence_rad: must be in [0, π)"},
+      {[](json& j) {
+         j["accuracy"] = {{"tolerance", 0.0}};
+       },
+       "scene.json: /accuracy/tolerance: must be in (0, 1)"},
+      {[](json& j) {
+         j["accuracy"] = {{"normals", "smooth"}};
+       },
+       "scene.json: /accuracy/normals: must be one of: surface, flat"},
+      {[](json& j) { j["materials"] = json::object(); },
+       "scene.json: /materials: must define at least one material"},
+  };
+  for (const Case& c : cases) {
+    json j = minimal();
+    c.edit(j);
+    const std::string message = refusal(j);
+    EXPECT_EQ(message.rfind(c.message, 0), 0u)
+        << "got:      " << message << "\nexpected: " << c.message;
+  }
+}
+
+TEST(Scene, RefusesNonFiniteNumbers) {
+  // JSON has no NaN or Infinity; a number too large for a double is how a non-finite value
+  // arrives.
+  std::string text = minimal().dump();
+  text.replace(text.find("1000.0"), 6, "1e999");
+  EXPECT_EQ(refusal(text), "scene.json: /laser/power_w: must be finite");
+  std::string in_array = minimal().dump();
+  in_array.replace(in_array.find("[-100,0,0]"), 10, "[-100,0,-1e400]");
+  EXPECT_EQ(refusal(in_array), "scene.json: /laser/position/2: must be finite");
+}
+
+TEST(Scene, RefusesDuplicateKeys) {
+  const std::string text = R"({"laser": {"position": [0,0,0], "power_w": 1, "power_w": 2}})";
+  EXPECT_EQ(refusal(text), "scene.json: /laser/power_w: duplicate key");
+  const std::string in_array = R"({"objects": [{}, {"radius": 1, "radius": 2}]})";
+  EXPECT_EQ(refusal(in_array), "scene.json: /objects/1/radius: duplicate key");
+}
+
+TEST(Scene, RefusesMalformedJsonWithItsPosition) {
+  const std::string message = refusal(std::string("{\n  \"laser\": {,\n}"));
+  EXPECT_EQ(message.rfind("scene.json: invalid JSON: parse error at line 2, column 13", 0), 0u)
+      << message;
+}
+
+TEST(Scene, LoadNamesAMissingFile) {
+  try {
+    loadScene("/nonexistent/scene.json");
+    FAIL() << "a missing file was accepted";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "/nonexistent/scene.json: cannot open the scene file");
+  }
+}
+
+}  // namespace
+}  // namespace glint
