@@ -48,11 +48,11 @@ void ProgressReporter::run() {
   if (wake_.wait_for(lock, 1s, [this] { return stopping_; })) return;
   const auto period = terminal_ ? std::chrono::milliseconds(500) : std::chrono::milliseconds(10000);
   do {
-    print(false);
+    print();
   } while (!wake_.wait_for(lock, period, [this] { return stopping_; }));
 }
 
-void ProgressReporter::print(bool) {
+void ProgressReporter::print() {
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   const std::size_t done = counter_.items_done.load();

@@ -29,7 +29,7 @@ class ProgressReporter {
 
  private:
   void run();
-  void print(bool final_line);
+  void print();
 
   std::ostream& err_;
   bool terminal_;

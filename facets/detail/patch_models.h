@@ -78,17 +78,23 @@ Moments edgeMidpointMoments(double parameter_area, SampleAt&& sample_at) {
   return {parameter_area * sum / 3.0, first / sum};
 }
 
-// The circular segment between a rim edge's chord and the rim's arc (its area is missing from
-// the triangle and belongs to the facet).
-inline double rimSegmentArea(const SubFacet& f, const RimCircle& rim) {
-  double area = 0.0;
+// The circular segments between a facet's rim edges and the rim's arcs: their area, missing
+// from the triangle but part of the facet, and how far the arcs bulge beyond the chords.
+struct RimSegments {
+  double area_m2 = 0.0;
+  double max_bulge_m = 0.0;
+};
+
+inline RimSegments rimSegments(const SubFacet& f, const RimCircle& rim) {
+  RimSegments s;
   for (int e = 0; e < 3; ++e) {
     if (!(f.rim_edges >> e & 1u)) continue;
     const double chord = glm::length(f.corner_m[(e + 1) % 3] - f.corner_m[e]);
     const double theta = 2.0 * std::asin(std::min(1.0, 0.5 * chord / rim.radius_m));
-    area += 0.5 * rim.radius_m * rim.radius_m * (theta - std::sin(theta));
+    s.area_m2 += 0.5 * rim.radius_m * rim.radius_m * (theta - std::sin(theta));
+    s.max_bulge_m = std::max(s.max_bulge_m, rim.radius_m * (1.0 - std::cos(0.5 * theta)));
   }
-  return area;
+  return s;
 }
 
 // Area bound from the largest tilt between the patch's normals and its chord: a surface that is
@@ -157,16 +163,16 @@ struct QuadricPatches {
       });
       if (mo.area_m2 > 0.0) {
         g.area_m2 = mo.area_m2;
-        const Vec3 inward = quadric->gradient(mo.centroid_m);
-        const double inward_len = glm::length(inward);
-        const auto t = inward_len > 0.0 ? quadric->nearestRoot(mo.centroid_m, inward / inward_len)
+        const Vec3 grad_c = quadric->gradient(mo.centroid_m);
+        const double grad_c_len = glm::length(grad_c);
+        const auto t = grad_c_len > 0.0 ? quadric->nearestRoot(mo.centroid_m, grad_c / grad_c_len)
                                         : std::nullopt;
-        g.centre_m = t ? mo.centroid_m + *t * (inward / inward_len) : mo.centroid_m;
+        g.centre_m = t ? mo.centroid_m + *t * (grad_c / grad_c_len) : mo.centroid_m;
       }
       const Vec3 grad_at = quadric->gradient(g.centre_m);
       const double grad_at_len = glm::length(grad_at);
       g.normal = grad_at_len > 0.0 ? grad_at / grad_at_len : surface_normal;
-      if (rim != nullptr && f.rim_edges != 0) g.area_m2 += rimSegmentArea(f, *rim);
+      if (rim != nullptr && f.rim_edges != 0) g.area_m2 += rimSegments(f, *rim).area_m2;
     }
     g.corner_m = f.corner_m;
     for (int k = 0; k < 3; ++k) {
@@ -197,10 +203,12 @@ struct QuadricPatches {
       // it, so widening by their angle keeps every patch normal within the cone of g.normal.
       cone = std::min(kPi, cone + angleBetween(surface_normal, g.normal));
       if (normals == NormalModel::Flat) cone = std::min(kPi, cone + chord_tilt);
-      // The ball was centred on the chord centroid; re-centring on the sample widens it.
-      g.radius_m = radius + glm::length(g.centre_m - c.centre_m);
+      // The ball was centred on the chord centroid; re-centring on the sample widens it, and so
+      // do rim arcs bulging past their chords (whose segments add to the area).
+      const RimSegments segments = rim != nullptr ? rimSegments(f, *rim) : RimSegments{};
+      g.radius_m = radius + segments.max_bulge_m + glm::length(g.centre_m - c.centre_m);
       g.cone_rad = cone;
-      g.area_bound_m2 = areaBound(c, cone + chord_tilt, g.radius_m);
+      g.area_bound_m2 = areaBound(c, cone + chord_tilt, g.radius_m) + segments.area_m2;
     }
     return g;
   }
@@ -246,7 +254,10 @@ struct PNPatches {
     }
     if constexpr (kBounds) {
       const double radius = c.max_corner_distance_m + pn->sagBound(f.depth);
-      double cone = pn->normalConeHalfAngle(f.bary, surface_normal);
+      // The blossom cone is about the normal at the parameter centroid; g.normal was taken at
+      // the area centroid, so widen by their angle as for quadrics.
+      double cone = std::min(kPi, pn->normalConeHalfAngle(f.bary, surface_normal) +
+                                      angleBetween(surface_normal, g.normal));
       const double chord_tilt = c.area_m2 > 0.0 ? angleBetween(c.normal, surface_normal) : 0.0;
       if (normals == NormalModel::Flat) cone = std::min(kPi, cone + chord_tilt);
       g.radius_m = radius + glm::length(g.centre_m - c.centre_m);

@@ -86,6 +86,36 @@ TEST(ContributionBound, BoundsThePointwiseIntegrandOfEveryDescendant) {
   EXPECT_GT(checked, 1000u) << "the property was exercised";
 }
 
+TEST(PatchGeometry, BallConeAndAreaBoundHoldForEveryDescendant) {
+  const Target t = mixedTarget(glm::normalize(Vec3(-1, -0.2, 0.1)));
+  std::size_t checked = 0;
+  for (std::uint32_t i = 0; i < t.facetCount(); ++i) {
+    for (NormalModel normals : {NormalModel::Surface, NormalModel::Flat}) {
+      SubFacet f = coarseSubFacet(t, i);
+      for (int depth = 0; depth <= 2; ++depth) {
+        const PatchGeometry g = patchGeometry(t, f, normals);
+        double area = 0.0;
+        forEachDescendant(t, f, 4, [&](const SubFacet& leaf) {
+          const PatchGeometry lg = patchGeometry(t, leaf, normals);
+          area += lg.area_m2;
+          ++checked;
+          for (const Vec3& p : {lg.centre_m, lg.corner_m[0], lg.corner_m[1], lg.corner_m[2]}) {
+            ASSERT_LE(glm::length(p - g.centre_m), g.radius_m * (1 + 1e-12)) << "facet " << i;
+          }
+          for (const Vec3& n :
+               {lg.normal, lg.corner_normal[0], lg.corner_normal[1], lg.corner_normal[2]}) {
+            ASSERT_LE(angleBetween(n, g.normal), g.cone_rad + 1e-12)
+                << "facet " << i << " normals " << static_cast<int>(normals) << " depth " << depth;
+          }
+        });
+        EXPECT_LE(area, g.area_bound_m2 * (1 + 1e-12)) << "facet " << i << " depth " << depth;
+        f = split(t, f)[static_cast<std::size_t>(depth) % 4];
+      }
+    }
+  }
+  EXPECT_GT(checked, 10000u);
+}
+
 TEST(ClipTriangle, KeepsWhereBothLinearFunctionsArePositive) {
   // Reference by sampling the triangle on a fine barycentric grid.
   auto reference = [](const std::array<double, 3>& a, const std::array<double, 3>& b) {
