@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "facets/beam.h"
@@ -48,6 +49,42 @@ struct CullStats {
   std::size_t lit = 0;           ///< kept for the observers
 };
 
+/// @brief A (sub)facet that observers may receive light from, with its bound geometry in its
+/// object's frame. The lit coarse facets are the candidates of every observer; a block of the
+/// observer field keeps those its bound cannot rule out, split finer where that tightens it,
+/// and hands them down to its children.
+struct Candidate {
+  SubFacet facet;
+  std::uint32_t object = 0;
+  PatchGeometry geometry;  ///< with bounds
+  /// Normal-cone half-angle and bounding radius of its coarse facet: however finely the facet
+  /// is split, the light of the whole coarse facet spreads at least this wide.
+  double fan_rad = 0.0;
+  double fan_radius_m = 0.0;
+};
+
+/// @brief How boundRegion() may trade candidates for work.
+struct RegionOptions {
+  /// Candidates whose bounds sum to at most this (with what the parents dropped) are dropped:
+  /// every observer of the region may miss that much.
+  double drop_allowance_w_m2 = 0.0;
+  /// Distance between the region's samples: a coarse facet whose whole light could pass
+  /// between them is reported in RegionBound::narrow_w_m2.
+  double sample_spacing_m = 0.0;
+  /// Splitting a candidate to tighten the bound stops at this depth.
+  int max_split_depth = 8;
+};
+
+/// @brief The bound of what any observer in a ball can receive (see boundRegion()).
+struct RegionBound {
+  double upper_w_m2 = 0.0;    ///< no observer in the ball receives more (kept + dropped)
+  double dropped_w_m2 = 0.0;  ///< bound of all dropped candidates, inherited ones included
+  /// Bound of the kept candidates whose coarse facet's light is narrower than the sample
+  /// spacing: a glint that samples alone could miss.
+  double narrow_w_m2 = 0.0;
+  std::int64_t bound_evaluations = 0;  ///< contribution bounds computed
+};
+
 /// @brief Per-thread scratch space of FacetIntegrator: reused between observers, so the hot
 /// loop does not allocate once it has grown to the largest observer's needs.
 class IntegratorWorkspace {
@@ -74,6 +111,24 @@ class FacetIntegrator {
   /// @brief Adaptive integration at @p observer_m (world coordinates).
   ObserverResult adaptive(const Vec3& observer_m, IntegratorWorkspace& ws) const;
 
+  /// @brief Adaptive integration at @p observer_m over @p candidates only (from
+  /// boundRegion() of a region that contains the observer), starting from their sub-facets.
+  ObserverResult adaptive(const Vec3& observer_m, std::span<const Candidate> candidates,
+                          IntegratorWorkspace& ws) const;
+
+  /// @brief The lit coarse facets: every observer's candidates.
+  [[nodiscard]] std::span<const Candidate> candidates() const { return lit_; }
+
+  /// @brief Bounds what any observer within @p radius_m of @p centre_m can receive from
+  /// @p inherited, and writes to @p kept the candidates that bound cannot drop. A candidate
+  /// whose bound exceeds the drop allowance and whose normal cone is wider than the region
+  /// looks from it is split 1→4 (up to RegionOptions::max_split_depth), which tightens the
+  /// bound where the region sees only part of its light. @p inherited_dropped_w_m2 is what the
+  /// parents already dropped. Never throws; allocates only when @p kept grows.
+  RegionBound boundRegion(const Vec3& centre_m, double radius_m,
+                          std::span<const Candidate> inherited, double inherited_dropped_w_m2,
+                          const RegionOptions& options, std::vector<Candidate>& kept) const;
+
   /// @brief The uniform twin: every lit coarse facet split to @p level, each sub-facet
   /// evaluated once by the same kernel. Its error estimate is not computed (reported as 0).
   ObserverResult uniform(const Vec3& observer_m, int level, IntegratorWorkspace& ws) const;
@@ -84,19 +139,13 @@ class FacetIntegrator {
   [[nodiscard]] const Beam& beam() const { return beam_; }
 
  private:
-  struct LitFacet {
-    std::uint32_t facet;
-    std::uint32_t object;
-    PatchGeometry geometry;  // of the coarse facet, with bounds
-  };
-
   void prepareObserver(const Vec3& observer_m, IntegratorWorkspace::Impl& ws) const;
 
   Target target_;
   Beam beam_;
   IntegratorOptions options_;
   std::vector<Beam> object_beams_;  // the beam in each object's frame
-  std::vector<LitFacet> lit_;
+  std::vector<Candidate> lit_;
   CullStats cull_;
 };
 

@@ -15,10 +15,13 @@ double turnAngle(double e, double len) { return e < len ? std::asin(e / len) : k
 
 ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer_m,
                                     const Beam& beam, const Material& material,
-                                    const ResolutionLimits& limits) {
+                                    const ResolutionLimits& limits, double observer_radius_m) {
   const Vec3 v = observer_m - g.centre_m;
   const double d = glm::length(v);
-  if (!(d > g.radius_m)) {
+  // Every patch point lies within g.radius_m of its centre and every observer within
+  // observer_radius_m of observer_m: the two balls merge into one for the distances and angles.
+  const double reach = g.radius_m + observer_radius_m;
+  if (!(d > reach)) {
     const double inf = std::numeric_limits<double>::infinity();
     return {inf, inf};
   }
@@ -27,7 +30,7 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
 
   // Half-vector spread: ωo turns by at most asin(r/d) over the ball, ωi by the beam's spread;
   // their sum moves by at most the two chords.
-  const double eps_o = std::asin(g.radius_m / d);
+  const double eps_o = std::asin(reach / d);
   const double eps_i = beam.directionSpreadInBall(g.radius_m);
   const Vec3 wi = beam.at(g.centre_m).toward_laser;
   const Vec3 h = wi + v / d;
@@ -41,7 +44,7 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
                              : std::numeric_limits<double>::infinity();
   };
   const double tan2_min = tan2(std::max(0.0, theta_n - spread));
-  const double d_min = d - g.radius_m;
+  const double d_min = d - reach;
   const double scale = e_max * g.area_bound_m2 / (d_min * d_min);
   double specular = 0.0;
   if (material.specular_reflectance > 0.0) {
@@ -53,7 +56,7 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
   // edges; the specular term also varies on the scale σ of the lobe. Where cos θi or cos θr
   // may change sign the kernel clips the facet, and there the lobe must be nearly flat too.
   const bool smooth =
-      g.radius_m <= limits.near_field * d && !beam.edgeMayCrossBall(g.centre_m, g.radius_m);
+      reach <= limits.near_field * d && !beam.edgeMayCrossBall(g.centre_m, g.radius_m);
   const bool may_be_clipped =
       std::abs(angleBetween(g.normal, wi) - 0.5 * kPi) <= g.cone_rad + eps_i ||
       std::abs(angleBetween(g.normal, v) - 0.5 * kPi) <= g.cone_rad + eps_o;
@@ -109,14 +112,15 @@ ClippedTriangle clipTriangle(const std::array<double, 3>& a, const std::array<do
   return {std::min(area2, 1.0), Vec3(1.0 - s - t, s, t)};
 }
 
-bool mayFaceObserver(const PatchGeometry& g, const Vec3& observer_m) {
-  // max over the ball and the cone of n·(x_O − x) ≤ d cos(max(0, θ − cone)) + r.
+bool mayFaceObserver(const PatchGeometry& g, const Vec3& observer_m, double observer_radius_m) {
+  // max over both balls and the cone of n·(x_O − x) ≤ d cos(max(0, θ − cone)) + r + r_O.
   const Vec3 v = observer_m - g.centre_m;
   const double d = glm::length(v);
-  if (!(d > g.radius_m)) return true;
+  const double reach = g.radius_m + observer_radius_m;
+  if (!(d > reach)) return true;
   const double excess = angleBetween(g.normal, v) - g.cone_rad;
   if (excess < 0.5 * kPi) return true;
-  return d * std::cos(excess) + g.radius_m > 0.0;
+  return d * std::cos(excess) + reach > 0.0;
 }
 
 LightVerdict lightVerdict(const PatchGeometry& g, const Beam& beam) {

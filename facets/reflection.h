@@ -99,13 +99,18 @@ struct ContributionBound {
 /// any normal of the cone can make with any half vector the ball allows), its area bound and
 /// its nearest distance, for the specular and diffuse terms separately. Requires the bound
 /// fields of @p g.
+///
+/// With @p observer_radius_m > 0 the bound holds for every observer in the ball of that radius
+/// around @p observer_m (a block of the observer field): the half vector may then also turn by
+/// what the observer ball subtends. (`unresolved_w_m2` keeps its meaning for a point observer.)
 ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer_m,
                                     const Beam& beam, const Material& material,
-                                    const ResolutionLimits& limits);
+                                    const ResolutionLimits& limits, double observer_radius_m = 0.0);
 
-/// @brief False only when no normal of the patch can face the observer from any point of it:
-/// such a facet costs that observer nothing.
-bool mayFaceObserver(const PatchGeometry& g, const Vec3& observer_m);
+/// @brief False only when no normal of the patch can face any observer within
+/// @p observer_radius_m of @p observer_m from any point of it: such a facet costs them nothing.
+bool mayFaceObserver(const PatchGeometry& g, const Vec3& observer_m,
+                     double observer_radius_m = 0.0);
 
 /// @brief Why a facet cannot be lit, if it cannot.
 enum class LightVerdict { MayBeLit, FacesAway, OutsideBeam };

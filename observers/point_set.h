@@ -15,6 +15,9 @@ namespace glint {
 struct WorkCounter {
   std::atomic<std::size_t> items_done{0};
   std::atomic<std::int64_t> evaluations{0};
+  /// Items known so far, where the total is not known in advance (the adaptive field learns
+  /// its points level by level).
+  std::atomic<std::size_t> items_scheduled{0};
 };
 
 /// @brief Which integration every point gets.

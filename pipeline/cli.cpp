@@ -9,6 +9,7 @@
 #include "glint/version.h"
 #include "pipeline/input_error.h"
 #include "pipeline/points_command.h"
+#include "pipeline/run_command.h"
 
 namespace glint {
 
@@ -50,6 +51,19 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
       ->check(CLI::Range(1, 4096));
   points_cmd->add_flag("-q,--quiet", points.quiet, "No progress and no summary on standard error");
 
+  RunArgs run;
+  CLI::App* run_cmd = app.add_subcommand(
+      "run", "The hazard volume over the scene's observer box: VDB, VTK files and a summary");
+  run_cmd->add_option("scene", run.scene_path, "Scene file (JSON) with an `observers` section")
+      ->required();
+  run_cmd->add_option("-o,--out", run.out_dir,
+                      "Output folder (default: out/<scene name>, out/<scene name>_uniform)");
+  run_cmd->add_flag("--uniform", run.uniform,
+                    "The dense twin: evaluate every lattice point (for comparison)");
+  run_cmd->add_option("--threads", run.threads, "Worker threads (default: all cores)")
+      ->check(CLI::Range(1, 4096));
+  run_cmd->add_flag("-q,--quiet", run.quiet, "No progress and no summary on standard error");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -64,6 +78,10 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
       if (*normals_opt) points.normals = normals;
       points.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
       runPoints(points, out, err);
+    }
+    if (app.got_subcommand(run_cmd)) {
+      run.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
+      runField(run, err);
     }
     return 0;
   } catch (const InputError& e) {

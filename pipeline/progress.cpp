@@ -56,11 +56,11 @@ void ProgressReporter::print() {
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   const std::size_t done = counter_.items_done.load();
-  const double fraction =
-      total_ > 0 ? static_cast<double>(done) / static_cast<double>(total_) : 0.0;
+  const std::size_t total = total_ > 0 ? total_ : counter_.items_scheduled.load();
+  const double fraction = total > 0 ? static_cast<double>(done) / static_cast<double>(total) : 0.0;
   char buf[256];
   std::snprintf(buf, sizeof buf, "glint: %zu/%zu %s (%.0f%%), %.3g evaluations, %s elapsed", done,
-                total_, noun_.c_str(), 100.0 * fraction,
+                total, noun_.c_str(), 100.0 * fraction,
                 static_cast<double>(counter_.evaluations.load()), formatDuration(elapsed).c_str());
   std::string line = buf;
   if (fraction > 0.0 && fraction < 1.0) {

@@ -18,6 +18,7 @@ namespace glint {
 /// items done, evaluations, elapsed time and the estimated time left.
 class ProgressReporter {
  public:
+  /// @param total items in all; 0: as many as the counter has scheduled so far.
   ProgressReporter(std::ostream& err, bool terminal, std::string noun, std::size_t total,
                    const WorkCounter& counter);
   ~ProgressReporter();

@@ -318,6 +318,36 @@ AccuracySpec readAccuracy(ObjectReader r) {
   return a;
 }
 
+ObserversSpec readObservers(ObjectReader r) {
+  ObserversSpec o;
+  o.min_m = r.vec3("min");
+  o.max_m = r.vec3("max");
+  for (int a = 0; a < 3; ++a) {
+    if (!(o.max_m[a] > o.min_m[a])) r.fail("max", "must exceed min on every axis");
+  }
+  o.voxel_m = positive(r, "voxel_m", r.number("voxel_m"));
+  const Vec3 extent = o.max_m - o.min_m;
+  const double longest = std::max({extent.x, extent.y, extent.z});
+  // Bounds the lattice (and the dense twin) to what a 32-bit OpenVDB index and memory allow.
+  if (longest / o.voxel_m > 65536.0)
+    r.fail("voxel_m", "gives more than 65536 voxels along an axis");
+  o.block_m = r.number("block_m", 16.0 * o.voxel_m);
+  const double ratio = o.block_m / o.voxel_m;
+  const double power = std::round(std::log2(ratio));
+  if (!(ratio >= 1.0) || std::abs(ratio - std::exp2(power)) > 1e-9 * ratio || power > 12) {
+    r.fail("block_m", "must be voxel_m times a power of two (1, 2, 4, ..., 4096)");
+  }
+  o.block_m = o.voxel_m * std::exp2(power);
+  o.tolerance = r.number("tolerance", o.tolerance);
+  if (!(o.tolerance > 0.0 && o.tolerance < 1.0)) r.fail("tolerance", "must be in (0, 1)");
+  if (auto floor = r.optionalNumber("floor_w_m2")) {
+    if (!(*floor > 0.0)) r.fail("floor_w_m2", "must be > 0");
+    o.floor_w_m2 = *floor;
+  }
+  r.finish();
+  return o;
+}
+
 }  // namespace
 
 Scene parseScene(std::string_view text, const std::string& source) {
@@ -362,6 +392,7 @@ Scene parseScene(std::string_view text, const std::string& source) {
   }
 
   if (r.has("accuracy")) scene.accuracy = readAccuracy(r.object("accuracy"));
+  if (r.has("observers")) scene.observers = readObservers(r.object("observers"));
   r.finish();
   return scene;
 }

@@ -59,6 +59,16 @@ struct AccuracySpec {
   NormalModel normals = NormalModel::Surface;
 };
 
+/// @brief The observer box of `glint run` (key `observers`; see FieldSpec for the meaning).
+struct ObserversSpec {
+  Vec3 min_m{0.0};
+  Vec3 max_m{0.0};
+  double voxel_m = 0.0;
+  double block_m = 0.0;  ///< coarsest block edge: voxel_m × a power of two (default 16 voxels)
+  double tolerance = 1e-2;
+  std::optional<double> floor_w_m2;  ///< default: 1e-6 × the beam's peak irradiance
+};
+
 /// @brief A validated scene: every number finite and in range, every reference resolved.
 struct Scene {
   std::string source;  ///< the file name as given, for messages
@@ -67,6 +77,7 @@ struct Scene {
   std::vector<MaterialSpec> materials;
   std::vector<ObjectSpec> objects;
   AccuracySpec accuracy;
+  std::optional<ObserversSpec> observers;  ///< required by `glint run` only
 };
 
 /// @brief Reads and validates a scene file.

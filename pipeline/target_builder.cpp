@@ -1,6 +1,9 @@
 #include "pipeline/target_builder.h"
 
+#include <cmath>
+
 #include "facets/tessellate.h"
+#include "pipeline/input_error.h"
 
 namespace glint {
 
@@ -48,6 +51,55 @@ IntegratorOptions integratorOptions(const Scene& scene) {
   o.max_evaluations = a.max_evaluations;
   o.normals = a.normals;
   return o;
+}
+
+FieldSpec fieldSpec(const Scene& scene) {
+  if (!scene.observers) {
+    throw InputError(scene.source + ": /observers: missing (glint run needs an observer box)");
+  }
+  const ObserversSpec& o = *scene.observers;
+  FieldSpec f;
+  f.min_m = o.min_m;
+  f.max_m = o.max_m;
+  f.voxel_m = o.voxel_m;
+  f.block_voxels = static_cast<int>(std::lround(o.block_m / o.voxel_m));
+  f.tolerance = o.tolerance;
+  f.floor_w_m2 = o.floor_w_m2 ? *o.floor_w_m2 : 1e-6 * beamOf(scene).peakIrradiance();
+  return f;
+}
+
+IntegratorOptions fieldIntegratorOptions(const Scene& scene, const FieldSpec& field) {
+  IntegratorOptions o = integratorOptions(scene);
+  o.tolerance = 0.25 * field.tolerance;
+  o.floor_w_m2 = 0.25 * field.floor_w_m2;
+  return o;
+}
+
+ExcludedFn excludedRegion(const Scene& scene, double margin_m) {
+  return [objects = scene.objects, margin_m](const Vec3& x) {
+    for (const ObjectSpec& o : objects) {
+      const Vec3 v = x - o.center_m;
+      switch (o.shape) {
+        case ShapeKind::Sphere:
+          if (glm::length(v) < o.radius_m + margin_m) return true;
+          break;
+        case ShapeKind::Cylinder: {
+          const double along = glm::dot(v, o.axis);
+          const double across = glm::length(v - along * o.axis);
+          if (std::abs(along) < 0.5 * o.length_m + margin_m && across < o.radius_m + margin_m)
+            return true;
+          break;
+        }
+        case ShapeKind::Disk: {
+          const double along = glm::dot(v, o.axis);
+          const double across = glm::length(v - along * o.axis);
+          if (std::abs(along) < margin_m && across < o.radius_m + margin_m) return true;
+          break;
+        }
+      }
+    }
+    return false;
+  };
 }
 
 }  // namespace glint

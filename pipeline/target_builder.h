@@ -3,6 +3,7 @@
 /// @brief From a validated Scene to what the facet integrator works on.
 
 #include "facets/integrator.h"
+#include "observers/field.h"
 #include "pipeline/scene.h"
 
 namespace glint {
@@ -17,5 +18,20 @@ Target buildTarget(const Scene& scene);
 /// @brief The scene's accuracy settings; the floor defaults to 1e-9 × the beam's peak
 /// irradiance, far below any exposure limit yet scaled to the scene.
 IntegratorOptions integratorOptions(const Scene& scene);
+
+/// @brief The observer box of the scene's `observers` section; the floor defaults to 1e-6 ×
+/// the beam's peak irradiance.
+/// @throw InputError when the scene has no `observers` section.
+FieldSpec fieldSpec(const Scene& scene);
+
+/// @brief Integrator settings for the points of an observer field: the scene's accuracy
+/// settings, with the tolerance and floor a quarter of the field's, so that the integration
+/// error stays a small part of the field's error budget.
+IntegratorOptions fieldIntegratorOptions(const Scene& scene, const FieldSpec& field);
+
+/// @brief Observer positions inside an object or within @p margin_m of its surface: inside a
+/// sphere or a cylinder (its open ends closed), or on a disk. No eye can be there, and the
+/// point-source model needs ever finer facets as an observer nears the surface.
+ExcludedFn excludedRegion(const Scene& scene, double margin_m);
 
 }  // namespace glint

@@ -173,3 +173,41 @@ TEST(Scene, LoadNamesAMissingFile) {
 
 }  // namespace
 }  // namespace glint
+
+namespace glint {
+namespace {
+
+TEST(SceneObservers, BoxLoadsWithDefaultsAndRefusesBadValues) {
+  json j = minimal();
+  j["observers"] = json::parse(R"({"min": [-1, -1, -1], "max": [1, 2, 3], "voxel_m": 0.1})");
+  const Scene scene = parseScene(j.dump(), "scene.json");
+  ASSERT_TRUE(scene.observers.has_value()) << "the section was read";
+  EXPECT_NEAR(scene.observers->block_m, 1.6, 1e-12) << "16 voxels by default";
+  EXPECT_EQ(scene.observers->tolerance, 0.01) << "the documented default";
+  const FieldSpec spec = fieldSpec(scene);
+  EXPECT_EQ(spec.block_voxels, 16);
+  // 2 m, 3 m, 4 m at 0.1 m: 20, 30, 40 voxels, rounded up to whole 16-voxel blocks.
+  EXPECT_EQ(spec.nodes(), (std::array<int, 3>{33, 33, 49})) << "box extended to whole blocks";
+  EXPECT_NEAR(spec.floor_w_m2, 1e-6 * 1000.0 / (kPi * 4.0), 1e-18) << "1e-6 × beam peak";
+
+  auto refused = [&](const char* key, const json& value) {
+    json bad = j;
+    bad["observers"][key] = value;
+    return refusal(bad);
+  };
+  EXPECT_EQ(refused("voxel_m", 0.0), "scene.json: /observers/voxel_m: must be > 0");
+  EXPECT_EQ(refused("block_m", 0.3),
+            "scene.json: /observers/block_m: must be voxel_m times a power of two (1, 2, 4, "
+            "..., 4096)");
+  EXPECT_EQ(refused("max", json::array({1, -2, 3})),
+            "scene.json: /observers/max: must exceed min on every axis");
+  EXPECT_EQ(refused("tolerance", 1.5), "scene.json: /observers/tolerance: must be in (0, 1)");
+  EXPECT_EQ(refused("floor_w_m2", 0.0), "scene.json: /observers/floor_w_m2: must be > 0");
+  EXPECT_EQ(refused("spacing", 1.0).rfind("scene.json: /observers/spacing: unknown key", 0), 0u)
+      << refused("spacing", 1.0);
+  EXPECT_THROW(fieldSpec(parseScene(minimal().dump(), "scene.json")), InputError)
+      << "glint run needs the section";
+}
+
+}  // namespace
+}  // namespace glint

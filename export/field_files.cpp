@@ -1,0 +1,230 @@
+#include "export/field_files.h"
+
+#include <openvdb/io/Stream.h>
+
+#include <cmath>
+#include <cstring>
+#include <sstream>
+#include <vector>
+
+#include "observers/field_grids.h"
+
+namespace glint {
+namespace {
+
+// VTK XML with every array in one raw appended block (header_type UInt64): compact, exact, and
+// read by ParaView and VTK without any decoding step.
+class VtkArrays {
+ public:
+  // Declares an array and returns its <DataArray> element.
+  template <class T>
+  std::string add(const std::string& name, const char* vtk_type, int components,
+                  const std::vector<T>& values) {
+    std::ostringstream xml;
+    xml << "<DataArray type=\"" << vtk_type << "\" Name=\"" << name << "\" NumberOfComponents=\""
+        << components << "\" format=\"appended\" offset=\"" << offset_ << "\"/>\n";
+    const std::uint64_t bytes = values.size() * sizeof(T);
+    std::string block(sizeof bytes + bytes, '\0');
+    std::memcpy(block.data(), &bytes, sizeof bytes);
+    if (bytes > 0) std::memcpy(block.data() + sizeof bytes, values.data(), bytes);
+    offset_ += block.size();
+    blocks_.push_back(std::move(block));
+    return xml.str();
+  }
+
+  void writeAppended(std::ostream& out) const {
+    out << "<AppendedData encoding=\"raw\">\n_";
+    for (const std::string& b : blocks_)
+      out.write(b.data(), static_cast<std::streamsize>(b.size()));
+    out << "\n</AppendedData>\n</VTKFile>\n";
+  }
+
+ private:
+  std::uint64_t offset_ = 0;
+  std::vector<std::string> blocks_;
+};
+
+const char* kHeader =
+    "<?xml version=\"1.0\"?>\n<VTKFile type=\"%s\" version=\"1.0\" byte_order=\"LittleEndian\" "
+    "header_type=\"UInt64\">\n";
+
+std::string header(const char* type) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, kHeader, type);
+  return buf;
+}
+
+}  // namespace
+
+void writeVdb(std::ostream& out, const ObserverField& field, const RunInfo& info) {
+  const FieldGrids& g = field.grids();
+  const FieldSpec& spec = field.spec();
+  const FieldStats& stats = field.stats();
+  openvdb::GridPtrVec grids;
+  // Copies share the trees; only the metadata differs.
+  auto irradiance = g.irradiance->copyGrid();
+  irradiance->insertMeta("units", openvdb::StringMetadata("W/m^2"));
+  auto level = g.level->copyGrid();
+  level->insertMeta("meaning", openvdb::StringMetadata("refinement level, 0 = coarsest block"));
+  auto status = g.status->copyGrid();
+  status->insertMeta("meaning", openvdb::StringMetadata(
+                                    "0 outside the box, 1 evaluated, 2 interpolated, 3 proven "
+                                    "below floor_w_m2 (not computed), 4 inside or on the target"));
+  grids.push_back(irradiance);
+  grids.push_back(level);
+  grids.push_back(status);
+
+  openvdb::MetaMap meta;
+  meta.insertMeta("program", openvdb::StringMetadata(info.program_version));
+  meta.insertMeta("scene_file", openvdb::StringMetadata(info.scene_file));
+  meta.insertMeta("scene_fnv1a64", openvdb::StringMetadata(info.scene_sha256));
+  meta.insertMeta("scheme", openvdb::StringMetadata(info.scheme));
+  meta.insertMeta("length_unit", openvdb::StringMetadata("m"));
+  meta.insertMeta("irradiance_unit", openvdb::StringMetadata("W/m^2"));
+  meta.insertMeta("wavelength_nm", openvdb::DoubleMetadata(info.wavelength_nm));
+  meta.insertMeta("power_w", openvdb::DoubleMetadata(info.power_w));
+  meta.insertMeta("tolerance", openvdb::DoubleMetadata(spec.tolerance));
+  meta.insertMeta("floor_w_m2", openvdb::DoubleMetadata(spec.floor_w_m2));
+  meta.insertMeta("voxel_m", openvdb::DoubleMetadata(spec.voxel_m));
+  meta.insertMeta("evaluations", openvdb::Int64Metadata(stats.evaluations));
+  meta.insertMeta("evaluated_points", openvdb::Int64Metadata(stats.evaluated_points));
+  meta.insertMeta("peak_irradiance_w_m2", openvdb::DoubleMetadata(stats.peak_w_m2));
+  openvdb::io::Stream(out).write(grids, meta);
+}
+
+void writeVti(std::ostream& out, const ObserverField& field, int stride) {
+  const FieldSpec& spec = field.spec();
+  const auto n = spec.nodes();
+  std::array<int, 3> m{};
+  for (int a = 0; a < 3; ++a) m[a] = (n[a] - 1) / stride + 1;
+  const std::size_t count = static_cast<std::size_t>(m[0]) * m[1] * m[2];
+  std::vector<float> irradiance(count);
+  std::vector<std::int32_t> level(count), status(count);
+  const auto& g = field.grids();
+  auto ia = g.irradiance->getConstAccessor();
+  auto la = g.level->getConstAccessor();
+  auto sa = g.status->getConstAccessor();
+  std::size_t p = 0;
+  for (int k = 0; k < m[2]; ++k)
+    for (int j = 0; j < m[1]; ++j)
+      for (int i = 0; i < m[0]; ++i, ++p) {
+        const openvdb::Coord c(i * stride, j * stride, k * stride);
+        irradiance[p] = ia.isValueOn(c) ? ia.getValue(c) : 0.0f;
+        level[p] = static_cast<std::int32_t>(std::lround(la.getValue(c)));
+        status[p] = static_cast<std::int32_t>(std::lround(sa.getValue(c)));
+      }
+  VtkArrays arrays;
+  out << header("ImageData");
+  const double h = spec.voxel_m * stride;
+  out << "<ImageData WholeExtent=\"0 " << m[0] - 1 << " 0 " << m[1] - 1 << " 0 " << m[2] - 1
+      << "\" Origin=\"" << spec.min_m.x << " " << spec.min_m.y << " " << spec.min_m.z
+      << "\" Spacing=\"" << h << " " << h << " " << h << "\">\n";
+  out << "<Piece Extent=\"0 " << m[0] - 1 << " 0 " << m[1] - 1 << " 0 " << m[2] - 1 << "\">\n";
+  out << "<PointData Scalars=\"irradiance_w_m2\">\n";
+  out << arrays.add("irradiance_w_m2", "Float32", 1, irradiance);
+  out << arrays.add("refinement_level", "Int32", 1, level);
+  out << arrays.add("status", "Int32", 1, status);
+  out << "</PointData>\n</Piece>\n</ImageData>\n";
+  arrays.writeAppended(out);
+}
+
+void writeBlocksVtu(std::ostream& out, const ObserverField& field) {
+  const FieldSpec& spec = field.spec();
+  const auto& blocks = field.blocks();
+  auto ia = field.grids().irradiance->getConstAccessor();
+  std::vector<double> points;
+  std::vector<float> irradiance;
+  std::vector<std::int64_t> connectivity, offsets;
+  std::vector<std::uint8_t> types;
+  std::vector<std::int32_t> level, status;
+  // VTK_HEXAHEDRON corner order.
+  constexpr int kCorner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                 {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  auto cell = [&](const FieldBlock& b) {
+    for (const auto& c : kCorner) {
+      const int i = b.origin[0] + c[0] * b.size, j = b.origin[1] + c[1] * b.size,
+                k = b.origin[2] + c[2] * b.size;
+      const Vec3 x = spec.position(i, j, k);
+      points.insert(points.end(), {x.x, x.y, x.z});
+      const openvdb::Coord q(i, j, k);
+      irradiance.push_back(ia.isValueOn(q) ? ia.getValue(q) : 0.0f);
+      connectivity.push_back(static_cast<std::int64_t>(connectivity.size()));
+    }
+    offsets.push_back(static_cast<std::int64_t>(connectivity.size()));
+    types.push_back(12);  // VTK_HEXAHEDRON
+    level.push_back(b.level);
+    status.push_back(static_cast<std::int32_t>(b.status));
+  };
+  for (const FieldBlock& b : blocks) {
+    if (b.status != VoxelStatus::Evaluated || b.size != 2) {
+      cell(b);
+      continue;
+    }
+    // A finest block (every lattice point evaluated) shows them all: one cell per voxel.
+    for (int i = 0; i < b.size; ++i)
+      for (int j = 0; j < b.size; ++j)
+        for (int k = 0; k < b.size; ++k) {
+          cell({{b.origin[0] + i, b.origin[1] + j, b.origin[2] + k}, 1, b.level, b.status});
+        }
+  }
+  VtkArrays arrays;
+  out << header("UnstructuredGrid") << "<UnstructuredGrid>\n";
+  out << "<Piece NumberOfPoints=\"" << points.size() / 3 << "\" NumberOfCells=\"" << types.size()
+      << "\">\n<Points>\n"
+      << arrays.add("Points", "Float64", 3, points) << "</Points>\n<Cells>\n"
+      << arrays.add("connectivity", "Int64", 1, connectivity)
+      << arrays.add("offsets", "Int64", 1, offsets) << arrays.add("types", "UInt8", 1, types)
+      << "</Cells>\n<PointData Scalars=\"irradiance_w_m2\">\n"
+      << arrays.add("irradiance_w_m2", "Float32", 1, irradiance) << "</PointData>\n<CellData>\n"
+      << arrays.add("refinement_level", "Int32", 1, level)
+      << arrays.add("status", "Int32", 1, status) << "</CellData>\n</Piece>\n</UnstructuredGrid>\n";
+  arrays.writeAppended(out);
+}
+
+void writeTargetVtp(std::ostream& out, const FacetIntegrator& integrator, int level) {
+  const Target& target = integrator.target();
+  const Beam& beam = integrator.beam();
+  const NormalModel normals = integrator.options().normals;
+  std::vector<double> points;
+  std::vector<std::int64_t> connectivity, offsets;
+  std::vector<double> power;
+  std::vector<std::int32_t> coarse;
+  std::vector<SubFacet> stack;
+  for (std::uint32_t f = 0; f < target.facetCount(); ++f) {
+    const Vec3 origin = target.objects[target.object[f]].origin_m;
+    stack.assign(1, coarseSubFacet(target, f));
+    while (!stack.empty()) {
+      const SubFacet s = stack.back();
+      stack.pop_back();
+      if (s.depth < level) {
+        for (const SubFacet& c : split(target, s)) stack.push_back(c);
+        continue;
+      }
+      const PatchGeometry g = patchGeometry(target, s, normals);
+      const Vec3 centre = g.centre_m + origin;
+      const Beam::Sample at = beam.at(centre);
+      power.push_back(at.irradiance_w_m2 * g.area_m2 *
+                      std::max(0.0, glm::dot(g.normal, at.toward_laser)));
+      coarse.push_back(static_cast<std::int32_t>(f));
+      for (const Vec3& corner : s.corner_m) {
+        const Vec3 x = corner + origin;
+        connectivity.push_back(static_cast<std::int64_t>(points.size() / 3));
+        points.insert(points.end(), {x.x, x.y, x.z});
+      }
+      offsets.push_back(static_cast<std::int64_t>(connectivity.size()));
+    }
+  }
+  VtkArrays arrays;
+  out << header("PolyData") << "<PolyData>\n";
+  out << "<Piece NumberOfPoints=\"" << points.size() / 3 << "\" NumberOfPolys=\"" << power.size()
+      << "\">\n<Points>\n"
+      << arrays.add("Points", "Float64", 3, points) << "</Points>\n<Polys>\n"
+      << arrays.add("connectivity", "Int64", 1, connectivity)
+      << arrays.add("offsets", "Int64", 1, offsets)
+      << "</Polys>\n<CellData Scalars=\"incident_power_w\">\n"
+      << arrays.add("incident_power_w", "Float64", 1, power)
+      << arrays.add("coarse_facet", "Int32", 1, coarse) << "</CellData>\n</Piece>\n</PolyData>\n";
+  arrays.writeAppended(out);
+}
+
+}  // namespace glint

@@ -1,0 +1,42 @@
+#pragma once
+/// @file
+/// @brief The files of `glint run`: the OpenVDB volume and the VTK XML files for ParaView.
+
+#include <cstdint>
+#include <ostream>
+#include <string>
+
+#include "facets/integrator.h"
+#include "observers/field.h"
+
+namespace glint {
+
+/// @brief What the files record about the run that made them.
+struct RunInfo {
+  std::string program_version;
+  std::string scene_file;
+  std::string scene_sha256;  ///< of the scene file's bytes
+  std::string scheme;        ///< "adaptive" or "uniform"
+  double wavelength_nm = 0.0;
+  double power_w = 0.0;
+};
+
+/// @brief The grids `irradiance_w_m2`, `refinement_level` and `status` (see VoxelStatus) with
+/// the field's transform, and as file metadata the units, laser, tolerance, floor, counts,
+/// program version and scene hash.
+void writeVdb(std::ostream& out, const ObserverField& field, const RunInfo& info);
+
+/// @brief VTK ImageData (.vti) of the box: point data `irradiance_w_m2` (Float32, 0 where
+/// not computed), `refinement_level` and `status`, sampled every @p stride lattice points.
+void writeVti(std::ostream& out, const ObserverField& field, int stride);
+
+/// @brief VTK UnstructuredGrid (.vtu) of the octree's final blocks as hexahedra: cell data
+/// `refinement_level` and `status` (1 computed, 2 interpolated, 3 proven below the floor),
+/// point data `irradiance_w_m2` at the corners.
+void writeBlocksVtu(std::ostream& out, const ObserverField& field);
+
+/// @brief VTK PolyData (.vtp) of the lit target: its coarse facets split @p level times on the
+/// true surface, cell data `incident_power_w` (beam power received) and `coarse_facet`.
+void writeTargetVtp(std::ostream& out, const FacetIntegrator& integrator, int level);
+
+}  // namespace glint

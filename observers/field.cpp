@@ -1,0 +1,605 @@
+#include "observers/field.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <stdexcept>
+#include <unordered_map>
+
+#include "observers/field_grids.h"
+
+namespace glint {
+namespace {
+
+using Index3 = std::array<int, 3>;
+constexpr std::uint32_t kNoParent = std::numeric_limits<std::uint32_t>::max();
+
+// Share of the floor that pruning may drop from a block's candidates: what every observer in
+// it may miss, on top of the integrator's own error.
+constexpr double kDropShareOfFloor = 0.25;
+// Interpolation must match the finer samples to this share of the block's budget: the voxels
+// are filled from the finer samples, whose own interpolation error is about a quarter of the
+// coarser one (trilinear interpolation is second order), so the rest covers that.
+constexpr double kCheckShare = 0.5;
+// Candidates are split to tighten block bounds down to this subdivision depth.
+constexpr int kMaxBoundSplitDepth = 6;
+
+struct Lattice {
+  Index3 n;  // points per axis
+
+  [[nodiscard]] std::uint64_t key(int i, int j, int k) const {
+    return (static_cast<std::uint64_t>(i) * static_cast<std::uint64_t>(n[1]) +
+            static_cast<std::uint64_t>(j)) *
+               static_cast<std::uint64_t>(n[2]) +
+           static_cast<std::uint64_t>(k);
+  }
+  [[nodiscard]] std::int64_t count() const { return static_cast<std::int64_t>(n[0]) * n[1] * n[2]; }
+};
+
+// A block of the octree: lattice points o .. o + size on each axis. It owns the voxels
+// [o, o + size) per axis, and the last lattice point of an axis where it touches the box's end.
+struct Block {
+  Index3 o;
+  int size;
+  int level;
+  std::uint32_t parent;  // index into the previous level's blocks
+};
+
+enum class Verdict : std::uint8_t { Skip, Accept, Refine, Finest };
+
+struct PointValue {
+  double irradiance_w_m2 = 0.0;
+  bool excluded = false;
+};
+
+// Offsets of a block's sample lattice along one axis: 0, s/2, s (or 0, 1 for a unit block).
+float code(VoxelStatus s) { return static_cast<float>(static_cast<int>(s)); }
+
+int samplesPerAxis(int size) { return size >= 2 ? 3 : 2; }
+int sampleOffset(int size, int a) { return size >= 2 ? a * size / 2 : a; }
+
+openvdb::math::Transform::Ptr fieldTransform(const FieldSpec& spec) {
+  auto transform = openvdb::math::Transform::createLinearTransform(spec.voxel_m);
+  transform->postTranslate(openvdb::Vec3d(spec.min_m.x, spec.min_m.y, spec.min_m.z));
+  return transform;
+}
+
+std::unique_ptr<FieldGrids> makeGrids(const FieldSpec& spec) {
+  auto g = std::make_unique<FieldGrids>();
+  const auto transform = fieldTransform(spec);
+  g->irradiance = openvdb::FloatGrid::create(0.0f);
+  g->irradiance->setName("irradiance_w_m2");
+  g->irradiance->setGridClass(openvdb::GRID_FOG_VOLUME);
+  g->level = openvdb::FloatGrid::create(-1.0f);
+  g->level->setName("refinement_level");
+  g->status = openvdb::FloatGrid::create(0.0f);
+  g->status->setName("status");
+  for (openvdb::GridBase* grid : {static_cast<openvdb::GridBase*>(g->irradiance.get()),
+                                  static_cast<openvdb::GridBase*>(g->level.get()),
+                                  static_cast<openvdb::GridBase*>(g->status.get())}) {
+    grid->setTransform(transform->copy());
+  }
+  return g;
+}
+
+// Threads write into their own grids; the owned voxel ranges are disjoint, so merging them is
+// a union.
+void mergeInto(FieldGrids& into, FieldGrids& from) {
+  into.irradiance->tree().merge(from.irradiance->tree());
+  into.level->tree().merge(from.level->tree());
+  into.status->tree().merge(from.status->tree());
+}
+
+// The voxels a block owns (see Block), as an inclusive OpenVDB box.
+openvdb::CoordBBox ownedBox(const Block& b, const Lattice& lattice) {
+  openvdb::Coord lo(b.o[0], b.o[1], b.o[2]), hi;
+  for (int a = 0; a < 3; ++a) {
+    const int end = b.o[a] + b.size;
+    hi[a] = end == lattice.n[a] - 1 ? end : end - 1;
+  }
+  return {lo, hi};
+}
+
+struct ThreadGrids {
+  std::unique_ptr<FieldGrids> grids;
+  openvdb::FloatGrid::Accessor irradiance;
+  openvdb::FloatGrid::Accessor level;
+  openvdb::FloatGrid::Accessor status;
+
+  explicit ThreadGrids(const FieldSpec& spec)
+      : grids(makeGrids(spec)),
+        irradiance(grids->irradiance->getAccessor()),
+        level(grids->level->getAccessor()),
+        status(grids->status->getAccessor()) {}
+};
+
+double trilinear(const std::array<double, 8>& c, double u, double v, double w) {
+  const double x00 = c[0] + u * (c[4] - c[0]), x01 = c[1] + u * (c[5] - c[1]);
+  const double x10 = c[2] + u * (c[6] - c[2]), x11 = c[3] + u * (c[7] - c[3]);
+  const double y0 = x00 + v * (x10 - x00), y1 = x01 + v * (x11 - x01);
+  return y0 + w * (y1 - y0);
+}
+
+// The computation of one adaptive field, level by level: every block of a level is bounded,
+// then the lattice points its survivors need are evaluated together (each once), then every
+// block decides. Working a whole level at a time keeps each point's candidate list, and so the
+// result, independent of thread scheduling.
+class FieldBuilder {
+ public:
+  FieldBuilder(const FacetIntegrator& integrator, const FieldSpec& spec, const ExcludedFn& excluded,
+               WorkCounter* counter)
+      : integrator_(integrator),
+        spec_(spec),
+        excluded_(excluded),
+        counter_(counter),
+        lattice_{spec.nodes()} {}
+
+  ObserverField run() {
+    const auto start = std::chrono::steady_clock::now();
+    stats_.nodes = lattice_.n;
+    stats_.lattice_points = lattice_.count();
+    const int b = spec_.block_voxels;
+    std::vector<Block> blocks;
+    for (int i = 0; i + 1 < lattice_.n[0]; i += b)
+      for (int j = 0; j + 1 < lattice_.n[1]; j += b)
+        for (int k = 0; k + 1 < lattice_.n[2]; k += b)
+          blocks.push_back({{i, j, k}, b, 0, kNoParent});
+
+    std::vector<std::vector<Candidate>> parent_lists;
+    std::vector<double> parent_dropped;
+    while (!blocks.empty()) {
+      stats_.levels = blocks.front().level;
+      std::vector<std::vector<Candidate>> lists(blocks.size());
+      std::vector<RegionBound> bounds(blocks.size());
+      boundBlocks(blocks, parent_lists, parent_dropped, lists, bounds);
+      evaluateSamples(blocks, lists, bounds);
+      const std::vector<Verdict> verdicts = decide(blocks, bounds);
+
+      std::vector<Block> children;
+      std::vector<std::vector<Candidate>> child_parent_lists;
+      std::vector<double> child_parent_dropped;
+      for (std::size_t i = 0; i < blocks.size(); ++i) {
+        const Block& blk = blocks[i];
+        switch (verdicts[i]) {
+          case Verdict::Skip:
+            ++stats_.blocks_skipped;
+            final_.push_back({blk, Verdict::Skip});
+            break;
+          case Verdict::Accept:
+            ++stats_.blocks_accepted;
+            final_.push_back({blk, Verdict::Accept});
+            break;
+          case Verdict::Finest:
+            ++stats_.blocks_finest;
+            final_.push_back({blk, Verdict::Finest});
+            break;
+          case Verdict::Refine: {
+            ++stats_.blocks_refined;
+            const auto parent = static_cast<std::uint32_t>(child_parent_lists.size());
+            child_parent_lists.push_back(std::move(lists[i]));
+            child_parent_dropped.push_back(bounds[i].dropped_w_m2);
+            const int h = blk.size / 2;
+            for (int c = 0; c < 8; ++c) {
+              children.push_back(
+                  {{blk.o[0] + h * (c >> 2), blk.o[1] + h * ((c >> 1) & 1), blk.o[2] + h * (c & 1)},
+                   h,
+                   blk.level + 1,
+                   parent});
+            }
+            break;
+          }
+        }
+      }
+      blocks = std::move(children);
+      parent_lists = std::move(child_parent_lists);
+      parent_dropped = std::move(child_parent_dropped);
+    }
+
+    std::unique_ptr<FieldGrids> grids = writeGrids();
+    std::vector<FieldBlock> blocks_out;
+    blocks_out.reserve(final_.size());
+    for (const FinalBlock& f : final_) {
+      const VoxelStatus status = f.verdict == Verdict::Skip     ? VoxelStatus::BelowFloor
+                                 : f.verdict == Verdict::Accept ? VoxelStatus::Interpolated
+                                                                : VoxelStatus::Evaluated;
+      blocks_out.push_back({f.block.o, f.block.size, f.block.level, status});
+    }
+    stats_.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return {spec_, stats_, std::move(grids), std::move(blocks_out)};
+  }
+
+ private:
+  struct FinalBlock {
+    Block block;
+    Verdict verdict;
+  };
+
+  [[nodiscard]] Vec3 centre(const Block& b) const {
+    const double half = 0.5 * b.size;
+    return spec_.position(b.o[0], b.o[1], b.o[2]) + spec_.voxel_m * Vec3(half, half, half);
+  }
+
+  void boundBlocks(const std::vector<Block>& blocks,
+                   const std::vector<std::vector<Candidate>>& parent_lists,
+                   const std::vector<double>& parent_dropped,
+                   std::vector<std::vector<Candidate>>& lists, std::vector<RegionBound>& bounds) {
+    tbb::enumerable_thread_specific<std::int64_t> bound_evaluations(0);
+    tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t i) {
+      const Block& b = blocks[i];
+      const bool root = b.parent == kNoParent;
+      const std::span<const Candidate> inherited =
+          root ? integrator_.candidates() : std::span<const Candidate>(parent_lists[b.parent]);
+      RegionOptions options;
+      options.drop_allowance_w_m2 = kDropShareOfFloor * spec_.floor_w_m2;
+      options.sample_spacing_m = spec_.voxel_m * std::max(1, b.size / 2);
+      options.max_split_depth = kMaxBoundSplitDepth;
+      const double radius = 0.5 * std::sqrt(3.0) * spec_.voxel_m * b.size;
+      bounds[i] = integrator_.boundRegion(centre(b), radius, inherited,
+                                          root ? 0.0 : parent_dropped[b.parent], options, lists[i]);
+      bound_evaluations.local() += bounds[i].bound_evaluations;
+    });
+    for (std::int64_t n : bound_evaluations) stats_.bound_evaluations += n;
+  }
+
+  [[nodiscard]] bool skipped(const RegionBound& bound) const {
+    return bound.upper_w_m2 <= spec_.floor_w_m2;
+  }
+
+  // Evaluates the sample lattice points of every block not skipped that no earlier level
+  // evaluated; a point shared by several blocks takes the candidates of the first.
+  void evaluateSamples(const std::vector<Block>& blocks,
+                       const std::vector<std::vector<Candidate>>& lists,
+                       const std::vector<RegionBound>& bounds) {
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> wanted;  // (point, block)
+    for (std::size_t i = 0; i < blocks.size(); ++i) {
+      if (skipped(bounds[i])) continue;
+      const Block& b = blocks[i];
+      const int m = samplesPerAxis(b.size);
+      for (int a = 0; a < m; ++a)
+        for (int c = 0; c < m; ++c)
+          for (int e = 0; e < m; ++e) {
+            const std::uint64_t key =
+                lattice_.key(b.o[0] + sampleOffset(b.size, a), b.o[1] + sampleOffset(b.size, c),
+                             b.o[2] + sampleOffset(b.size, e));
+            if (!values_.contains(key)) wanted.emplace_back(key, static_cast<std::uint32_t>(i));
+          }
+    }
+    tbb::parallel_sort(wanted.begin(), wanted.end());
+    wanted.erase(std::unique(wanted.begin(), wanted.end(),
+                             [](const auto& x, const auto& y) { return x.first == y.first; }),
+                 wanted.end());
+
+    if (counter_ != nullptr) counter_->items_scheduled.fetch_add(wanted.size());
+    std::vector<PointValue> results(wanted.size());
+    std::vector<std::int64_t> evaluations(wanted.size(), 0);
+    std::vector<char> unconverged(wanted.size(), 0);
+    tbb::enumerable_thread_specific<IntegratorWorkspace> workspaces;
+    tbb::parallel_for(std::size_t{0}, wanted.size(), [&](std::size_t w) {
+      const std::uint64_t key = wanted[w].first;
+      const auto nk = static_cast<std::uint64_t>(lattice_.n[2]);
+      const auto nj = static_cast<std::uint64_t>(lattice_.n[1]);
+      const int k = static_cast<int>(key % nk);
+      const int j = static_cast<int>((key / nk) % nj);
+      const int i = static_cast<int>(key / nk / nj);
+      const Vec3 x = spec_.position(i, j, k);
+      if (excluded_ && excluded_(x)) {
+        results[w].excluded = true;
+        return;
+      }
+      const ObserverResult r = integrator_.adaptive(x, lists[wanted[w].second], workspaces.local());
+      results[w].irradiance_w_m2 = r.irradiance_w_m2;
+      evaluations[w] = r.evaluations;
+      unconverged[w] = r.converged ? 0 : 1;
+      if (counter_ != nullptr) {
+        counter_->items_done.fetch_add(1, std::memory_order_relaxed);
+        counter_->evaluations.fetch_add(r.evaluations, std::memory_order_relaxed);
+      }
+    });
+    for (std::size_t w = 0; w < wanted.size(); ++w) {
+      values_.emplace(wanted[w].first, results[w]);
+      if (results[w].excluded) {
+        ++stats_.excluded_points;
+        continue;
+      }
+      ++stats_.evaluated_points;
+      stats_.evaluations += evaluations[w];
+      stats_.unconverged_points += unconverged[w];
+    }
+  }
+
+  std::vector<Verdict> decide(const std::vector<Block>& blocks,
+                              const std::vector<RegionBound>& bounds) const {
+    std::vector<Verdict> verdicts(blocks.size());
+    tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t i) {
+      if (skipped(bounds[i])) {
+        verdicts[i] = Verdict::Skip;
+        return;
+      }
+      const Block& b = blocks[i];
+      if (b.size <= 2) {
+        verdicts[i] = Verdict::Finest;  // every lattice point of it is a sample
+        return;
+      }
+      std::array<double, 27> v{};
+      double largest = 0.0;
+      for (int a = 0; a < 3; ++a)
+        for (int c = 0; c < 3; ++c)
+          for (int e = 0; e < 3; ++e) {
+            const PointValue& p = values_.at(lattice_.key(
+                b.o[0] + a * b.size / 2, b.o[1] + c * b.size / 2, b.o[2] + e * b.size / 2));
+            if (p.excluded) {
+              verdicts[i] = Verdict::Refine;  // the target is in the block: resolve it finely
+              return;
+            }
+            v[static_cast<std::size_t>(9 * a + 3 * c + e)] = p.irradiance_w_m2;
+            largest = std::max(largest, std::abs(p.irradiance_w_m2));
+          }
+      const double allowed = kCheckShare * (spec_.tolerance * largest + spec_.floor_w_m2);
+      // A coarse facet whose light could pass between the samples leaves no trace in them:
+      // only the bound can say whether such a glint is too weak to matter.
+      if (bounds[i].narrow_w_m2 > allowed) {
+        verdicts[i] = Verdict::Refine;
+        return;
+      }
+      const std::array<double, 8> corners = {v[0], v[2], v[6], v[8], v[18], v[20], v[24], v[26]};
+      for (int a = 0; a < 3; ++a)
+        for (int c = 0; c < 3; ++c)
+          for (int e = 0; e < 3; ++e) {
+            const double interpolated = trilinear(corners, 0.5 * a, 0.5 * c, 0.5 * e);
+            if (std::abs(interpolated - v[static_cast<std::size_t>(9 * a + 3 * c + e)]) > allowed) {
+              verdicts[i] = Verdict::Refine;
+              return;
+            }
+          }
+      verdicts[i] = Verdict::Accept;
+    });
+    return verdicts;
+  }
+
+  std::unique_ptr<FieldGrids> writeGrids() {
+    tbb::enumerable_thread_specific<ThreadGrids> per_thread([&] { return ThreadGrids(spec_); });
+    tbb::enumerable_thread_specific<std::int64_t> interpolated(0), below(0);
+    tbb::parallel_for(std::size_t{0}, final_.size(), [&](std::size_t f) {
+      const Block& b = final_[f].block;
+      ThreadGrids& t = per_thread.local();
+      const openvdb::CoordBBox box = ownedBox(b, lattice_);
+      switch (final_[f].verdict) {
+        case Verdict::Skip:
+          t.grids->status->tree().fill(box, code(VoxelStatus::BelowFloor), true);
+          t.grids->level->tree().fill(box, static_cast<float>(b.level), true);
+          below.local() += static_cast<std::int64_t>(box.volume());
+          break;
+        case Verdict::Finest:
+          t.grids->level->tree().fill(box, static_cast<float>(b.level), true);
+          break;  // its points are all samples: written below
+        case Verdict::Accept: {
+          t.grids->level->tree().fill(box, static_cast<float>(b.level), true);
+          const int h = b.size / 2;
+          std::array<double, 27> v{};
+          for (int a = 0; a < 3; ++a)
+            for (int c = 0; c < 3; ++c)
+              for (int e = 0; e < 3; ++e) {
+                v[static_cast<std::size_t>(9 * a + 3 * c + e)] =
+                    values_.at(lattice_.key(b.o[0] + a * h, b.o[1] + c * h, b.o[2] + e * h))
+                        .irradiance_w_m2;
+              }
+          // Each octant from its own corners: the finer samples the check compared against.
+          for (auto it = box.begin(); it; ++it) {
+            const openvdb::Coord& p = *it;
+            int oct[3];
+            double t3[3];
+            for (int a = 0; a < 3; ++a) {
+              const int local = p[a] - b.o[a];
+              oct[a] = std::min(local / h, 1);
+              t3[a] = static_cast<double>(local - oct[a] * h) / h;
+            }
+            std::array<double, 8> corners;
+            for (int c = 0; c < 8; ++c) {
+              corners[static_cast<std::size_t>(c)] = v[static_cast<std::size_t>(
+                  9 * (oct[0] + (c >> 2)) + 3 * (oct[1] + ((c >> 1) & 1)) + (oct[2] + (c & 1)))];
+            }
+            t.irradiance.setValue(p, static_cast<float>(trilinear(corners, t3[0], t3[1], t3[2])));
+            t.status.setValue(p, code(VoxelStatus::Interpolated));
+            ++interpolated.local();
+          }
+          break;
+        }
+        case Verdict::Refine:
+          break;
+      }
+    });
+    std::unique_ptr<FieldGrids> grids = makeGrids(spec_);
+    for (ThreadGrids& t : per_thread) mergeInto(*grids, *t.grids);
+    for (std::int64_t n : interpolated) stats_.interpolated_points += n;
+    for (std::int64_t n : below) stats_.below_floor_points += n;
+
+    // Every sample, wherever its block ended up, with its own value.
+    auto irradiance = grids->irradiance->getAccessor();
+    auto status = grids->status->getAccessor();
+    const auto nk = static_cast<std::uint64_t>(lattice_.n[2]);
+    const auto nj = static_cast<std::uint64_t>(lattice_.n[1]);
+    for (const auto& [key, value] : values_) {
+      const openvdb::Coord p(static_cast<int>(key / nk / nj), static_cast<int>((key / nk) % nj),
+                             static_cast<int>(key % nk));
+      const float before = status.getValue(p);
+      if (before == code(VoxelStatus::Interpolated)) --stats_.interpolated_points;
+      if (before == code(VoxelStatus::BelowFloor)) --stats_.below_floor_points;
+      if (value.excluded) {
+        status.setValue(p, code(VoxelStatus::Excluded));
+        irradiance.setValueOff(p, 0.0f);
+        continue;
+      }
+      status.setValue(p, code(VoxelStatus::Evaluated));
+      irradiance.setValue(p, static_cast<float>(value.irradiance_w_m2));
+      if (value.irradiance_w_m2 > stats_.peak_w_m2) {
+        stats_.peak_w_m2 = value.irradiance_w_m2;
+        stats_.peak_at_m = spec_.position(p[0], p[1], p[2]);
+      }
+    }
+    finishStats(*grids, stats_);
+    return grids;
+  }
+
+ public:
+  static void finishStats(const FieldGrids& grids, FieldStats& stats) {
+    stats.active_voxels = static_cast<std::int64_t>(grids.irradiance->activeVoxelCount());
+    stats.grid_bytes =
+        grids.irradiance->memUsage() + grids.level->memUsage() + grids.status->memUsage();
+  }
+
+ private:
+  const FacetIntegrator& integrator_;
+  const FieldSpec& spec_;
+  const ExcludedFn& excluded_;
+  WorkCounter* counter_;
+  Lattice lattice_;
+  FieldStats stats_;
+  std::unordered_map<std::uint64_t, PointValue> values_;  // every sample, evaluated once
+  std::vector<FinalBlock> final_;
+};
+
+void validate(const FieldSpec& spec) {
+  const int b = spec.block_voxels;
+  if (!(spec.voxel_m > 0.0) || !std::isfinite(spec.voxel_m) || b < 1 || (b & (b - 1)) != 0 ||
+      !(spec.tolerance >= 0.0) || !(spec.floor_w_m2 >= 0.0)) {
+    throw std::invalid_argument("FieldSpec out of range");
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (!(spec.max_m[a] > spec.min_m[a])) throw std::invalid_argument("FieldSpec: empty box");
+  }
+}
+
+}  // namespace
+
+std::array<int, 3> FieldSpec::nodes() const {
+  std::array<int, 3> n{};
+  for (int a = 0; a < 3; ++a) {
+    // A box edge within a millionth of a voxel of a whole number of voxels is that number.
+    const double voxels = (max_m[a] - min_m[a]) / voxel_m;
+    const auto whole = static_cast<std::int64_t>(std::ceil(voxels - 1e-6));
+    const std::int64_t blocks =
+        (std::max<std::int64_t>(whole, 1) + block_voxels - 1) / block_voxels;
+    n[static_cast<std::size_t>(a)] = static_cast<int>(blocks * block_voxels + 1);
+  }
+  return n;
+}
+
+ObserverField::ObserverField(FieldSpec spec, FieldStats stats, std::unique_ptr<FieldGrids> grids,
+                             std::vector<FieldBlock> blocks)
+    : spec_(spec), stats_(stats), grids_(std::move(grids)), blocks_(std::move(blocks)) {}
+ObserverField::~ObserverField() = default;
+ObserverField::ObserverField(ObserverField&&) noexcept = default;
+ObserverField& ObserverField::operator=(ObserverField&&) noexcept = default;
+
+double ObserverField::irradiance(int i, int j, int k) const {
+  return grids_->irradiance->tree().getValue(openvdb::Coord(i, j, k));
+}
+VoxelStatus ObserverField::status(int i, int j, int k) const {
+  return static_cast<VoxelStatus>(
+      std::lround(grids_->status->tree().getValue(openvdb::Coord(i, j, k))));
+}
+int ObserverField::level(int i, int j, int k) const {
+  return static_cast<int>(std::lround(grids_->level->tree().getValue(openvdb::Coord(i, j, k))));
+}
+
+double ObserverField::volumeAbove(double threshold_w_m2) const {
+  std::int64_t count = 0;
+  for (auto it = grids_->irradiance->cbeginValueOn(); it; ++it) {
+    if (static_cast<double>(*it) >= threshold_w_m2)
+      count += static_cast<std::int64_t>(it.getVoxelCount());
+  }
+  return static_cast<double>(count) * spec_.voxel_m * spec_.voxel_m * spec_.voxel_m;
+}
+
+ObserverField computeField(const FacetIntegrator& integrator, const FieldSpec& spec,
+                           const ExcludedFn& excluded, WorkCounter* counter) {
+  validate(spec);
+  openvdb::initialize();
+  return FieldBuilder(integrator, spec, excluded, counter).run();
+}
+
+ObserverField computeDenseField(const FacetIntegrator& integrator, const FieldSpec& spec,
+                                const ExcludedFn& excluded, WorkCounter* counter) {
+  validate(spec);
+  openvdb::initialize();
+  const auto start = std::chrono::steady_clock::now();
+  const Lattice lattice{spec.nodes()};
+  if (counter != nullptr)
+    counter->items_scheduled.fetch_add(static_cast<std::size_t>(lattice.count()));
+  FieldStats stats;
+  stats.nodes = lattice.n;
+  stats.lattice_points = lattice.count();
+  int finest = 0;
+  for (int b = spec.block_voxels; b > 1; b /= 2) ++finest;
+  stats.levels = finest;
+
+  struct Local {
+    ThreadGrids grids;
+    IntegratorWorkspace workspace;
+    FieldStats stats;
+  };
+  tbb::enumerable_thread_specific<Local> per_thread([&] {
+    return Local{ThreadGrids(spec), {}, {}};
+  });
+  // One task per line of points along z: each thread's grid then holds whole lines.
+  const std::int64_t lines = static_cast<std::int64_t>(lattice.n[0]) * lattice.n[1];
+  tbb::parallel_for(std::int64_t{0}, lines, [&](std::int64_t line) {
+    Local& local = per_thread.local();
+    const int i = static_cast<int>(line / lattice.n[1]);
+    const int j = static_cast<int>(line % lattice.n[1]);
+    for (int k = 0; k < lattice.n[2]; ++k) {
+      const openvdb::Coord p(i, j, k);
+      const Vec3 x = spec.position(i, j, k);
+      local.grids.level.setValue(p, static_cast<float>(finest));
+      if (excluded && excluded(x)) {
+        local.grids.status.setValue(p, code(VoxelStatus::Excluded));
+        ++local.stats.excluded_points;
+        continue;
+      }
+      const ObserverResult r = integrator.adaptive(x, local.workspace);
+      local.grids.irradiance.setValue(p, static_cast<float>(r.irradiance_w_m2));
+      local.grids.status.setValue(p, code(VoxelStatus::Evaluated));
+      ++local.stats.evaluated_points;
+      local.stats.evaluations += r.evaluations;
+      local.stats.unconverged_points += r.converged ? 0 : 1;
+      if (r.irradiance_w_m2 > local.stats.peak_w_m2) {
+        local.stats.peak_w_m2 = r.irradiance_w_m2;
+        local.stats.peak_at_m = x;
+      }
+      if (counter != nullptr) {
+        counter->items_done.fetch_add(1, std::memory_order_relaxed);
+        counter->evaluations.fetch_add(r.evaluations, std::memory_order_relaxed);
+      }
+    }
+  });
+  std::unique_ptr<FieldGrids> grids = makeGrids(spec);
+  for (Local& local : per_thread) {
+    mergeInto(*grids, *local.grids.grids);
+    stats.evaluated_points += local.stats.evaluated_points;
+    stats.excluded_points += local.stats.excluded_points;
+    stats.evaluations += local.stats.evaluations;
+    stats.unconverged_points += local.stats.unconverged_points;
+    if (local.stats.peak_w_m2 > stats.peak_w_m2) {
+      stats.peak_w_m2 = local.stats.peak_w_m2;
+      stats.peak_at_m = local.stats.peak_at_m;
+    }
+  }
+  FieldBuilder::finishStats(*grids, stats);
+  std::vector<FieldBlock> blocks;
+  const int b = spec.block_voxels;
+  for (int i = 0; i + 1 < lattice.n[0]; i += b)
+    for (int j = 0; j + 1 < lattice.n[1]; j += b)
+      for (int k = 0; k + 1 < lattice.n[2]; k += b)
+        blocks.push_back({{i, j, k}, b, 0, VoxelStatus::Evaluated});
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return {spec, stats, std::move(grids), std::move(blocks)};
+}
+
+}  // namespace glint

@@ -1,0 +1,130 @@
+#pragma once
+/// @file
+/// @brief The adaptive observer field: irradiance over a box of observers, refined octree-
+/// fashion only where it varies and left empty only where a bound proves it negligible
+/// (DESIGN.md, "the two-way hierarchy"). OpenVDB holds the result; this header does not
+/// include it (see observers/field_grids.h for the grids themselves).
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "facets/integrator.h"
+#include "observers/point_set.h"
+
+namespace glint {
+
+/// @brief The observer box and its accuracy (scene key `observers`).
+///
+/// Observers sit on a lattice of spacing voxel_m starting at min_m; the box is extended up to
+/// whole coarse blocks of block_voxels × voxel_m. Lattice point (i, j, k) is OpenVDB voxel
+/// (i, j, k) at world position min_m + voxel_m · (i, j, k).
+struct FieldSpec {
+  Vec3 min_m{0.0};
+  Vec3 max_m{0.0};
+  double voxel_m = 0.0;   ///< finest lattice spacing
+  int block_voxels = 16;  ///< coarsest block edge in voxels, a power of two
+  /// A block is accepted (its voxels interpolated) when interpolation from its corners misses
+  /// every finer sample by at most tolerance × the block's largest sample (+ the floor).
+  double tolerance = 1e-2;
+  double floor_w_m2 = 0.0;  ///< irradiance below this counts as negligible
+
+  /// @brief Lattice points per axis (voxels + 1), after extending to whole blocks.
+  [[nodiscard]] std::array<int, 3> nodes() const;
+  /// @brief World position of lattice point (i, j, k).
+  [[nodiscard]] Vec3 position(int i, int j, int k) const { return min_m + voxel_m * Vec3(i, j, k); }
+};
+
+/// @brief What a voxel of the result holds (grid `status`). Inactive irradiance never stands
+/// for 0 without one of these saying why.
+enum class VoxelStatus : int {
+  Outside = 0,       ///< not in the box (the grids' background)
+  Evaluated = 1,     ///< integrated at this very point
+  Interpolated = 2,  ///< trilinear from evaluated points, within the tolerance
+  BelowFloor = 3,    ///< a bound proves the irradiance ≤ floor here; not computed
+  Excluded = 4,      ///< inside or on the target: no observer can be here
+};
+
+/// @brief Counts and figures of one field computation.
+struct FieldStats {
+  std::array<int, 3> nodes{};         ///< lattice points per axis
+  std::int64_t lattice_points = 0;    ///< in the box
+  std::int64_t evaluated_points = 0;  ///< integrated (each once)
+  std::int64_t interpolated_points = 0;
+  std::int64_t below_floor_points = 0;
+  std::int64_t excluded_points = 0;
+  std::int64_t unconverged_points = 0;  ///< integrator did not reach its tolerance
+  std::int64_t blocks_skipped = 0;      ///< proven below the floor
+  std::int64_t blocks_accepted = 0;     ///< interpolated
+  std::int64_t blocks_refined = 0;
+  std::int64_t blocks_finest = 0;      ///< every point evaluated
+  std::int64_t evaluations = 0;        ///< reflection calculations, all points
+  std::int64_t bound_evaluations = 0;  ///< contribution bounds of candidate facets
+  int levels = 0;                      ///< refinement levels used (0 = coarsest blocks only)
+  double peak_w_m2 = 0.0;
+  Vec3 peak_at_m{0.0};
+  double seconds = 0.0;
+  std::int64_t active_voxels = 0;  ///< of the irradiance grid
+  std::size_t grid_bytes = 0;      ///< memory of all grids
+};
+
+/// @brief A block of the octree as it ended: lattice points origin .. origin + size per axis.
+struct FieldBlock {
+  std::array<int, 3> origin{};
+  int size = 0;                                 ///< edge in voxels
+  int level = 0;                                ///< 0 = coarsest
+  VoxelStatus status = VoxelStatus::Evaluated;  ///< Evaluated, Interpolated or BelowFloor
+};
+
+/// @brief Observer positions glint does not evaluate (inside or on the target).
+using ExcludedFn = std::function<bool(const Vec3& point_m)>;
+
+struct FieldGrids;  // observers/field_grids.h
+
+/// @brief The computed field: OpenVDB grids at the finest voxel size and their statistics.
+class ObserverField {
+ public:
+  ObserverField(FieldSpec spec, FieldStats stats, std::unique_ptr<FieldGrids> grids,
+                std::vector<FieldBlock> blocks);
+  ~ObserverField();
+  ObserverField(ObserverField&&) noexcept;
+  ObserverField& operator=(ObserverField&&) noexcept;
+
+  [[nodiscard]] const FieldSpec& spec() const { return spec_; }
+  [[nodiscard]] const FieldStats& stats() const { return stats_; }
+  [[nodiscard]] const FieldGrids& grids() const { return *grids_; }
+  /// @brief The final blocks (for the dense twin: the coarsest blocks, all evaluated).
+  [[nodiscard]] const std::vector<FieldBlock>& blocks() const { return blocks_; }
+
+  /// @brief Irradiance at lattice point (i, j, k); 0 where not computed (see status()).
+  [[nodiscard]] double irradiance(int i, int j, int k) const;
+  [[nodiscard]] VoxelStatus status(int i, int j, int k) const;
+  [[nodiscard]] int level(int i, int j, int k) const;
+
+  /// @brief Volume in m³ of the lattice cells whose irradiance is at least @p threshold_w_m2
+  /// (each lattice point standing for one voxel_m³).
+  [[nodiscard]] double volumeAbove(double threshold_w_m2) const;
+
+ private:
+  FieldSpec spec_;
+  FieldStats stats_;
+  std::unique_ptr<FieldGrids> grids_;
+  std::vector<FieldBlock> blocks_;
+};
+
+/// @brief The adaptive field: top-down over blocks, each pruning its candidate facets by
+/// bound, skipping where the bound is below the floor, else evaluating its 3×3×3 lattice and
+/// refining into eight where interpolation misses. Evaluated points are cached and never
+/// computed twice; TBB runs over blocks and points. @p integrator's options are used per
+/// point. @p counter (optional) counts evaluated points and evaluations.
+ObserverField computeField(const FacetIntegrator& integrator, const FieldSpec& spec,
+                           const ExcludedFn& excluded, WorkCounter* counter = nullptr);
+
+/// @brief The uniform dense twin: every lattice point of the box evaluated with the same
+/// integrator over every lit facet.
+ObserverField computeDenseField(const FacetIntegrator& integrator, const FieldSpec& spec,
+                                const ExcludedFn& excluded, WorkCounter* counter = nullptr);
+
+}  // namespace glint

@@ -1,0 +1,20 @@
+#pragma once
+/// @file
+/// @brief The OpenVDB grids of an ObserverField. Include only from .cpp files: it brings in
+/// OpenVDB.
+
+#include <openvdb/openvdb.h>
+
+namespace glint {
+
+/// @brief All at the finest voxel size, index (i, j, k) = lattice point (i, j, k).
+struct FieldGrids {
+  openvdb::FloatGrid::Ptr
+      irradiance;  ///< `irradiance_w_m2`: active where evaluated or interpolated
+  // Float grids, though the values are small integers: Debian's python3-openvdb (and many
+  // other readers) handle only float, vector and bool grids.
+  openvdb::FloatGrid::Ptr level;   ///< `refinement_level`: 0 = coarsest block
+  openvdb::FloatGrid::Ptr status;  ///< `status`: a VoxelStatus, background Outside
+};
+
+}  // namespace glint

@@ -1,0 +1,202 @@
+#include "pipeline/run_command.h"
+
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "export/atomic_file.h"
+#include "export/field_files.h"
+#include "glint/version.h"
+#include "pipeline/input_error.h"
+#include "pipeline/progress.h"
+#include "pipeline/scene.h"
+#include "pipeline/target_builder.h"
+
+namespace glint {
+namespace {
+
+// FNV-1a, 64 bit: identifies the scene file a result came from (not a security measure).
+std::string fnv1a64(const std::string& bytes) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+std::string readBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string format(const char* fmt, double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, fmt, x);
+  return buf;
+}
+
+// The largest power-of-two stride that keeps the .vti resample under 16.7 M points.
+int vtiStride(const FieldSpec& spec) {
+  const auto n = spec.nodes();
+  int stride = 1;
+  auto points = [&](int s) {
+    double p = 1.0;
+    for (int a = 0; a < 3; ++a) p *= (n[a] - 1) / s + 1;
+    return p;
+  };
+  while (points(stride) > 16.7e6 && stride < spec.block_voxels) stride *= 2;
+  return stride;
+}
+
+nlohmann::json summaryJson(const ObserverField& field, const RunInfo& info, const CullStats& cull) {
+  const FieldSpec& spec = field.spec();
+  const FieldStats& s = field.stats();
+  nlohmann::json j;
+  j["program"] = info.program_version;
+  j["scene_file"] = info.scene_file;
+  j["scene_fnv1a64"] = info.scene_sha256;
+  j["scheme"] = info.scheme;
+  j["box"] = {{"min_m", {spec.min_m.x, spec.min_m.y, spec.min_m.z}},
+              {"max_m",
+               {spec.position(s.nodes[0] - 1, 0, 0).x, spec.position(0, s.nodes[1] - 1, 0).y,
+                spec.position(0, 0, s.nodes[2] - 1).z}},
+              {"voxel_m", spec.voxel_m},
+              {"block_m", spec.voxel_m * spec.block_voxels},
+              {"lattice_points", {s.nodes[0], s.nodes[1], s.nodes[2]}}};
+  j["tolerance"] = spec.tolerance;
+  j["floor_w_m2"] = spec.floor_w_m2;
+  j["target"] = {{"coarse_facets", cull.coarse_facets},
+                 {"lit", cull.lit},
+                 {"facing_away", cull.facing_away},
+                 {"outside_beam", cull.outside_beam},
+                 {"degenerate", cull.degenerate}};
+  j["points"] = {{"in_box", s.lattice_points},
+                 {"evaluated", s.evaluated_points},
+                 {"interpolated", s.interpolated_points},
+                 {"proven_below_floor", s.below_floor_points},
+                 {"inside_target", s.excluded_points},
+                 {"unconverged", s.unconverged_points}};
+  j["blocks"] = {{"skipped", s.blocks_skipped},
+                 {"accepted", s.blocks_accepted},
+                 {"refined", s.blocks_refined},
+                 {"finest", s.blocks_finest},
+                 {"levels", s.levels + 1}};
+  j["evaluations"] = s.evaluations;
+  j["bound_evaluations"] = s.bound_evaluations;
+  j["seconds"] = s.seconds;
+  j["peak_irradiance_w_m2"] = s.peak_w_m2;
+  j["peak_at_m"] = {s.peak_at_m.x, s.peak_at_m.y, s.peak_at_m.z};
+  nlohmann::json volumes = nlohmann::json::array();
+  for (double fraction : {0.01, 0.1, 0.5}) {
+    const double t = fraction * s.peak_w_m2;
+    volumes.push_back({{"fraction_of_peak", fraction},
+                       {"threshold_w_m2", t},
+                       {"volume_m3", s.peak_w_m2 > 0.0 ? field.volumeAbove(t) : 0.0}});
+  }
+  j["volumes_above"] = volumes;
+  j["memory"] = {{"grid_bytes", s.grid_bytes},
+                 {"active_voxels", s.active_voxels},
+                 {"bytes_per_active_voxel",
+                  s.active_voxels > 0
+                      ? static_cast<double>(s.grid_bytes) / static_cast<double>(s.active_voxels)
+                      : 0.0}};
+  return j;
+}
+
+}  // namespace
+
+void runField(const RunArgs& args, std::ostream& err) {
+  const Scene scene = loadScene(args.scene_path);
+  const FieldSpec spec = fieldSpec(scene);
+  std::filesystem::path dir = args.out_dir;
+  if (dir.empty()) {
+    dir = std::filesystem::path("out") / (std::filesystem::path(args.scene_path).stem().string() +
+                                          (args.uniform ? "_uniform" : ""));
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw OutputError(dir.string() + ": cannot create the output folder: " + ec.message());
+  // Opened before the work, so an unwritable folder stops the run at once.
+  AtomicFile vdb(dir / "irradiance.vdb"), vti(dir / "irradiance.vti"), vtu(dir / "blocks.vtu"),
+      vtp(dir / "target.vtp"), summary(dir / "summary.json");
+
+  std::unique_ptr<tbb::global_control> thread_limit;
+  if (args.threads > 0) {
+    thread_limit = std::make_unique<tbb::global_control>(
+        tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(args.threads));
+  }
+  const FacetIntegrator integrator(buildTarget(scene), beamOf(scene),
+                                   fieldIntegratorOptions(scene, spec));
+  const ExcludedFn excluded = excludedRegion(scene, 0.5 * spec.voxel_m);
+
+  WorkCounter counter;
+  std::unique_ptr<ObserverField> field;
+  {
+    std::unique_ptr<ProgressReporter> progress;
+    if (!args.quiet) {
+      progress = std::make_unique<ProgressReporter>(err, args.terminal, "points", 0, counter);
+    }
+    field = std::make_unique<ObserverField>(
+        args.uniform ? computeDenseField(integrator, spec, excluded, &counter)
+                     : computeField(integrator, spec, excluded, &counter));
+  }
+
+  RunInfo info;
+  info.program_version = std::string("glint ") + GLINT_VERSION;
+  info.scene_file = args.scene_path;
+  info.scene_sha256 = fnv1a64(readBytes(args.scene_path));
+  info.scheme = args.uniform ? "uniform" : "adaptive";
+  info.wavelength_nm = scene.laser.wavelength_nm;
+  info.power_w = scene.laser.power_w;
+
+  writeVdb(vdb.stream(), *field, info);
+  writeVti(vti.stream(), *field, vtiStride(spec));
+  writeBlocksVtu(vtu.stream(), *field);
+  writeTargetVtp(vtp.stream(), integrator, 2);
+  const nlohmann::json j = summaryJson(*field, info, integrator.cullStats());
+  summary.stream() << j.dump(2) << "\n";
+  for (AtomicFile* f : {&vdb, &vti, &vtu, &vtp, &summary}) f->commit();
+
+  if (args.quiet) return;
+  const FieldStats& s = field->stats();
+  const double box_points = static_cast<double>(s.lattice_points);
+  err << "glint run: " << info.scheme << ", " << s.nodes[0] << "×" << s.nodes[1] << "×"
+      << s.nodes[2] << " lattice points at " << spec.voxel_m << " m, tolerance " << spec.tolerance
+      << ", floor " << format("%.3g", spec.floor_w_m2) << " W/m²\n";
+  err << "  points: " << s.evaluated_points << " evaluated ("
+      << format("%.3g", 100.0 * static_cast<double>(s.evaluated_points) / box_points) << " %), "
+      << s.interpolated_points << " interpolated, " << s.below_floor_points
+      << " proven below the floor, " << s.excluded_points << " inside the target\n";
+  if (!args.uniform) {
+    err << "  blocks: " << s.blocks_skipped << " skipped, " << s.blocks_accepted << " accepted, "
+        << s.blocks_refined << " refined, " << s.blocks_finest << " at the finest level ("
+        << s.levels + 1 << " levels)\n";
+  }
+  err << "  evaluations: " << format("%.4g", static_cast<double>(s.evaluations)) << " in "
+      << formatDuration(s.seconds) << "\n";
+  err << "  peak irradiance: " << format("%.6g", s.peak_w_m2) << " W/m² at (" << s.peak_at_m.x
+      << ", " << s.peak_at_m.y << ", " << s.peak_at_m.z << ")\n";
+  if (s.unconverged_points > 0) {
+    err << "  warning: " << s.unconverged_points
+        << " points did not reach the integration tolerance (see summary.json)\n";
+  }
+  err << "  memory: " << format("%.3g", static_cast<double>(s.grid_bytes) / 1e6) << " MB of grids, "
+      << format("%.3g", s.active_voxels > 0 ? static_cast<double>(s.grid_bytes) /
+                                                  static_cast<double>(s.active_voxels)
+                                            : 0.0)
+      << " bytes per active voxel\n";
+  err << "  wrote " << dir.string() << "/{irradiance.vdb, irradiance.vti, blocks.vtu, target.vtp, "
+      << "summary.json}\n";
+}
+
+}  // namespace glint

@@ -1,0 +1,25 @@
+#pragma once
+/// @file
+/// @brief `glint run`: the adaptive hazard volume over the scene's observer box (the main job).
+
+#include <ostream>
+#include <string>
+
+namespace glint {
+
+/// @brief The arguments of `glint run`.
+struct RunArgs {
+  std::string scene_path;
+  std::string out_dir;   ///< empty: out/<scene file stem> (out/<stem>_uniform for --uniform)
+  bool uniform = false;  ///< the dense twin: every lattice point evaluated
+  int threads = 0;       ///< 0: all cores
+  bool quiet = false;    ///< no progress, no summary
+  bool terminal = false;
+};
+
+/// @brief Runs the command: writes irradiance.vdb, irradiance.vti, blocks.vtu, target.vtp and
+/// summary.json into the output folder, each whole or not at all.
+/// @throw InputError, OutputError on bad input or an unwritable folder.
+void runField(const RunArgs& args, std::ostream& err);
+
+}  // namespace glint

@@ -1,0 +1,28 @@
+"""Reads glint's irradiance.vdb back with Debian's python3-openvdb and checks it against
+summary.json: grid names, voxel size, active voxel count and metadata."""
+import json
+import sys
+
+import pyopenvdb as vdb
+
+out = sys.argv[1]
+summary = json.load(open(f"{out}/summary.json"))
+grids, meta = vdb.readAll(f"{out}/irradiance.vdb")
+by_name = {g.name: g for g in grids}
+assert set(by_name) == {"irradiance_w_m2", "refinement_level", "status"}, by_name.keys()
+voxel = summary["box"]["voxel_m"]
+for g in grids:
+    size = g.transform.voxelSize()
+    assert all(abs(s - voxel) < 1e-12 * voxel for s in size), (g.name, size, voxel)
+irr = by_name["irradiance_w_m2"]
+assert irr.activeVoxelCount() == summary["memory"]["active_voxels"], (
+    irr.activeVoxelCount(), summary["memory"]["active_voxels"])
+lo, hi = irr.evalMinMax()
+peak = summary["peak_irradiance_w_m2"]
+assert abs(hi - peak) <= 1e-6 * peak, (hi, peak)  # the grid stores float32
+assert lo >= 0.0, lo
+for key in ("program", "scene_fnv1a64", "wavelength_nm", "power_w", "tolerance", "floor_w_m2",
+            "evaluations", "irradiance_unit"):
+    assert key in meta, key
+assert meta["evaluations"] == summary["evaluations"]
+print("vdb ok:", {g.name: g.activeVoxelCount() for g in grids})
