@@ -77,7 +77,7 @@ void writeVdb(std::ostream& out, const ObserverField& field, const RunInfo& info
   openvdb::MetaMap meta;
   meta.insertMeta("program", openvdb::StringMetadata(info.program_version));
   meta.insertMeta("scene_file", openvdb::StringMetadata(info.scene_file));
-  meta.insertMeta("scene_fnv1a64", openvdb::StringMetadata(info.scene_sha256));
+  meta.insertMeta("scene_fnv1a64", openvdb::StringMetadata(info.scene_fnv1a64));
   meta.insertMeta("scheme", openvdb::StringMetadata(info.scheme));
   meta.insertMeta("length_unit", openvdb::StringMetadata("m"));
   meta.insertMeta("irradiance_unit", openvdb::StringMetadata("W/m^2"));

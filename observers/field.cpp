@@ -42,6 +42,14 @@ struct Lattice {
   [[nodiscard]] std::int64_t count() const { return static_cast<std::int64_t>(n[0]) * n[1] * n[2]; }
 };
 
+// Calls fn(origin, size) for every block of the coarsest level.
+template <class Fn>
+void forEachCoarseBlock(const Lattice& lattice, int size, Fn&& fn) {
+  for (int i = 0; i + 1 < lattice.n[0]; i += size)
+    for (int j = 0; j + 1 < lattice.n[1]; j += size)
+      for (int k = 0; k + 1 < lattice.n[2]; k += size) fn(Index3{i, j, k}, size);
+}
+
 // A block of the octree: lattice points o .. o + size on each axis. It owns the voxels
 // [o, o + size) per axis, and the last lattice point of an axis where it touches the box's end.
 struct Block {
@@ -144,12 +152,10 @@ class FieldBuilder {
     const auto start = std::chrono::steady_clock::now();
     stats_.nodes = lattice_.n;
     stats_.lattice_points = lattice_.count();
-    const int b = spec_.block_voxels;
     std::vector<Block> blocks;
-    for (int i = 0; i + 1 < lattice_.n[0]; i += b)
-      for (int j = 0; j + 1 < lattice_.n[1]; j += b)
-        for (int k = 0; k + 1 < lattice_.n[2]; k += b)
-          blocks.push_back({{i, j, k}, b, 0, kNoParent});
+    forEachCoarseBlock(lattice_, spec_.block_voxels, [&](const Index3& o, int b) {
+      blocks.push_back({o, b, 0, kNoParent});
+    });
 
     std::vector<std::vector<Candidate>> parent_lists;
     std::vector<double> parent_dropped;
@@ -593,11 +599,9 @@ ObserverField computeDenseField(const FacetIntegrator& integrator, const FieldSp
   }
   FieldBuilder::finishStats(*grids, stats);
   std::vector<FieldBlock> blocks;
-  const int b = spec.block_voxels;
-  for (int i = 0; i + 1 < lattice.n[0]; i += b)
-    for (int j = 0; j + 1 < lattice.n[1]; j += b)
-      for (int k = 0; k + 1 < lattice.n[2]; k += b)
-        blocks.push_back({{i, j, k}, b, 0, VoxelStatus::Evaluated});
+  forEachCoarseBlock(lattice, spec.block_voxels, [&](const Index3& o, int b) {
+    blocks.push_back({o, b, 0, VoxelStatus::Evaluated});
+  });
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return {spec, stats, std::move(grids), std::move(blocks)};
 }

@@ -19,12 +19,6 @@
 namespace glint {
 namespace {
 
-std::string format(const char* fmt, double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, fmt, x);
-  return buf;
-}
-
 void printSummary(std::ostream& err, const PointsArgs& args, const FacetIntegrator& integrator,
                   std::span<const Vec3> points, std::span<const ObserverResult> results,
                   double seconds, int threads) {
@@ -43,21 +37,22 @@ void printSummary(std::ostream& err, const PointsArgs& args, const FacetIntegrat
   }
   const std::string scheme = args.uniform_level
                                  ? "uniform twin, level " + std::to_string(*args.uniform_level)
-                                 : "adaptive, tolerance " + format("%g", opt.tolerance) +
-                                       ", floor " + format("%.3g", opt.floor_w_m2) + " W/m²";
+                                 : "adaptive, tolerance " + formatNumber("%g", opt.tolerance) +
+                                       ", floor " + formatNumber("%.3g", opt.floor_w_m2) + " W/m²";
   err << "glint points: " << points.size() << " observers, " << scheme << ", " << threads
       << (threads == 1 ? " thread\n" : " threads\n");
   err << "  target: " << cull.coarse_facets << " coarse facets; " << cull.lit << " lit, "
       << cull.facing_away << " facing away from the laser, " << cull.outside_beam
       << " outside the beam, " << cull.degenerate << " degenerate\n";
-  err << "  evaluations: " << format("%.4g", static_cast<double>(total)) << " in all; per observer "
-      << format("%.4g", static_cast<double>(total) / static_cast<double>(results.size()))
+  err << "  evaluations: " << formatNumber("%.4g", static_cast<double>(total))
+      << " in all; per observer "
+      << formatNumber("%.4g", static_cast<double>(total) / static_cast<double>(results.size()))
       << " on average, " << lo << " to " << hi << "\n";
   const Vec3& p = points[peak];
-  err << "  peak irradiance: " << format("%.6g", results[peak].irradiance_w_m2) << " W/m² at ("
-      << p.x << ", " << p.y << ", " << p.z << ")\n";
+  err << "  peak irradiance: " << formatNumber("%.6g", results[peak].irradiance_w_m2)
+      << " W/m² at (" << p.x << ", " << p.y << ", " << p.z << ")\n";
   err << "  time: " << formatDuration(seconds) << " ("
-      << format("%.3g", static_cast<double>(total) / std::max(seconds, 1e-9))
+      << formatNumber("%.3g", static_cast<double>(total) / std::max(seconds, 1e-9))
       << " evaluations/s)\n";
   if (!args.uniform_level) {
     if (unconverged == 0) {

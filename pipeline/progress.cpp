@@ -74,4 +74,10 @@ void ProgressReporter::print() {
   printed_ = true;
 }
 
+std::string formatNumber(const char* fmt, double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, fmt, x);
+  return buf;
+}
+
 }  // namespace glint

@@ -45,6 +45,9 @@ class ProgressReporter {
   std::thread thread_;
 };
 
+/// @brief @p x through a printf format with one double conversion ("%.3g").
+std::string formatNumber(const char* fmt, double x);
+
 /// @brief "1.23 s", "4 min 5 s": a duration for people.
 std::string formatDuration(double seconds);
 

@@ -39,12 +39,6 @@ std::string readBytes(const std::string& path) {
   return s.str();
 }
 
-std::string format(const char* fmt, double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, fmt, x);
-  return buf;
-}
-
 // The largest power-of-two stride that keeps the .vti resample under 16.7 M points.
 int vtiStride(const FieldSpec& spec) {
   const auto n = spec.nodes();
@@ -64,7 +58,7 @@ nlohmann::json summaryJson(const ObserverField& field, const RunInfo& info, cons
   nlohmann::json j;
   j["program"] = info.program_version;
   j["scene_file"] = info.scene_file;
-  j["scene_fnv1a64"] = info.scene_sha256;
+  j["scene_fnv1a64"] = info.scene_fnv1a64;
   j["scheme"] = info.scheme;
   j["box"] = {{"min_m", {spec.min_m.x, spec.min_m.y, spec.min_m.z}},
               {"max_m",
@@ -154,7 +148,7 @@ void runField(const RunArgs& args, std::ostream& err) {
   RunInfo info;
   info.program_version = std::string("glint ") + GLINT_VERSION;
   info.scene_file = args.scene_path;
-  info.scene_sha256 = fnv1a64(readBytes(args.scene_path));
+  info.scene_fnv1a64 = fnv1a64(readBytes(args.scene_path));
   info.scheme = args.uniform ? "uniform" : "adaptive";
   info.wavelength_nm = scene.laser.wavelength_nm;
   info.power_w = scene.laser.power_w;
@@ -172,28 +166,29 @@ void runField(const RunArgs& args, std::ostream& err) {
   const double box_points = static_cast<double>(s.lattice_points);
   err << "glint run: " << info.scheme << ", " << s.nodes[0] << "×" << s.nodes[1] << "×"
       << s.nodes[2] << " lattice points at " << spec.voxel_m << " m, tolerance " << spec.tolerance
-      << ", floor " << format("%.3g", spec.floor_w_m2) << " W/m²\n";
+      << ", floor " << formatNumber("%.3g", spec.floor_w_m2) << " W/m²\n";
   err << "  points: " << s.evaluated_points << " evaluated ("
-      << format("%.3g", 100.0 * static_cast<double>(s.evaluated_points) / box_points) << " %), "
-      << s.interpolated_points << " interpolated, " << s.below_floor_points
+      << formatNumber("%.3g", 100.0 * static_cast<double>(s.evaluated_points) / box_points)
+      << " %), " << s.interpolated_points << " interpolated, " << s.below_floor_points
       << " proven below the floor, " << s.excluded_points << " inside the target\n";
   if (!args.uniform) {
     err << "  blocks: " << s.blocks_skipped << " skipped, " << s.blocks_accepted << " accepted, "
         << s.blocks_refined << " refined, " << s.blocks_finest << " at the finest level ("
         << s.levels + 1 << " levels)\n";
   }
-  err << "  evaluations: " << format("%.4g", static_cast<double>(s.evaluations)) << " in "
+  err << "  evaluations: " << formatNumber("%.4g", static_cast<double>(s.evaluations)) << " in "
       << formatDuration(s.seconds) << "\n";
-  err << "  peak irradiance: " << format("%.6g", s.peak_w_m2) << " W/m² at (" << s.peak_at_m.x
+  err << "  peak irradiance: " << formatNumber("%.6g", s.peak_w_m2) << " W/m² at (" << s.peak_at_m.x
       << ", " << s.peak_at_m.y << ", " << s.peak_at_m.z << ")\n";
   if (s.unconverged_points > 0) {
     err << "  warning: " << s.unconverged_points
         << " points did not reach the integration tolerance (see summary.json)\n";
   }
-  err << "  memory: " << format("%.3g", static_cast<double>(s.grid_bytes) / 1e6) << " MB of grids, "
-      << format("%.3g", s.active_voxels > 0 ? static_cast<double>(s.grid_bytes) /
-                                                  static_cast<double>(s.active_voxels)
-                                            : 0.0)
+  err << "  memory: " << formatNumber("%.3g", static_cast<double>(s.grid_bytes) / 1e6)
+      << " MB of grids, "
+      << formatNumber("%.3g", s.active_voxels > 0 ? static_cast<double>(s.grid_bytes) /
+                                                        static_cast<double>(s.active_voxels)
+                                                  : 0.0)
       << " bytes per active voxel\n";
   err << "  wrote " << dir.string() << "/{irradiance.vdb, irradiance.vti, blocks.vtu, target.vtp, "
       << "summary.json}\n";
