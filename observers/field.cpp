@@ -23,10 +23,11 @@ constexpr std::uint32_t kNoParent = std::numeric_limits<std::uint32_t>::max();
 // Share of the floor that pruning may drop from a block's candidates: what every observer in
 // it may miss, on top of the integrator's own error.
 constexpr double kDropShareOfFloor = 0.25;
-// Interpolation must match the finer samples to this share of the block's budget: the voxels
-// are filled from the finer samples, whose own interpolation error is about a quarter of the
-// coarser one (trilinear interpolation is second order), so the rest covers that.
-constexpr double kCheckShare = 0.5;
+// Interpolation from a block's corners must match its finer samples to this share of the
+// block's budget (tolerance × largest sample + floor). The voxels are then filled from the
+// finer samples, at half the spacing: trilinear interpolation is second order, so where the
+// field is smooth the error of the fill is about a quarter of what the check measured.
+constexpr double kCheckShare = 1.0;
 // Candidates are split to tighten block bounds down to this subdivision depth.
 constexpr int kMaxBoundSplitDepth = 6;
 
