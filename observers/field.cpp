@@ -23,10 +23,11 @@ constexpr std::uint32_t kNoParent = std::numeric_limits<std::uint32_t>::max();
 // Share of the floor that pruning may drop from a block's candidates: what every observer in
 // it may miss, on top of the integrator's own error.
 constexpr double kDropShareOfFloor = 0.25;
-// Interpolation from a block's corners must match its finer samples to this share of the
-// block's budget (tolerance × largest sample + floor). The voxels are then filled from the
-// finer samples, at half the spacing: trilinear interpolation is second order, so where the
-// field is smooth the error of the fill is about a quarter of what the check measured.
+// Interpolation from a block's corners must match its finer samples, and the fill from those
+// must match the octant centres, to this share of the block's budget (tolerance × largest
+// sample + floor). The fill is octant by octant from the finer samples: where the field is
+// smooth its error is about a quarter of what the corner check measured (trilinear
+// interpolation is second order), and the octant centres measure it where it is largest.
 constexpr double kCheckShare = 1.0;
 // Candidates are split to tighten block bounds down to this subdivision depth.
 constexpr int kMaxBoundSplitDepth = 6;
@@ -67,11 +68,26 @@ struct PointValue {
   bool excluded = false;
 };
 
-// Offsets of a block's sample lattice along one axis: 0, s/2, s (or 0, 1 for a unit block).
 float code(VoxelStatus s) { return static_cast<float>(static_cast<int>(s)); }
 
-int samplesPerAxis(int size) { return size >= 2 ? 3 : 2; }
-int sampleOffset(int size, int a) { return size >= 2 ? a * size / 2 : a; }
+// Calls fn(di, dj, dk) for every sample of a block of edge `size`, as offsets from its origin:
+// the 3×3×3 lattice 0, size/2, size per axis (0, 1 for a unit block) and, for size ≥ 4, the
+// centres of its eight octants. The octant centres check the fill itself: a step centred on
+// the middle sample plane (a lobe edge on a round coordinate) looks linear to the 3×3×3
+// lattice, but not to the points a quarter of the way in.
+template <class Fn>
+void forEachSample(int size, Fn&& fn) {
+  const int m = size >= 2 ? 3 : 2;
+  const auto offset = [&](int a) { return size >= 2 ? a * size / 2 : a; };
+  for (int a = 0; a < m; ++a)
+    for (int c = 0; c < m; ++c)
+      for (int e = 0; e < m; ++e) fn(offset(a), offset(c), offset(e));
+  if (size < 4) return;
+  const int q = size / 4;
+  for (int oct = 0; oct < 8; ++oct) {
+    fn(q * (1 + 2 * (oct >> 2)), q * (1 + 2 * ((oct >> 1) & 1)), q * (1 + 2 * (oct & 1)));
+  }
+}
 
 openvdb::math::Transform::Ptr fieldTransform(const FieldSpec& spec) {
   auto transform = openvdb::math::Transform::createLinearTransform(spec.voxel_m);
@@ -268,15 +284,10 @@ class FieldBuilder {
     for (std::size_t i = 0; i < blocks.size(); ++i) {
       if (skipped(bounds[i])) continue;
       const Block& b = blocks[i];
-      const int m = samplesPerAxis(b.size);
-      for (int a = 0; a < m; ++a)
-        for (int c = 0; c < m; ++c)
-          for (int e = 0; e < m; ++e) {
-            const std::uint64_t key =
-                lattice_.key(b.o[0] + sampleOffset(b.size, a), b.o[1] + sampleOffset(b.size, c),
-                             b.o[2] + sampleOffset(b.size, e));
-            if (!values_.contains(key)) wanted.emplace_back(key, static_cast<std::uint32_t>(i));
-          }
+      forEachSample(b.size, [&](int di, int dj, int dk) {
+        const std::uint64_t key = lattice_.key(b.o[0] + di, b.o[1] + dj, b.o[2] + dk);
+        if (!values_.contains(key)) wanted.emplace_back(key, static_cast<std::uint32_t>(i));
+      });
     }
     tbb::parallel_sort(wanted.begin(), wanted.end());
     wanted.erase(std::unique(wanted.begin(), wanted.end(),
@@ -334,20 +345,21 @@ class FieldBuilder {
         verdicts[i] = Verdict::Finest;  // every lattice point of it is a sample
         return;
       }
-      std::array<double, 27> v{};
+      // The 3×3×3 lattice (v[9a + 3c + e]) and the octant centres, in forEachSample's order.
+      std::array<double, 35> v{};
+      std::size_t n = 0;
+      bool excluded = false;
+      forEachSample(b.size, [&](int di, int dj, int dk) {
+        const PointValue& p = values_.at(lattice_.key(b.o[0] + di, b.o[1] + dj, b.o[2] + dk));
+        excluded = excluded || p.excluded;
+        v[n++] = p.irradiance_w_m2;
+      });
+      if (excluded) {
+        verdicts[i] = Verdict::Refine;  // the target is in the block: resolve it finely
+        return;
+      }
       double largest = 0.0;
-      for (int a = 0; a < 3; ++a)
-        for (int c = 0; c < 3; ++c)
-          for (int e = 0; e < 3; ++e) {
-            const PointValue& p = values_.at(lattice_.key(
-                b.o[0] + a * b.size / 2, b.o[1] + c * b.size / 2, b.o[2] + e * b.size / 2));
-            if (p.excluded) {
-              verdicts[i] = Verdict::Refine;  // the target is in the block: resolve it finely
-              return;
-            }
-            v[static_cast<std::size_t>(9 * a + 3 * c + e)] = p.irradiance_w_m2;
-            largest = std::max(largest, std::abs(p.irradiance_w_m2));
-          }
+      for (std::size_t s = 0; s < n; ++s) largest = std::max(largest, std::abs(v[s]));
       const double allowed = kCheckShare * (spec_.tolerance * largest + spec_.floor_w_m2);
       // A coarse facet whose light could pass between the samples leaves no trace in them:
       // only the bound can say whether such a glint is too weak to matter.
@@ -365,6 +377,18 @@ class FieldBuilder {
               return;
             }
           }
+      // The fill at each octant centre: the mean of the octant's eight corners.
+      for (std::size_t oct = 0; oct < 8; ++oct) {
+        double mean = 0.0;
+        for (std::size_t c = 0; c < 8; ++c) {
+          mean += v[9 * ((oct >> 2) + (c >> 2)) + 3 * (((oct >> 1) & 1) + ((c >> 1) & 1)) +
+                    ((oct & 1) + (c & 1))];
+        }
+        if (std::abs(0.125 * mean - v[27 + oct]) > allowed) {
+          verdicts[i] = Verdict::Refine;
+          return;
+        }
+      }
       verdicts[i] = Verdict::Accept;
     });
     return verdicts;
