@@ -39,14 +39,12 @@ Row measure(const std::filesystem::path& path, double voxel_m) {
     spec.block_voxels = 1;
     while (spec.block_voxels * voxel_m < block_m * (1.0 - 1e-9)) spec.block_voxels *= 2;
   }
-  const FacetIntegrator integrator(buildTarget(scene), beamOf(scene),
-                                   fieldIntegratorOptions(scene, spec));
-  const ExcludedFn excluded = excludedRegion(scene, 0.5 * spec.voxel_m);
+  const FieldProblem problem = fieldProblem(scene, spec);
   std::fprintf(stderr, "%s: adaptive ...\n", path.filename().c_str());
-  const ObserverField adaptive = computeField(integrator, spec, excluded);
+  const ObserverField adaptive = computeField(problem.integrator, spec, problem.excluded);
   std::fprintf(stderr, "%s: dense (%lld points) ...\n", path.filename().c_str(),
                static_cast<long long>(adaptive.stats().lattice_points));
-  const ObserverField dense = computeDenseField(integrator, spec, excluded);
+  const ObserverField dense = computeDenseField(problem.integrator, spec, problem.excluded);
   return {path.filename().string(), spec, adaptive.stats(), dense.stats(),
           compareFields(adaptive, dense)};
 }

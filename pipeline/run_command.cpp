@@ -129,9 +129,8 @@ void runField(const RunArgs& args, std::ostream& err) {
     thread_limit = std::make_unique<tbb::global_control>(
         tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(args.threads));
   }
-  const FacetIntegrator integrator(buildTarget(scene), beamOf(scene),
-                                   fieldIntegratorOptions(scene, spec));
-  const ExcludedFn excluded = excludedRegion(scene, 0.5 * spec.voxel_m);
+  const FieldProblem problem = fieldProblem(scene, spec);
+  const FacetIntegrator& integrator = problem.integrator;
 
   WorkCounter counter;
   std::unique_ptr<ObserverField> field;
@@ -141,8 +140,8 @@ void runField(const RunArgs& args, std::ostream& err) {
       progress = std::make_unique<ProgressReporter>(err, args.terminal, "points", 0, counter);
     }
     field = std::make_unique<ObserverField>(
-        args.uniform ? computeDenseField(integrator, spec, excluded, &counter)
-                     : computeField(integrator, spec, excluded, &counter));
+        args.uniform ? computeDenseField(integrator, spec, problem.excluded, &counter)
+                     : computeField(integrator, spec, problem.excluded, &counter));
   }
 
   RunInfo info;

@@ -75,6 +75,11 @@ IntegratorOptions fieldIntegratorOptions(const Scene& scene, const FieldSpec& fi
   return o;
 }
 
+FieldProblem fieldProblem(const Scene& scene, const FieldSpec& field) {
+  return {FacetIntegrator(buildTarget(scene), beamOf(scene), fieldIntegratorOptions(scene, field)),
+          excludedRegion(scene, 0.5 * field.voxel_m)};
+}
+
 ExcludedFn excludedRegion(const Scene& scene, double margin_m) {
   return [objects = scene.objects, margin_m](const Vec3& x) {
     for (const ObjectSpec& o : objects) {

@@ -34,4 +34,13 @@ IntegratorOptions fieldIntegratorOptions(const Scene& scene, const FieldSpec& fi
 /// point-source model needs ever finer facets as an observer nears the surface.
 ExcludedFn excludedRegion(const Scene& scene, double margin_m);
 
+/// @brief What computing the scene's observer field takes besides its FieldSpec: the
+/// integrator with fieldIntegratorOptions(), and the observers excluded within half a voxel
+/// of the target (excludedRegion()).
+struct FieldProblem {
+  FacetIntegrator integrator;
+  ExcludedFn excluded;
+};
+FieldProblem fieldProblem(const Scene& scene, const FieldSpec& field);
+
 }  // namespace glint

@@ -37,11 +37,9 @@ struct Comparison {
 Comparison compare(const std::string& json) {
   const Scene scene = parseScene(json, "test.json");
   const FieldSpec spec = fieldSpec(scene);
-  const FacetIntegrator integrator(buildTarget(scene), beamOf(scene),
-                                   fieldIntegratorOptions(scene, spec));
-  const ExcludedFn excluded = excludedRegion(scene, 0.5 * spec.voxel_m);
-  const ObserverField a = computeField(integrator, spec, excluded);
-  const ObserverField d = computeDenseField(integrator, spec, excluded);
+  const FieldProblem p = fieldProblem(scene, spec);
+  const ObserverField a = computeField(p.integrator, spec, p.excluded);
+  const ObserverField d = computeDenseField(p.integrator, spec, p.excluded);
   Comparison c;
   c.fields = compareFields(a, d);
   c.adaptive = a.stats();
