@@ -67,9 +67,11 @@ void writeVdb(std::ostream& out, const ObserverField& field, const RunInfo& info
   auto level = g.level->copyGrid();
   level->insertMeta("meaning", openvdb::StringMetadata("refinement level, 0 = coarsest block"));
   auto status = g.status->copyGrid();
-  status->insertMeta("meaning", openvdb::StringMetadata(
-                                    "0 outside the box, 1 evaluated, 2 interpolated, 3 proven "
-                                    "below floor_w_m2 (not computed), 4 inside or on the target"));
+  status->insertMeta("meaning",
+                     openvdb::StringMetadata(
+                         "0 outside the box, 1 evaluated, 2 interpolated, 3 proven "
+                         "below floor_w_m2 (not computed), 4 inside or on the target, 5 evaluated "
+                         "but unconverged (integrator limit reached)"));
   grids.push_back(irradiance);
   grids.push_back(level);
   grids.push_back(status);

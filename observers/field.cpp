@@ -66,9 +66,16 @@ enum class Verdict : std::uint8_t { Skip, Accept, Refine, Finest };
 struct PointValue {
   double irradiance_w_m2 = 0.0;
   bool excluded = false;
+  bool converged = true;
 };
 
 float code(VoxelStatus s) { return static_cast<float>(static_cast<int>(s)); }
+
+void noteUnconverged(FieldStats& stats, const Vec3& x) {
+  ++stats.unconverged_points;
+  stats.unconverged_min_m = glm::min(stats.unconverged_min_m, x);
+  stats.unconverged_max_m = glm::max(stats.unconverged_max_m, x);
+}
 
 // Calls fn(di, dj, dk) for every sample of a block of edge `size`, as offsets from its origin:
 // the 3×3×3 lattice 0, size/2, size per axis (0, 1 for a unit block) and, for size ≥ 4, the
@@ -297,7 +304,6 @@ class FieldBuilder {
     if (counter_ != nullptr) counter_->items_scheduled.fetch_add(wanted.size());
     std::vector<PointValue> results(wanted.size());
     std::vector<std::int64_t> evaluations(wanted.size(), 0);
-    std::vector<char> unconverged(wanted.size(), 0);
     tbb::enumerable_thread_specific<IntegratorWorkspace> workspaces;
     tbb::parallel_for(std::size_t{0}, wanted.size(), [&](std::size_t w) {
       const std::uint64_t key = wanted[w].first;
@@ -313,8 +319,8 @@ class FieldBuilder {
       }
       const ObserverResult r = integrator_.adaptive(x, lists[wanted[w].second], workspaces.local());
       results[w].irradiance_w_m2 = r.irradiance_w_m2;
+      results[w].converged = r.converged;
       evaluations[w] = r.evaluations;
-      unconverged[w] = r.converged ? 0 : 1;
       if (counter_ != nullptr) {
         counter_->items_done.fetch_add(1, std::memory_order_relaxed);
         counter_->evaluations.fetch_add(r.evaluations, std::memory_order_relaxed);
@@ -328,7 +334,6 @@ class FieldBuilder {
       }
       ++stats_.evaluated_points;
       stats_.evaluations += evaluations[w];
-      stats_.unconverged_points += unconverged[w];
     }
   }
 
@@ -467,7 +472,8 @@ class FieldBuilder {
         irradiance.setValueOff(p, 0.0f);
         continue;
       }
-      status.setValue(p, code(VoxelStatus::Evaluated));
+      status.setValue(p, code(value.converged ? VoxelStatus::Evaluated : VoxelStatus::Unconverged));
+      if (!value.converged) noteUnconverged(stats_, spec_.position(p[0], p[1], p[2]));
       irradiance.setValue(p, static_cast<float>(value.irradiance_w_m2));
       if (value.irradiance_w_m2 > stats_.peak_w_m2) {
         stats_.peak_w_m2 = value.irradiance_w_m2;
@@ -596,10 +602,11 @@ ObserverField computeDenseField(const FacetIntegrator& integrator, const FieldSp
       }
       const ObserverResult r = integrator.adaptive(x, local.workspace);
       local.grids.irradiance.setValue(p, static_cast<float>(r.irradiance_w_m2));
-      local.grids.status.setValue(p, code(VoxelStatus::Evaluated));
+      local.grids.status.setValue(
+          p, code(r.converged ? VoxelStatus::Evaluated : VoxelStatus::Unconverged));
       ++local.stats.evaluated_points;
       local.stats.evaluations += r.evaluations;
-      local.stats.unconverged_points += r.converged ? 0 : 1;
+      if (!r.converged) noteUnconverged(local.stats, x);
       if (r.irradiance_w_m2 > local.stats.peak_w_m2) {
         local.stats.peak_w_m2 = r.irradiance_w_m2;
         local.stats.peak_at_m = x;
@@ -617,6 +624,8 @@ ObserverField computeDenseField(const FacetIntegrator& integrator, const FieldSp
     stats.excluded_points += local.stats.excluded_points;
     stats.evaluations += local.stats.evaluations;
     stats.unconverged_points += local.stats.unconverged_points;
+    stats.unconverged_min_m = glm::min(stats.unconverged_min_m, local.stats.unconverged_min_m);
+    stats.unconverged_max_m = glm::max(stats.unconverged_max_m, local.stats.unconverged_max_m);
     if (local.stats.peak_w_m2 > stats.peak_w_m2) {
       stats.peak_w_m2 = local.stats.peak_w_m2;
       stats.peak_at_m = local.stats.peak_at_m;

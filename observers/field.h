@@ -6,6 +6,7 @@
 /// include it (see observers/field_grids.h for the grids themselves).
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -45,7 +46,15 @@ enum class VoxelStatus : int {
   Interpolated = 2,  ///< trilinear from evaluated points, within the tolerance
   BelowFloor = 3,    ///< a bound proves the irradiance ≤ floor here; not computed
   Excluded = 4,      ///< inside or on the target: no observer can be here
+  /// Integrated here, but the integrator hit its depth or evaluation limit before its
+  /// tolerance: the value is its best estimate, not a converged one.
+  Unconverged = 5,
 };
+
+/// @brief Whether the irradiance of a voxel with status @p s was integrated at that point.
+inline bool integratedHere(VoxelStatus s) {
+  return s == VoxelStatus::Evaluated || s == VoxelStatus::Unconverged;
+}
 
 /// @brief Counts and figures of one field computation.
 struct FieldStats {
@@ -55,9 +64,12 @@ struct FieldStats {
   std::int64_t interpolated_points = 0;
   std::int64_t below_floor_points = 0;
   std::int64_t excluded_points = 0;
-  std::int64_t unconverged_points = 0;  ///< integrator did not reach its tolerance
-  std::int64_t blocks_skipped = 0;      ///< proven below the floor
-  std::int64_t blocks_accepted = 0;     ///< interpolated
+  std::int64_t unconverged_points = 0;  ///< integrator did not reach its tolerance (status 5)
+  /// The box around the unconverged points (meaningful when there are any).
+  Vec3 unconverged_min_m{INFINITY};
+  Vec3 unconverged_max_m{-INFINITY};
+  std::int64_t blocks_skipped = 0;   ///< proven below the floor
+  std::int64_t blocks_accepted = 0;  ///< interpolated
   std::int64_t blocks_refined = 0;
   std::int64_t blocks_finest = 0;      ///< every point evaluated
   std::int64_t evaluations = 0;        ///< reflection calculations, all points

@@ -33,7 +33,7 @@ FieldComparison compareFields(const ObserverField& adaptive, const ObserverField
   for (int i = 0; i < n[0]; ++i)
     for (int j = 0; j < n[1]; ++j)
       for (int k = 0; k < n[2]; ++k) {
-        if (dense.status(i, j, k) != VoxelStatus::Evaluated) continue;
+        if (!integratedHere(dense.status(i, j, k))) continue;
         const double e = dense.irradiance(i, j, k);
         const double error = std::abs(adaptive.irradiance(i, j, k) - e);
         sum_squares += error * error;

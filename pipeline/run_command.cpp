@@ -80,6 +80,12 @@ nlohmann::json summaryJson(const ObserverField& field, const RunInfo& info, cons
                  {"proven_below_floor", s.below_floor_points},
                  {"inside_target", s.excluded_points},
                  {"unconverged", s.unconverged_points}};
+  if (s.unconverged_points > 0) {
+    // Where: each such voxel has status 5 in the grids; this is the box around them.
+    j["unconverged_box"] = {
+        {"min_m", {s.unconverged_min_m.x, s.unconverged_min_m.y, s.unconverged_min_m.z}},
+        {"max_m", {s.unconverged_max_m.x, s.unconverged_max_m.y, s.unconverged_max_m.z}}};
+  }
   j["blocks"] = {{"skipped", s.blocks_skipped},
                  {"accepted", s.blocks_accepted},
                  {"refined", s.blocks_refined},
@@ -181,7 +187,10 @@ void runField(const RunArgs& args, std::ostream& err) {
       << ", " << s.peak_at_m.y << ", " << s.peak_at_m.z << ")\n";
   if (s.unconverged_points > 0) {
     err << "  warning: " << s.unconverged_points
-        << " points did not reach the integration tolerance (see summary.json)\n";
+        << " points did not reach the integration tolerance, within (" << s.unconverged_min_m.x
+        << ", " << s.unconverged_min_m.y << ", " << s.unconverged_min_m.z << ") .. ("
+        << s.unconverged_max_m.x << ", " << s.unconverged_max_m.y << ", " << s.unconverged_max_m.z
+        << "); status 5 in the grids marks each\n";
   }
   err << "  memory: " << formatNumber("%.3g", static_cast<double>(s.grid_bytes) / 1e6)
       << " MB of grids, "
