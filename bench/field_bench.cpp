@@ -2,10 +2,12 @@
 // time and the accuracy the issue asks for (max error ≤ tolerance × peak + floor, volumes
 // above 1 %, 10 %, 50 % of the peak within 1 %, no bright voxel skipped).
 //
-//   glint_field_bench SCENE.json [SCENE.json ...] [--voxel M] [--out results.csv]
+//   glint_field_bench SCENE.json [SCENE.json ...] [--voxel M] [--tolerance T] [--out results.csv]
 //
 // Each scene needs an `observers` box; --voxel overrides its finest spacing (the coarsest
-// block keeps its size in metres, so the refinement gets one more level per halving).
+// block keeps its size in metres, so the refinement gets one more level per halving) and
+// --tolerance its tolerance. Memory: the grids of each field, and the process's peak resident
+// set after the adaptive field (it runs first), which includes its working memory.
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
@@ -28,9 +30,19 @@ struct Row {
   FieldSpec spec;
   FieldStats adaptive, dense;
   FieldComparison comparison;
+  std::int64_t adaptive_peak_rss_bytes = 0;
 };
 
-Row measure(const std::filesystem::path& path, double voxel_m) {
+// The peak resident set of this process so far (Linux: VmHWM), 0 where unknown.
+std::int64_t peakRssBytes() {
+  std::ifstream status("/proc/self/status");
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind("VmHWM:", 0) == 0) return std::stoll(line.substr(6)) * 1024;  // kB
+  }
+  return 0;
+}
+
+Row measure(const std::filesystem::path& path, double voxel_m, double tolerance) {
   const Scene scene = loadScene(path);
   FieldSpec spec = fieldSpec(scene);
   if (voxel_m > 0.0) {
@@ -39,14 +51,16 @@ Row measure(const std::filesystem::path& path, double voxel_m) {
     spec.block_voxels = 1;
     while (spec.block_voxels * voxel_m < block_m * (1.0 - 1e-9)) spec.block_voxels *= 2;
   }
+  if (tolerance > 0.0) spec.tolerance = tolerance;
   const FieldProblem problem = fieldProblem(scene, spec);
   std::fprintf(stderr, "%s: adaptive ...\n", path.filename().c_str());
   const ObserverField adaptive = computeField(problem.integrator, spec, problem.excluded);
+  const std::int64_t rss = peakRssBytes();
   std::fprintf(stderr, "%s: dense (%lld points) ...\n", path.filename().c_str(),
                static_cast<long long>(adaptive.stats().lattice_points));
   const ObserverField dense = computeDenseField(problem.integrator, spec, problem.excluded);
-  return {path.filename().string(), spec, adaptive.stats(), dense.stats(),
-          compareFields(adaptive, dense)};
+  return {path.filename().string(),       spec, adaptive.stats(), dense.stats(),
+          compareFields(adaptive, dense), rss};
 }
 
 double ratio(double a, double b) { return b > 0.0 ? a / b : 0.0; }
@@ -60,12 +74,15 @@ int main(int argc, char** argv) {
   std::string out_path;
   app.add_option("scenes", scenes, "scene files with an observers box")->required();
   app.add_option("--voxel", voxel_m, "override the finest voxel size (m)");
+  double tolerance = 0.0;
+  app.add_option("--tolerance", tolerance, "override the field's tolerance")
+      ->check(CLI::Range(1e-6, 0.5));
   app.add_option("--out", out_path, "write the rows as CSV");
   CLI11_PARSE(app, argc, argv);
 
   std::vector<Row> rows;
   try {
-    for (const std::string& s : scenes) rows.push_back(measure(s, voxel_m));
+    for (const std::string& s : scenes) rows.push_back(measure(s, voxel_m, tolerance));
   } catch (const InputError& e) {
     std::cerr << "glint_field_bench: " << e.what() << "\n";
     return 2;
@@ -73,9 +90,8 @@ int main(int argc, char** argv) {
 
   std::printf(
       "%-18s %6s %9s | %9s %10s %8s | %9s %10s %8s | %6s %6s | %9s %9s | %6s %6s %6s | %s\n",
-      "scene", "voxel", "points", "adapt.pts", "adapt.eval", "adapt.s", "dense.pts",
-      "dense.eval", "dense.s", "eval×", "time×", "max.err", "allowed", "V1%", "V10%", "V50%",
-      "bright skipped");
+      "scene", "voxel", "points", "adapt.pts", "adapt.eval", "adapt.s", "dense.pts", "dense.eval",
+      "dense.s", "eval×", "time×", "max.err", "allowed", "V1%", "V10%", "V50%", "bright skipped");
   for (const Row& r : rows) {
     const FieldComparison& c = r.comparison;
     std::printf(
@@ -86,27 +102,32 @@ int main(int argc, char** argv) {
         static_cast<double>(r.adaptive.evaluations), r.adaptive.seconds,
         static_cast<long long>(r.dense.evaluated_points), static_cast<double>(r.dense.evaluations),
         r.dense.seconds,
-        ratio(static_cast<double>(r.dense.evaluations), static_cast<double>(r.adaptive.evaluations)),
+        ratio(static_cast<double>(r.dense.evaluations),
+              static_cast<double>(r.adaptive.evaluations)),
         ratio(r.dense.seconds, r.adaptive.seconds), c.max_error_w_m2, c.allowed_error_w_m2,
         c.volumeRatio(0), c.volumeRatio(1), c.volumeRatio(2),
         static_cast<long long>(c.bright_skipped));
   }
   if (!out_path.empty()) {
     std::ofstream out(out_path);
-    out << "scene,voxel_m,lattice_points,adaptive_points,adaptive_evaluations,adaptive_seconds,"
+    out << "scene,voxel_m,tolerance,lattice_points,adaptive_points,adaptive_evaluations,adaptive_"
+           "seconds,"
            "adaptive_unconverged,dense_points,dense_evaluations,dense_seconds,dense_unconverged,"
            "peak_w_m2,max_error_w_m2,rms_error_w_m2,allowed_error_w_m2,volume_ratio_1pct,"
-           "volume_ratio_10pct,volume_ratio_50pct,bright_skipped,within_accuracy\n";
+           "volume_ratio_10pct,volume_ratio_50pct,bright_skipped,within_accuracy,"
+           "adaptive_grid_bytes,dense_grid_bytes,adaptive_peak_rss_bytes\n";
     for (const Row& r : rows) {
       const FieldComparison& c = r.comparison;
-      out << r.scene << ',' << r.spec.voxel_m << ',' << r.adaptive.lattice_points << ','
-          << r.adaptive.evaluated_points << ',' << r.adaptive.evaluations << ','
-          << r.adaptive.seconds << ',' << r.adaptive.unconverged_points << ','
-          << r.dense.evaluated_points << ',' << r.dense.evaluations << ',' << r.dense.seconds
-          << ',' << r.dense.unconverged_points << ',' << c.peak_w_m2 << ',' << c.max_error_w_m2
-          << ',' << c.rms_error_w_m2 << ',' << c.allowed_error_w_m2 << ',' << c.volumeRatio(0)
-          << ',' << c.volumeRatio(1) << ',' << c.volumeRatio(2) << ',' << c.bright_skipped << ','
-          << (c.withinAccuracy() ? "yes" : "no") << '\n';
+      out << r.scene << ',' << r.spec.voxel_m << ',' << r.spec.tolerance << ','
+          << r.adaptive.lattice_points << ',' << r.adaptive.evaluated_points << ','
+          << r.adaptive.evaluations << ',' << r.adaptive.seconds << ','
+          << r.adaptive.unconverged_points << ',' << r.dense.evaluated_points << ','
+          << r.dense.evaluations << ',' << r.dense.seconds << ',' << r.dense.unconverged_points
+          << ',' << c.peak_w_m2 << ',' << c.max_error_w_m2 << ',' << c.rms_error_w_m2 << ','
+          << c.allowed_error_w_m2 << ',' << c.volumeRatio(0) << ',' << c.volumeRatio(1) << ','
+          << c.volumeRatio(2) << ',' << c.bright_skipped << ','
+          << (c.withinAccuracy() ? "yes" : "no") << ',' << r.adaptive.grid_bytes << ','
+          << r.dense.grid_bytes << ',' << r.adaptive_peak_rss_bytes << '\n';
     }
   }
   bool all_within = true;
