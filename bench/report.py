@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Plots and RESULTS.md from the CSV files of bench/run_all.sh.
 
-    python3 bench/report.py RESULTS_DIR bench/RESULTS.md
+    python3 bench/report.py RESULTS_DIR bench/RESULTS.md ["the command that ran the suite"]
 
 Writes RESULTS_DIR/facets.png (run time against error on the paper's 186 observers, adaptive
 and uniform, one colour per sigma), RESULTS_DIR/field.png (evaluations against the finest
@@ -156,9 +156,10 @@ def field_section(out):
 
 def main():
     out, report = sys.argv[1], sys.argv[2]
+    command = sys.argv[3] if len(sys.argv) > 3 else "bash bench/run_all.sh"
     text = ["# Benchmark results", "",
             f"Machine: {machine()}.", "",
-            "Produced by `bash bench/run_all.sh` (CSV files and the plots `facets.png`, "
+            f"Produced by `{command}` (CSV files and the plots `facets.png`, "
             f"`field.png` in `{out}`; the plots are not committed). Times are wall-clock on all "
             "cores unless a row says otherwise.", "",
             "## Kernel throughput (`glint_kernel_bench`, Google Benchmark)", ""]

@@ -5,6 +5,7 @@
 #
 #   bash bench/run_all.sh [--quick]
 #
+# Plots need Debian's python3-matplotlib, hence /usr/bin/python3 (not a python3 earlier on PATH).
 # --quick runs one tolerance and the coarsest voxel size per scene (about 15 minutes on two
 # cores); the full run takes a few hours. Run it on an otherwise idle machine: it measures time.
 set -euo pipefail
@@ -61,4 +62,4 @@ for tol in 0.01 0.03 0.003; do
 done
 
 echo "== report" >&2
-python3 bench/report.py "$out" bench/RESULTS.md
+/usr/bin/python3 bench/report.py "$out" bench/RESULTS.md "bash bench/run_all.sh $*"

@@ -170,7 +170,13 @@ class FieldBuilder {
         spec_(spec),
         excluded_(excluded),
         counter_(counter),
-        lattice_{spec.nodes()} {}
+        lattice_{spec.nodes()},
+        coarse_candidate_(integrator.target().facetCount(), 0) {
+    const std::span<const Candidate> lit = integrator.candidates();
+    for (std::size_t k = 0; k < lit.size(); ++k) {
+      coarse_candidate_[lit[k].facet.coarse] = static_cast<std::uint32_t>(k);
+    }
+  }
 
   ObserverField run() {
     const auto start = std::chrono::steady_clock::now();
@@ -278,6 +284,25 @@ class FieldBuilder {
     for (std::int64_t n : bound_evaluations) stats_.bound_evaluations += n;
   }
 
+  // What the points of a block integrate over: the whole coarse facets of which its bound kept
+  // any piece, in the order of the block's list. The pieces were split to tighten the block's
+  // bound; handed to the integrator they would make every point start finer than it needs,
+  // since each piece costs an evaluation before the integrator can see that a smooth facet
+  // wants no more. (Measured on bench/scenes/sphere.json at 0.2 m: 4.1e8 evaluations with the
+  // pieces, 9.1e7 with their coarse facets; dense 9.4e7. The cylinder is unchanged.)
+  [[nodiscard]] std::vector<Candidate> integrationList(std::span<const Candidate> kept) const {
+    const std::span<const Candidate> lit = integrator_.candidates();
+    std::vector<char> taken(lit.size(), 0);
+    std::vector<Candidate> out;
+    for (const Candidate& c : kept) {
+      const std::uint32_t k = coarse_candidate_[c.facet.coarse];
+      if (taken[k] != 0) continue;
+      taken[k] = 1;
+      out.push_back(lit[k]);
+    }
+    return out;
+  }
+
   [[nodiscard]] bool skipped(const RegionBound& bound) const {
     return bound.upper_w_m2 <= spec_.floor_w_m2;
   }
@@ -302,6 +327,12 @@ class FieldBuilder {
                  wanted.end());
 
     if (counter_ != nullptr) counter_->items_scheduled.fetch_add(wanted.size());
+    std::vector<char> sampled(blocks.size(), 0);
+    for (const auto& [key, block] : wanted) sampled[block] = 1;
+    std::vector<std::vector<Candidate>> point_lists(blocks.size());
+    tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t i) {
+      if (sampled[i] != 0) point_lists[i] = integrationList(lists[i]);
+    });
     std::vector<PointValue> results(wanted.size());
     std::vector<std::int64_t> evaluations(wanted.size(), 0);
     tbb::enumerable_thread_specific<IntegratorWorkspace> workspaces;
@@ -317,7 +348,8 @@ class FieldBuilder {
         results[w].excluded = true;
         return;
       }
-      const ObserverResult r = integrator_.adaptive(x, lists[wanted[w].second], workspaces.local());
+      const ObserverResult r =
+          integrator_.adaptive(x, point_lists[wanted[w].second], workspaces.local());
       results[w].irradiance_w_m2 = r.irradiance_w_m2;
       results[w].converged = r.converged;
       evaluations[w] = r.evaluations;
@@ -497,6 +529,7 @@ class FieldBuilder {
   const ExcludedFn& excluded_;
   WorkCounter* counter_;
   Lattice lattice_;
+  std::vector<std::uint32_t> coarse_candidate_;  // coarse facet → index of its lit candidate
   FieldStats stats_;
   std::unordered_map<std::uint64_t, PointValue> values_;  // every sample, evaluated once
   std::vector<FinalBlock> final_;
