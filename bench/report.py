@@ -49,12 +49,23 @@ def g(x, digits=3):
     return f"{float(x):.{digits}g}"
 
 
+def table_head(*columns):
+    """The header and separator lines of a Markdown table."""
+    return ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+
+
+def save_plot(fig, ax, path):
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+
+
 def kernel_section(out):
     k = rows(os.path.join(out, "kernel.csv"))
     if not k:
         return ["No kernel results."]
-    lines = ["| benchmark | time per iteration | reflection calculations per second |",
-             "|---|---|---|"]
+    lines = table_head("benchmark", "time per iteration", "reflection calculations per second")
     for r in k:
         rate = r.get("reflections_per_s", "")
         per = r.get("reflections_per_s_per_thread", "")
@@ -81,9 +92,9 @@ def facet_sections(out):
             if not data:
                 continue
             curves.append((sigma, normals, data))
-            lines += [f"#### sigma = {sigma}, {normals} normals", "",
-                      "| scheme | tolerance / level | evaluations per observer | time (s) | max error | RMS error | unconverged |",
-                      "|---|---|---|---|---|---|---|"]
+            lines += [f"#### sigma = {sigma}, {normals} normals", ""]
+            lines += table_head("scheme", "tolerance / level", "evaluations per observer",
+                                "time (s)", "max error", "RMS error", "unconverged")
             for r in data:
                 lines.append(f"| {r['scheme']} | {r['parameter']} | {g(r['evaluations_per_observer'], 4)} | "
                              f"{g(r['seconds'])} | {g(r['max_rel_error'])} | {g(r['rms_rel_error'])} | {r['unconverged']} |")
@@ -116,10 +127,7 @@ def facet_sections(out):
         ax.set_xlabel("max relative error over the 186 observers")
         ax.set_ylabel("wall time (s)")
         ax.set_title("Facet side: run time against error (paper's cylinder)")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
-        fig.tight_layout()
-        fig.savefig(os.path.join(out, "facets.png"), dpi=120)
+        save_plot(fig, ax, os.path.join(out, "facets.png"))
     return lines
 
 
@@ -127,8 +135,10 @@ def field_section(out):
     data = rows(os.path.join(out, "field.csv"))
     if not data:
         return ["No observer-field results."]
-    lines = ["| scene | voxel (m) | tolerance | points | adaptive: evaluations, s, grids MB, peak RSS MB | dense: evaluations, s | fewer evaluations / faster | max error / allowed | RMS error | volume >1 %, >10 %, >50 % (adaptive / dense) |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+    lines = table_head("scene", "voxel (m)", "tolerance", "points",
+                       "adaptive: evaluations, s, grids MB, peak RSS MB", "dense: evaluations, s",
+                       "fewer evaluations / faster", "max error / allowed", "RMS error",
+                       "volume >1 %, >10 %, >50 % (adaptive / dense)")
     for r in data:
         ae, de = float(r["adaptive_evaluations"]), float(r["dense_evaluations"])
         at, dt = float(r["adaptive_seconds"]), float(r["dense_seconds"])
@@ -152,10 +162,7 @@ def field_section(out):
     ax.set_ylabel("reflection calculations")
     ax.set_title("Observer side: cost as the voxel halves (tolerance 0.01)")
     ax.invert_xaxis()
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "field.png"), dpi=120)
+    save_plot(fig, ax, os.path.join(out, "field.png"))
     return lines
 
 

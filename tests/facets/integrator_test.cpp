@@ -6,6 +6,7 @@
 
 #include "facets/tessellate.h"
 #include "support/quadrature.h"
+#include "support/references.h"
 #include "support/scenes.h"
 
 namespace glint {
@@ -87,10 +88,8 @@ TEST(Integrator, NearFieldObserverConvergesLikeAFarOne) {
 }
 
 TEST(Integrator, SphereFarFieldMatchesClosedForm) {
-  // A mirror sphere reflects a collimated beam isotropically: far away E = ρs E0 R² / (4 d²).
-  // At a finite distance L from the glint the pencil diverges from the convex mirror's two
-  // focal lines, f_t = R cos θi / 2 and f_s = R / (2 cos θi) behind the surface:
-  // E = ρs E0 R² / (4 (L + f_t)(L + f_s)).
+  // A mirror sphere reflects a collimated beam isotropically: far away E = ρs E0 R² / (4 d²);
+  // at a finite distance, test::mirrorSphere (the convex mirror's two focal lines).
   const double e0 = 100.0, radius = 0.5, rho = 0.8, d = 1000.0;
   const Beam beam = flatTop(Vec3(0), Vec3(0, 0, -1), e0, 1.0);
   const FacetIntegrator fi = test::singleObject(
@@ -105,11 +104,7 @@ TEST(Integrator, SphereFarFieldMatchesClosedForm) {
     const double t = deg * kPi / 180.0;
     const Vec3 dir(std::sin(t) * std::cos(0.5), std::sin(t) * std::sin(0.5), std::cos(t));
     const ObserverResult r = fi.adaptive(d * dir, ws);
-    const Vec3 glint = radius * glm::normalize(dir + Vec3(0, 0, 1));
-    const double cos_i = std::cos(0.5 * t);
-    const double len = glm::length(d * dir - glint);
-    const double focal = rho * e0 * radius * radius /
-                         (4.0 * (len + 0.5 * radius * cos_i) * (len + 0.5 * radius / cos_i));
+    const double focal = test::mirrorSphere(rho, e0, radius, d * dir);
     // Tolerance 1e-4, the lobe's O(σ²) and the glint's O(R/d) offset from the centre's
     // direction: 2e-4.
     EXPECT_NEAR(r.irradiance_w_m2 / focal, 1.0, 2e-4) << deg << " deg from backscatter";

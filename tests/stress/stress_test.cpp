@@ -16,6 +16,7 @@
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
 #include "support/quadrature.h"
+#include "support/references.h"
 #include "support/scenes.h"
 
 namespace glint {
@@ -28,30 +29,10 @@ using test::mirror;
 // ---------------------------------------------------------------------------------------------
 // The lobe from σ = 1e-5 to 1
 
-// ∫ Ξ cos θN dω over the hemisphere, in the variable tan θN / σ where the lobe lives, so the
-// same rule resolves σ = 1e-5 and σ = 1.
-double lobeIntegral(const Beckmann& b) {
-  const Vec3 n(0, 0, 1);
-  auto ring = [&](double theta) {
-    const Vec3 h(std::sin(theta), 0.0, std::cos(theta));
-    return b.xi(n, h) * std::cos(theta) * std::sin(theta) * 2.0 * kPi;
-  };
-  // θ = atan(σ s): the integrand over s is a Gaussian tail times smooth factors.
-  auto in_s = [&](double s) {
-    const double t = b.sigma * s;
-    return ring(std::atan(t)) * b.sigma / (1.0 + t * t);
-  };
-  // e^{-s²/2} is below 1e-300 beyond s = 40; the rest of the hemisphere (θ beyond atan 60σ)
-  // only matters for broad lobes.
-  return test::simpson(in_s, 0.0, 60.0, 20000) +
-         test::simpson(ring, std::atan(60.0 * b.sigma), kPi / 2, 20000);
-}
-
 TEST(StressLobe, BeckmannIsNormalisedAndFiniteFromSigma1e5To1) {
   for (double sigma : {1e-5, 3e-5, 1e-4, 1e-3, 1e-2, 0.1, 0.3, 0.6, 1.0}) {
     const Beckmann b{sigma};
-    // Simpson over 20 000 intervals of a Gaussian: error far below 1e-10.
-    EXPECT_NEAR(lobeIntegral(b), 1.0, 1e-9) << "sigma " << sigma;
+    EXPECT_NEAR(test::lobeIntegral(b), 1.0, 1e-9) << "sigma " << sigma;
     const double peak = b.maxXiBeyond(0.0);
     EXPECT_TRUE(std::isfinite(peak)) << "sigma " << sigma;
     EXPECT_GE(peak, b.xiFromTan2(0.0)) << "sigma " << sigma;
@@ -61,18 +42,6 @@ TEST(StressLobe, BeckmannIsNormalisedAndFiniteFromSigma1e5To1) {
       EXPECT_LE(xi, peak) << "sigma " << sigma << " tan² " << tan2;
     }
   }
-}
-
-// A mirror-like sphere of radius R under a collimated beam along −z, seen from direction `dir`
-// at distance d from the centre. For a narrow lobe the glint pencil diverges from the convex
-// mirror's focal lines f_t = R cos θi / 2 and f_s = R / (2 cos θi) behind the surface.
-double sphereGlint(double rho, double e0, double radius, const Vec3& observer) {
-  const Vec3 dir = glm::normalize(observer);
-  const Vec3 glint = radius * glm::normalize(dir + Vec3(0, 0, 1));
-  const double cos_i = glm::dot(glm::normalize(glint), Vec3(0, 0, 1));
-  const double len = glm::length(observer - glint);
-  return rho * e0 * radius * radius /
-         (4.0 * (len + 0.5 * radius * cos_i) * (len + 0.5 * radius / cos_i));
 }
 
 FacetIntegrator sphere(double sigma, double radius, const IntegratorOptions& options) {
@@ -100,7 +69,7 @@ TEST(StressLobe, SphereGlintConvergesOrSaysSoFromSigma1e5To1) {
     // (second order), which shares no refinement decision with the adaptive integration.
     double reference = 0.0, reference_error = 0.0;
     if (sigma <= 1e-2) {
-      reference = sphereGlint(0.9, 100.0, radius, observer);
+      reference = test::mirrorSphere(0.9, 100.0, radius, observer);
       // O(σ²), and 2e-4 for how far the formula's glint point is from the true one at
       // d = 100 m (as in Integrator.SphereFarFieldMatchesClosedForm).
       reference_error = 2.0 * sigma * sigma * reference + 2e-4 * reference;
