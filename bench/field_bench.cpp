@@ -2,12 +2,15 @@
 // time and the accuracy the issue asks for (max error ≤ tolerance × peak + floor, volumes
 // above 1 %, 10 %, 50 % of the peak within 1 %, no bright voxel skipped).
 //
-//   glint_field_bench SCENE.json [SCENE.json ...] [--voxel M] [--tolerance T] [--out results.csv]
+//   glint_field_bench SCENE.json [SCENE.json ...] [--voxel M] [--tolerance T[,T...]]
+//                     [--out results.csv]
 //
 // Each scene needs an `observers` box; --voxel overrides its finest spacing (the coarsest
 // block keeps its size in metres, so the refinement gets one more level per halving) and
-// --tolerance its tolerance. Memory: the grids of each field, and the process's peak resident
-// set after the adaptive field (it runs first), which includes its working memory.
+// --tolerance its tolerance. The dense twin does not depend on the tolerance: it runs once per
+// scene, then the adaptive field once per tolerance, one row each. Memory: the grids of each
+// field, and the peak resident set during the adaptive field, working memory included (the
+// peak is reset before each adaptive run through /proc/self/clear_refs).
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
@@ -42,7 +45,16 @@ std::int64_t peakRssBytes() {
   return 0;
 }
 
-Row measure(const std::filesystem::path& path, double voxel_m, double tolerance) {
+// Restarts the peak resident set (VmHWM) from the current one; false where the kernel refuses.
+bool resetPeakRss() {
+  std::ofstream clear("/proc/self/clear_refs");
+  clear << "5";
+  clear.flush();
+  return static_cast<bool>(clear);
+}
+
+std::vector<Row> measure(const std::filesystem::path& path, double voxel_m,
+                         const std::vector<double>& tolerances) {
   const Scene scene = loadScene(path);
   FieldSpec spec = fieldSpec(scene);
   if (voxel_m > 0.0) {
@@ -51,16 +63,20 @@ Row measure(const std::filesystem::path& path, double voxel_m, double tolerance)
     spec.block_voxels = 1;
     while (spec.block_voxels * voxel_m < block_m * (1.0 - 1e-9)) spec.block_voxels *= 2;
   }
-  if (tolerance > 0.0) spec.tolerance = tolerance;
   const FieldProblem problem = fieldProblem(scene, spec);
-  std::fprintf(stderr, "%s: adaptive ...\n", path.filename().c_str());
-  const ObserverField adaptive = computeField(problem.integrator, spec, problem.excluded);
-  const std::int64_t rss = peakRssBytes();
-  std::fprintf(stderr, "%s: dense (%lld points) ...\n", path.filename().c_str(),
-               static_cast<long long>(adaptive.stats().lattice_points));
+  std::fprintf(stderr, "%s: dense ...\n", path.filename().c_str());
   const ObserverField dense = computeDenseField(problem.integrator, spec, problem.excluded);
-  return {path.filename().string(),       spec, adaptive.stats(), dense.stats(),
-          compareFields(adaptive, dense), rss};
+  std::vector<Row> rows;
+  for (const double tolerance : tolerances.empty() ? std::vector{spec.tolerance} : tolerances) {
+    FieldSpec s = spec;
+    s.tolerance = tolerance;
+    std::fprintf(stderr, "%s: adaptive, tolerance %g ...\n", path.filename().c_str(), tolerance);
+    const bool rss_valid = resetPeakRss();
+    const ObserverField adaptive = computeField(problem.integrator, s, problem.excluded);
+    rows.push_back({path.filename().string(), s, adaptive.stats(), dense.stats(),
+                    compareFields(adaptive, dense), rss_valid ? peakRssBytes() : 0});
+  }
+  return rows;
 }
 
 double ratio(double a, double b) { return b > 0.0 ? a / b : 0.0; }
@@ -74,30 +90,33 @@ int main(int argc, char** argv) {
   std::string out_path;
   app.add_option("scenes", scenes, "scene files with an observers box")->required();
   app.add_option("--voxel", voxel_m, "override the finest voxel size (m)");
-  double tolerance = 0.0;
-  app.add_option("--tolerance", tolerance, "override the field's tolerance")
+  std::vector<double> tolerances;
+  app.add_option("--tolerance", tolerances, "override the field's tolerance (a list: one row each)")
+      ->delimiter(',')
       ->check(CLI::Range(1e-6, 0.5));
   app.add_option("--out", out_path, "write the rows as CSV");
   CLI11_PARSE(app, argc, argv);
 
   std::vector<Row> rows;
   try {
-    for (const std::string& s : scenes) rows.push_back(measure(s, voxel_m, tolerance));
+    for (const std::string& s : scenes) {
+      for (Row& r : measure(s, voxel_m, tolerances)) rows.push_back(std::move(r));
+    }
   } catch (const InputError& e) {
     std::cerr << "glint_field_bench: " << e.what() << "\n";
     return 2;
   }
 
   std::printf(
-      "%-18s %6s %9s | %9s %10s %8s | %9s %10s %8s | %6s %6s | %9s %9s | %6s %6s %6s | %s\n",
-      "scene", "voxel", "points", "adapt.pts", "adapt.eval", "adapt.s", "dense.pts", "dense.eval",
+      "%-18s %6s %7s %9s | %9s %10s %8s | %9s %10s %8s | %6s %6s | %9s %9s | %6s %6s %6s | %s\n",
+      "scene", "voxel", "tol.", "points", "adapt.pts", "adapt.eval", "adapt.s", "dense.pts", "dense.eval",
       "dense.s", "eval×", "time×", "max.err", "allowed", "V1%", "V10%", "V50%", "bright skipped");
   for (const Row& r : rows) {
     const FieldComparison& c = r.comparison;
     std::printf(
-        "%-18s %6.3f %9lld | %9lld %10.3e %8.1f | %9lld %10.3e %8.1f | %6.1f %6.1f | %9.3g "
+        "%-18s %6.3f %7.3g %9lld | %9lld %10.3e %8.1f | %9lld %10.3e %8.1f | %6.1f %6.1f | %9.3g "
         "%9.3g | %6.4f %6.4f %6.4f | %lld\n",
-        r.scene.c_str(), r.spec.voxel_m, static_cast<long long>(r.adaptive.lattice_points),
+        r.scene.c_str(), r.spec.voxel_m, r.spec.tolerance, static_cast<long long>(r.adaptive.lattice_points),
         static_cast<long long>(r.adaptive.evaluated_points),
         static_cast<double>(r.adaptive.evaluations), r.adaptive.seconds,
         static_cast<long long>(r.dense.evaluated_points), static_cast<double>(r.dense.evaluations),

@@ -31,6 +31,13 @@ constexpr double kDropShareOfFloor = 0.25;
 constexpr double kCheckShare = 1.0;
 // Candidates are split to tighten block bounds down to this subdivision depth.
 constexpr int kMaxBoundSplitDepth = 6;
+// Far from the target the field falls off as a power of the distance r from it: 1/r² from a
+// compact glint, about 1/r where a cylinder's line of glints spreads it in one plane only.
+// Trilinear interpolation of such a field errs by about 0.75 (h/r)² per power, so a 1 % check
+// would keep blocks under a tenth of their distance. A block may instead interpolate E·r^p for
+// the first of these powers whose interpolation passes the same checks against the same
+// samples; E·r² is then nearly constant and a block may be as large as the field is smooth.
+constexpr std::array<int, 3> kInterpolationPowers = {0, 2, 1};
 
 struct Lattice {
   Index3 n;  // points per axis
@@ -62,6 +69,11 @@ struct Block {
 };
 
 enum class Verdict : std::uint8_t { Skip, Accept, Refine, Finest };
+
+struct Decision {
+  Verdict verdict = Verdict::Refine;
+  int power = 0;  // an accepted block interpolates E·r^power (see kInterpolationPowers)
+};
 
 struct PointValue {
   double irradiance_w_m2 = 0.0;
@@ -173,9 +185,16 @@ class FieldBuilder {
         lattice_{spec.nodes()},
         coarse_candidate_(integrator.target().facetCount(), 0) {
     const std::span<const Candidate> lit = integrator.candidates();
+    Vec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
     for (std::size_t k = 0; k < lit.size(); ++k) {
       coarse_candidate_[lit[k].facet.coarse] = static_cast<std::uint32_t>(k);
+      const Vec3 origin = integrator.target().objects[lit[k].object].origin_m;
+      for (const Vec3& corner : lit[k].geometry.corner_m) {
+        lo = glm::min(lo, origin + corner);
+        hi = glm::max(hi, origin + corner);
+      }
     }
+    if (!lit.empty()) lit_centre_m_ = 0.5 * (lo + hi);
   }
 
   ObserverField run() {
@@ -195,25 +214,26 @@ class FieldBuilder {
       std::vector<RegionBound> bounds(blocks.size());
       boundBlocks(blocks, parent_lists, parent_dropped, lists, bounds);
       evaluateSamples(blocks, lists, bounds);
-      const std::vector<Verdict> verdicts = decide(blocks, bounds);
+      const std::vector<Decision> decisions = decide(blocks, bounds);
 
       std::vector<Block> children;
       std::vector<std::vector<Candidate>> child_parent_lists;
       std::vector<double> child_parent_dropped;
       for (std::size_t i = 0; i < blocks.size(); ++i) {
         const Block& blk = blocks[i];
-        switch (verdicts[i]) {
+        switch (decisions[i].verdict) {
           case Verdict::Skip:
             ++stats_.blocks_skipped;
-            final_.push_back({blk, Verdict::Skip});
+            final_.push_back({blk, decisions[i]});
             break;
           case Verdict::Accept:
             ++stats_.blocks_accepted;
-            final_.push_back({blk, Verdict::Accept});
+            if (decisions[i].power > 0) ++stats_.blocks_accepted_spread;
+            final_.push_back({blk, decisions[i]});
             break;
           case Verdict::Finest:
             ++stats_.blocks_finest;
-            final_.push_back({blk, Verdict::Finest});
+            final_.push_back({blk, decisions[i]});
             break;
           case Verdict::Refine: {
             ++stats_.blocks_refined;
@@ -241,9 +261,10 @@ class FieldBuilder {
     std::vector<FieldBlock> blocks_out;
     blocks_out.reserve(final_.size());
     for (const FinalBlock& f : final_) {
-      const VoxelStatus status = f.verdict == Verdict::Skip     ? VoxelStatus::BelowFloor
-                                 : f.verdict == Verdict::Accept ? VoxelStatus::Interpolated
-                                                                : VoxelStatus::Evaluated;
+      const Verdict v = f.decision.verdict;
+      const VoxelStatus status = v == Verdict::Skip     ? VoxelStatus::BelowFloor
+                                 : v == Verdict::Accept ? VoxelStatus::Interpolated
+                                                        : VoxelStatus::Evaluated;
       blocks_out.push_back({f.block.o, f.block.size, f.block.level, status});
     }
     stats_.seconds =
@@ -254,8 +275,22 @@ class FieldBuilder {
  private:
   struct FinalBlock {
     Block block;
-    Verdict verdict;
+    Decision decision;
   };
+
+  // r^power, r the distance of lattice point (i, j, k) from the lit facets' centre.
+  [[nodiscard]] double spreadWeight(int i, int j, int k, int power) const {
+    if (power == 0) return 1.0;
+    const double r = glm::length(spec_.position(i, j, k) - lit_centre_m_);
+    return power == 1 ? r : r * r;
+  }
+
+  // Whether E·r^p may be interpolated over block b for p > 0: only where the block keeps clear
+  // of the centre by its own diagonal, so that no weight is near 0 and r varies smoothly.
+  [[nodiscard]] bool farFromTarget(const Block& b) const {
+    const double diagonal_m = std::sqrt(3.0) * spec_.voxel_m * b.size;
+    return glm::length(centre(b) - lit_centre_m_) > 1.5 * diagonal_m;
+  }
 
   [[nodiscard]] Vec3 centre(const Block& b) const {
     const double half = 0.5 * b.size;
@@ -369,66 +404,72 @@ class FieldBuilder {
     }
   }
 
-  std::vector<Verdict> decide(const std::vector<Block>& blocks,
-                              const std::vector<RegionBound>& bounds) const {
-    std::vector<Verdict> verdicts(blocks.size());
+  std::vector<Decision> decide(const std::vector<Block>& blocks,
+                               const std::vector<RegionBound>& bounds) const {
+    std::vector<Decision> decisions(blocks.size());
     tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t i) {
-      if (skipped(bounds[i])) {
-        verdicts[i] = Verdict::Skip;
-        return;
-      }
-      const Block& b = blocks[i];
-      if (b.size <= 2) {
-        verdicts[i] = Verdict::Finest;  // every lattice point of it is a sample
-        return;
-      }
-      // The 3×3×3 lattice (v[9a + 3c + e]) and the octant centres, in forEachSample's order.
-      std::array<double, 35> v{};
-      std::size_t n = 0;
-      bool excluded = false;
-      forEachSample(b.size, [&](int di, int dj, int dk) {
-        const PointValue& p = values_.at(lattice_.key(b.o[0] + di, b.o[1] + dj, b.o[2] + dk));
-        excluded = excluded || p.excluded;
-        v[n++] = p.irradiance_w_m2;
-      });
-      if (excluded) {
-        verdicts[i] = Verdict::Refine;  // the target is in the block: resolve it finely
-        return;
-      }
-      double largest = 0.0;
-      for (std::size_t s = 0; s < n; ++s) largest = std::max(largest, std::abs(v[s]));
-      const double allowed = kCheckShare * (spec_.tolerance * largest + spec_.floor_w_m2);
-      // A coarse facet whose light could pass between the samples leaves no trace in them:
-      // only the bound can say whether such a glint is too weak to matter.
-      if (bounds[i].narrow_w_m2 > allowed) {
-        verdicts[i] = Verdict::Refine;
-        return;
-      }
-      const std::array<double, 8> corners = {v[0], v[2], v[6], v[8], v[18], v[20], v[24], v[26]};
-      for (int a = 0; a < 3; ++a)
-        for (int c = 0; c < 3; ++c)
-          for (int e = 0; e < 3; ++e) {
-            const double interpolated = trilinear(corners, 0.5 * a, 0.5 * c, 0.5 * e);
-            if (std::abs(interpolated - v[static_cast<std::size_t>(9 * a + 3 * c + e)]) > allowed) {
-              verdicts[i] = Verdict::Refine;
-              return;
-            }
-          }
-      // The fill at each octant centre: the mean of the octant's eight corners.
-      for (std::size_t oct = 0; oct < 8; ++oct) {
-        double mean = 0.0;
-        for (std::size_t c = 0; c < 8; ++c) {
-          mean += v[9 * ((oct >> 2) + (c >> 2)) + 3 * (((oct >> 1) & 1) + ((c >> 1) & 1)) +
-                    ((oct & 1) + (c & 1))];
-        }
-        if (std::abs(0.125 * mean - v[27 + oct]) > allowed) {
-          verdicts[i] = Verdict::Refine;
-          return;
-        }
-      }
-      verdicts[i] = Verdict::Accept;
+      decisions[i] = decideBlock(blocks[i], bounds[i]);
     });
-    return verdicts;
+    return decisions;
+  }
+
+  [[nodiscard]] Decision decideBlock(const Block& b, const RegionBound& bound) const {
+    if (skipped(bound)) return {Verdict::Skip};
+    if (b.size <= 2) return {Verdict::Finest};  // every lattice point of it is a sample
+    // The 3×3×3 lattice (v[9a + 3c + e]) and the octant centres, in forEachSample's order.
+    std::array<double, 35> v{};
+    std::array<Index3, 35> at{};
+    std::size_t n = 0;
+    bool excluded = false;
+    forEachSample(b.size, [&](int di, int dj, int dk) {
+      at[n] = {b.o[0] + di, b.o[1] + dj, b.o[2] + dk};
+      const PointValue& p = values_.at(lattice_.key(at[n][0], at[n][1], at[n][2]));
+      excluded = excluded || p.excluded;
+      v[n++] = p.irradiance_w_m2;
+    });
+    // The target is in the block: resolve it finely.
+    if (excluded) return {Verdict::Refine};
+    double largest = 0.0;
+    for (std::size_t s = 0; s < n; ++s) largest = std::max(largest, std::abs(v[s]));
+    const double allowed = kCheckShare * (spec_.tolerance * largest + spec_.floor_w_m2);
+    // A coarse facet whose light could pass between the samples leaves no trace in them:
+    // only the bound can say whether such a glint is too weak to matter.
+    if (bound.narrow_w_m2 > allowed) return {Verdict::Refine};
+    const bool far = farFromTarget(b);
+    for (const int power : kInterpolationPowers) {
+      if (power > 0 && !far) break;
+      std::array<double, 35> w{};  // the weights r^power
+      for (std::size_t s = 0; s < n; ++s) w[s] = spreadWeight(at[s][0], at[s][1], at[s][2], power);
+      if (interpolates(v, w, allowed)) return {Verdict::Accept, power};
+    }
+    return {Verdict::Refine};
+  }
+
+  // Whether E·w interpolated from the block's corners, divided by w, meets every sample of the
+  // 3×3×3 lattice, and the octant-by-octant fill from those meets every octant centre, within
+  // `allowed` (v and w in forEachSample's order).
+  static bool interpolates(const std::array<double, 35>& v, const std::array<double, 35>& w,
+                           double allowed) {
+    std::array<double, 27> u{};
+    for (std::size_t s = 0; s < 27; ++s) u[s] = v[s] * w[s];
+    const std::array<double, 8> corners = {u[0], u[2], u[6], u[8], u[18], u[20], u[24], u[26]};
+    for (int a = 0; a < 3; ++a)
+      for (int c = 0; c < 3; ++c)
+        for (int e = 0; e < 3; ++e) {
+          const auto s = static_cast<std::size_t>(9 * a + 3 * c + e);
+          const double interpolated = trilinear(corners, 0.5 * a, 0.5 * c, 0.5 * e) / w[s];
+          if (!(std::abs(interpolated - v[s]) <= allowed)) return false;
+        }
+    // The fill at each octant centre: the mean of the octant's eight corners.
+    for (std::size_t oct = 0; oct < 8; ++oct) {
+      double mean = 0.0;
+      for (std::size_t c = 0; c < 8; ++c) {
+        mean += u[9 * ((oct >> 2) + (c >> 2)) + 3 * (((oct >> 1) & 1) + ((c >> 1) & 1)) +
+                  ((oct & 1) + (c & 1))];
+      }
+      if (!(std::abs(0.125 * mean / w[27 + oct] - v[27 + oct]) <= allowed)) return false;
+    }
+    return true;
   }
 
   std::unique_ptr<FieldGrids> writeGrids() {
@@ -438,7 +479,7 @@ class FieldBuilder {
       const Block& b = final_[f].block;
       ThreadGrids& t = per_thread.local();
       const openvdb::CoordBBox box = ownedBox(b, lattice_);
-      switch (final_[f].verdict) {
+      switch (final_[f].decision.verdict) {
         case Verdict::Skip:
           t.grids->status->tree().fill(box, code(VoxelStatus::BelowFloor), true);
           t.grids->level->tree().fill(box, static_cast<float>(b.level), true);
@@ -450,13 +491,15 @@ class FieldBuilder {
         case Verdict::Accept: {
           t.grids->level->tree().fill(box, static_cast<float>(b.level), true);
           const int h = b.size / 2;
-          std::array<double, 27> v{};
+          const int power = final_[f].decision.power;
+          std::array<double, 27> v{};  // E·r^power at the 3×3×3 lattice
           for (int a = 0; a < 3; ++a)
             for (int c = 0; c < 3; ++c)
               for (int e = 0; e < 3; ++e) {
+                const int i = b.o[0] + a * h, j = b.o[1] + c * h, k = b.o[2] + e * h;
                 v[static_cast<std::size_t>(9 * a + 3 * c + e)] =
-                    values_.at(lattice_.key(b.o[0] + a * h, b.o[1] + c * h, b.o[2] + e * h))
-                        .irradiance_w_m2;
+                    values_.at(lattice_.key(i, j, k)).irradiance_w_m2 *
+                    spreadWeight(i, j, k, power);
               }
           // Each octant from its own corners: the finer samples the check compared against.
           for (auto it = box.begin(); it; ++it) {
@@ -473,7 +516,9 @@ class FieldBuilder {
               corners[static_cast<std::size_t>(c)] = v[static_cast<std::size_t>(
                   9 * (oct[0] + (c >> 2)) + 3 * (oct[1] + ((c >> 1) & 1)) + (oct[2] + (c & 1)))];
             }
-            t.irradiance.setValue(p, static_cast<float>(trilinear(corners, t3[0], t3[1], t3[2])));
+            const double value = trilinear(corners, t3[0], t3[1], t3[2]) /
+                                 spreadWeight(p[0], p[1], p[2], power);
+            t.irradiance.setValue(p, static_cast<float>(value));
             t.status.setValue(p, code(VoxelStatus::Interpolated));
             ++interpolated.local();
           }
@@ -530,6 +575,7 @@ class FieldBuilder {
   WorkCounter* counter_;
   Lattice lattice_;
   std::vector<std::uint32_t> coarse_candidate_;  // coarse facet → index of its lit candidate
+  Vec3 lit_centre_m_{0.0};  // centre of the lit facets' box: where the light spreads from
   FieldStats stats_;
   std::unordered_map<std::uint64_t, PointValue> values_;  // every sample, evaluated once
   std::vector<FinalBlock> final_;

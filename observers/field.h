@@ -70,6 +70,9 @@ struct FieldStats {
   Vec3 unconverged_max_m{-INFINITY};
   std::int64_t blocks_skipped = 0;   ///< proven below the floor
   std::int64_t blocks_accepted = 0;  ///< interpolated
+  /// Of those, the blocks that interpolated E·r or E·r² (r from the lit facets' centre)
+  /// because E itself failed the check: the far field's fall-off.
+  std::int64_t blocks_accepted_spread = 0;
   std::int64_t blocks_refined = 0;
   std::int64_t blocks_finest = 0;      ///< every point evaluated
   std::int64_t evaluations = 0;        ///< reflection calculations, all points

@@ -88,6 +88,7 @@ nlohmann::json summaryJson(const ObserverField& field, const RunInfo& info, cons
   }
   j["blocks"] = {{"skipped", s.blocks_skipped},
                  {"accepted", s.blocks_accepted},
+                 {"accepted_interpolating_e_r_or_e_r2", s.blocks_accepted_spread},
                  {"refined", s.blocks_refined},
                  {"finest", s.blocks_finest},
                  {"levels", s.levels + 1}};
@@ -177,7 +178,8 @@ void runField(const RunArgs& args, std::ostream& err) {
       << " %), " << s.interpolated_points << " interpolated, " << s.below_floor_points
       << " proven below the floor, " << s.excluded_points << " inside the target\n";
   if (!args.uniform) {
-    err << "  blocks: " << s.blocks_skipped << " skipped, " << s.blocks_accepted << " accepted, "
+    err << "  blocks: " << s.blocks_skipped << " skipped, " << s.blocks_accepted << " accepted ("
+        << s.blocks_accepted_spread << " as E·r or E·r²), "
         << s.blocks_refined << " refined, " << s.blocks_finest << " at the finest level ("
         << s.levels + 1 << " levels)\n";
   }
