@@ -1,6 +1,7 @@
 // Adaptive observer field against its uniform dense twin, scene by scene: evaluations, wall
 // time and the accuracy the issue asks for (max error ≤ tolerance × peak + floor, volumes
-// above 1 %, 10 %, 50 % of the peak within 1 %, no bright voxel skipped).
+// above 1 %, 10 %, 50 % of the peak within 1 %, no bright voxel skipped), and the volume above
+// the scene's MPE (the nominal hazard zone) in either field.
 //
 //   glint_field_bench SCENE.json [SCENE.json ...] [--voxel M] [--tolerance T[,T...]]
 //                     [--out results.csv]
@@ -74,7 +75,8 @@ std::vector<Row> measure(const std::filesystem::path& path, double voxel_m,
     const bool rss_valid = resetPeakRss();
     const ObserverField adaptive = computeField(problem.integrator, s, problem.excluded);
     rows.push_back({path.filename().string(), s, adaptive.stats(), dense.stats(),
-                    compareFields(adaptive, dense), rss_valid ? peakRssBytes() : 0});
+                    compareFields(adaptive, dense, scene.hazard.mpe.irradiance_w_m2),
+                    rss_valid ? peakRssBytes() : 0});
   }
   return rows;
 }
@@ -134,7 +136,8 @@ int main(int argc, char** argv) {
            "adaptive_unconverged,dense_points,dense_evaluations,dense_seconds,dense_unconverged,"
            "peak_w_m2,max_error_w_m2,rms_error_w_m2,allowed_error_w_m2,volume_ratio_1pct,"
            "volume_ratio_10pct,volume_ratio_50pct,bright_skipped,within_accuracy,"
-           "adaptive_grid_bytes,dense_grid_bytes,adaptive_peak_rss_bytes\n";
+           "adaptive_grid_bytes,dense_grid_bytes,adaptive_peak_rss_bytes,mpe_w_m2,"
+           "dense_volume_above_mpe_m3,volume_ratio_mpe\n";
     for (const Row& r : rows) {
       const FieldComparison& c = r.comparison;
       out << r.scene << ',' << r.spec.voxel_m << ',' << r.spec.tolerance << ','
@@ -146,7 +149,8 @@ int main(int argc, char** argv) {
           << c.allowed_error_w_m2 << ',' << c.volumeRatio(0) << ',' << c.volumeRatio(1) << ','
           << c.volumeRatio(2) << ',' << c.bright_skipped << ','
           << (c.withinAccuracy() ? "yes" : "no") << ',' << r.adaptive.grid_bytes << ','
-          << r.dense.grid_bytes << ',' << r.adaptive_peak_rss_bytes << '\n';
+          << r.dense.grid_bytes << ',' << r.adaptive_peak_rss_bytes << ',' << c.level_w_m2 << ','
+          << c.dense_level_volume_m3 << ',' << c.levelVolumeRatio() << '\n';
     }
   }
   bool all_within = true;

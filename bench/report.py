@@ -157,7 +157,8 @@ def field_section(out):
     lines = table_head("scene", "voxel (m)", "tolerance", "points",
                        "adaptive: evaluations, s, grids MB, peak RSS MB", "dense: evaluations, s",
                        "fewer evaluations / faster", "max error / allowed", "RMS error",
-                       "volume >1 %, >10 %, >50 % (adaptive / dense)")
+                       "volume >1 %, >10 %, >50 % (adaptive / dense)",
+                       "hazard zone >MPE: dense m³, adaptive / dense")
     for r in data:
         ae, de = float(r["adaptive_evaluations"]), float(r["dense_evaluations"])
         at, dt = float(r["adaptive_seconds"]), float(r["dense_seconds"])
@@ -167,7 +168,9 @@ def field_section(out):
             f"{float(r['adaptive_peak_rss_bytes']) / 1e6:.0f} | {g(de)}, {g(dt)} | "
             f"{de / ae:.1f}x / {dt / at:.1f}x | {g(r['max_error_w_m2'])} / {g(r['allowed_error_w_m2'])} | "
             f"{g(r['rms_error_w_m2'])} | {float(r['volume_ratio_1pct']):.4f}, "
-            f"{float(r['volume_ratio_10pct']):.4f}, {float(r['volume_ratio_50pct']):.4f} |")
+            f"{float(r['volume_ratio_10pct']):.4f}, {float(r['volume_ratio_50pct']):.4f} | "
+            + (f"{g(r['dense_volume_above_mpe_m3'])}, {float(r['volume_ratio_mpe']):.4f} |"
+               if r.get("volume_ratio_mpe") else "not measured |"))
     lines += ["", "How cost grows as the finest voxel halves (tolerance 0.01; dense grows about 8x):", ""]
     for scene in sorted({r["scene"] for r in data}):
         pts = sorted(((float(r["voxel_m"]), float(r["adaptive_evaluations"]),

@@ -54,6 +54,15 @@ std::string header(const char* type) {
   return buf;
 }
 
+// irradiance / MPE, computed in double.
+std::vector<float> ratioOf(const std::vector<float>& irradiance_w_m2, double mpe_w_m2) {
+  std::vector<float> ratio(irradiance_w_m2.size());
+  for (std::size_t i = 0; i < ratio.size(); ++i) {
+    ratio[i] = static_cast<float>(static_cast<double>(irradiance_w_m2[i]) / mpe_w_m2);
+  }
+  return ratio;
+}
+
 }  // namespace
 
 void writeVdb(std::ostream& out, const ObserverField& field, const RunInfo& info) {
@@ -73,6 +82,15 @@ void writeVdb(std::ostream& out, const ObserverField& field, const RunInfo& info
                          "below floor_w_m2 (not computed), 4 inside or on the target, 5 evaluated "
                          "but unconverged (integrator limit reached)"));
   grids.push_back(irradiance);
+  if (info.mpe_w_m2 > 0.0) {
+    auto hazard = g.irradiance->deepCopy();
+    for (auto it = hazard->beginValueOn(); it; ++it) {
+      it.setValue(static_cast<float>(static_cast<double>(*it) / info.mpe_w_m2));
+    }
+    hazard->setName("hazard_ratio");
+    hazard->insertMeta("units", openvdb::StringMetadata("1 (irradiance / MPE)"));
+    grids.push_back(hazard);
+  }
   grids.push_back(level);
   grids.push_back(status);
 
@@ -85,6 +103,11 @@ void writeVdb(std::ostream& out, const ObserverField& field, const RunInfo& info
   meta.insertMeta("irradiance_unit", openvdb::StringMetadata("W/m^2"));
   meta.insertMeta("wavelength_nm", openvdb::DoubleMetadata(info.wavelength_nm));
   meta.insertMeta("power_w", openvdb::DoubleMetadata(info.power_w));
+  if (info.mpe_w_m2 > 0.0) {
+    meta.insertMeta("exposure_s", openvdb::DoubleMetadata(info.exposure_s));
+    meta.insertMeta("mpe_w_m2", openvdb::DoubleMetadata(info.mpe_w_m2));
+    meta.insertMeta("mpe_rule", openvdb::StringMetadata(info.mpe_rule));
+  }
   meta.insertMeta("tolerance", openvdb::DoubleMetadata(spec.tolerance));
   meta.insertMeta("floor_w_m2", openvdb::DoubleMetadata(spec.floor_w_m2));
   meta.insertMeta("voxel_m", openvdb::DoubleMetadata(spec.voxel_m));
@@ -94,7 +117,7 @@ void writeVdb(std::ostream& out, const ObserverField& field, const RunInfo& info
   openvdb::io::Stream(out).write(grids, meta);
 }
 
-void writeVti(std::ostream& out, const ObserverField& field, int stride) {
+void writeVti(std::ostream& out, const ObserverField& field, int stride, double mpe_w_m2) {
   const FieldSpec& spec = field.spec();
   const auto n = spec.nodes();
   std::array<int, 3> m{};
@@ -124,13 +147,14 @@ void writeVti(std::ostream& out, const ObserverField& field, int stride) {
   out << "<Piece Extent=\"0 " << m[0] - 1 << " 0 " << m[1] - 1 << " 0 " << m[2] - 1 << "\">\n";
   out << "<PointData Scalars=\"irradiance_w_m2\">\n";
   out << arrays.add("irradiance_w_m2", "Float32", 1, irradiance);
+  if (mpe_w_m2 > 0.0) out << arrays.add("hazard_ratio", "Float32", 1, ratioOf(irradiance, mpe_w_m2));
   out << arrays.add("refinement_level", "Int32", 1, level);
   out << arrays.add("status", "Int32", 1, status);
   out << "</PointData>\n</Piece>\n</ImageData>\n";
   arrays.writeAppended(out);
 }
 
-void writeBlocksVtu(std::ostream& out, const ObserverField& field) {
+void writeBlocksVtu(std::ostream& out, const ObserverField& field, double mpe_w_m2) {
   const FieldSpec& spec = field.spec();
   const auto& blocks = field.blocks();
   auto ia = field.grids().irradiance->getConstAccessor();
@@ -177,7 +201,10 @@ void writeBlocksVtu(std::ostream& out, const ObserverField& field) {
       << arrays.add("connectivity", "Int64", 1, connectivity)
       << arrays.add("offsets", "Int64", 1, offsets) << arrays.add("types", "UInt8", 1, types)
       << "</Cells>\n<PointData Scalars=\"irradiance_w_m2\">\n"
-      << arrays.add("irradiance_w_m2", "Float32", 1, irradiance) << "</PointData>\n<CellData>\n"
+      << arrays.add("irradiance_w_m2", "Float32", 1, irradiance)
+      << (mpe_w_m2 > 0.0 ? arrays.add("hazard_ratio", "Float32", 1, ratioOf(irradiance, mpe_w_m2))
+                         : std::string())
+      << "</PointData>\n<CellData>\n"
       << arrays.add("refinement_level", "Int32", 1, level)
       << arrays.add("status", "Int32", 1, status) << "</CellData>\n</Piece>\n</UnstructuredGrid>\n";
   arrays.writeAppended(out);

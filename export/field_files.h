@@ -19,21 +19,26 @@ struct RunInfo {
   std::string scheme;         ///< "adaptive" or "uniform"
   double wavelength_nm = 0.0;
   double power_w = 0.0;
+  double exposure_s = 0.0;
+  double mpe_w_m2 = 0.0;  ///< > 0: `hazard_ratio` (irradiance / MPE) is written beside irradiance
+  std::string mpe_rule;   ///< the MPE table row that applied
 };
 
-/// @brief The grids `irradiance_w_m2`, `refinement_level` and `status` (see VoxelStatus) with
-/// the field's transform, and as file metadata the units, laser, tolerance, floor, counts,
-/// program version and scene hash.
+/// @brief The grids `irradiance_w_m2`, `hazard_ratio` (irradiance / MPE, where
+/// info.mpe_w_m2 > 0), `refinement_level` and `status` (see VoxelStatus) with the field's
+/// transform, and as file metadata the units, laser, exposure and MPE, tolerance, floor,
+/// counts, program version and scene hash.
 void writeVdb(std::ostream& out, const ObserverField& field, const RunInfo& info);
 
 /// @brief VTK ImageData (.vti) of the box: point data `irradiance_w_m2` (Float32, 0 where
-/// not computed), `refinement_level` and `status`, sampled every @p stride lattice points.
-void writeVti(std::ostream& out, const ObserverField& field, int stride);
+/// not computed), `hazard_ratio` (as for the VDB), `refinement_level` and `status`, sampled
+/// every @p stride lattice points.
+void writeVti(std::ostream& out, const ObserverField& field, int stride, double mpe_w_m2);
 
 /// @brief VTK UnstructuredGrid (.vtu) of the octree's final blocks as hexahedra: cell data
 /// `refinement_level` and `status` (1 computed, 2 interpolated, 3 proven below the floor),
-/// point data `irradiance_w_m2` at the corners.
-void writeBlocksVtu(std::ostream& out, const ObserverField& field);
+/// point data `irradiance_w_m2` (and `hazard_ratio` where @p mpe_w_m2 > 0) at the corners.
+void writeBlocksVtu(std::ostream& out, const ObserverField& field, double mpe_w_m2);
 
 /// @brief VTK PolyData (.vtp) of the lit target: its coarse facets split @p level times on the
 /// true surface, cell data `incident_power_w` (beam power received) and `coarse_facet`.

@@ -634,6 +634,43 @@ double ObserverField::volumeAbove(double threshold_w_m2) const {
   return static_cast<double>(count) * spec_.voxel_m * spec_.voxel_m * spec_.voxel_m;
 }
 
+ObserverField::Region ObserverField::regionAbove(double threshold_w_m2,
+                                                const Vec3& from_m) const {
+  Region r;
+  r.min_m = Vec3(std::numeric_limits<double>::infinity());
+  r.max_m = -r.min_m;
+  const auto add = [&](const openvdb::Coord& c) {
+    const Vec3 x = spec_.position(c.x(), c.y(), c.z());
+    r.min_m = glm::min(r.min_m, x);
+    r.max_m = glm::max(r.max_m, x);
+    const double d = glm::length(x - from_m);
+    if (d > r.farthest_m) {
+      r.farthest_m = d;
+      r.farthest_at_m = x;
+    }
+  };
+  for (auto it = grids_->irradiance->cbeginValueOn(); it; ++it) {
+    if (!(static_cast<double>(*it) >= threshold_w_m2)) continue;
+    if (it.isVoxelValue()) {
+      add(it.getCoord());
+      ++r.points;
+      continue;
+    }
+    // A tile: its box's corners hold its extremes.
+    openvdb::CoordBBox box;
+    it.getBoundingBox(box);
+    for (int c = 0; c < 8; ++c) {
+      add(openvdb::Coord((c & 4) != 0 ? box.max().x() : box.min().x(),
+                         (c & 2) != 0 ? box.max().y() : box.min().y(),
+                         (c & 1) != 0 ? box.max().z() : box.min().z()));
+    }
+    r.points += static_cast<std::int64_t>(box.volume());
+  }
+  if (r.points == 0) r.min_m = r.max_m = Vec3(0.0);
+  r.volume_m3 = static_cast<double>(r.points) * spec_.voxel_m * spec_.voxel_m * spec_.voxel_m;
+  return r;
+}
+
 ObserverField computeField(const FacetIntegrator& integrator, const FieldSpec& spec,
                            const ExcludedFn& excluded, WorkCounter* counter) {
   validate(spec);

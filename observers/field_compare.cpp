@@ -10,6 +10,11 @@ double FieldComparison::volumeRatio(std::size_t t) const {
   return adaptive_volume_m3[t] / dense_volume_m3[t];
 }
 
+double FieldComparison::levelVolumeRatio() const {
+  if (dense_level_volume_m3 == 0.0) return adaptive_level_volume_m3 == 0.0 ? 1.0 : 0.0;
+  return adaptive_level_volume_m3 / dense_level_volume_m3;
+}
+
 bool FieldComparison::withinAccuracy() const {
   if (!(max_error_w_m2 <= allowed_error_w_m2) || bright_skipped != 0) return false;
   for (std::size_t t = 0; t < threshold_shares.size(); ++t) {
@@ -18,7 +23,8 @@ bool FieldComparison::withinAccuracy() const {
   return true;
 }
 
-FieldComparison compareFields(const ObserverField& adaptive, const ObserverField& dense) {
+FieldComparison compareFields(const ObserverField& adaptive, const ObserverField& dense,
+                              double level_w_m2) {
   const FieldSpec& spec = dense.spec();
   if (adaptive.spec().nodes() != spec.nodes() || adaptive.spec().voxel_m != spec.voxel_m ||
       adaptive.spec().min_m != spec.min_m) {
@@ -51,6 +57,11 @@ FieldComparison compareFields(const ObserverField& adaptive, const ObserverField
     const double threshold = c.threshold_shares[t] * c.peak_w_m2;
     c.adaptive_volume_m3[t] = adaptive.volumeAbove(threshold);
     c.dense_volume_m3[t] = dense.volumeAbove(threshold);
+  }
+  if (level_w_m2 > 0.0) {
+    c.level_w_m2 = level_w_m2;
+    c.adaptive_level_volume_m3 = adaptive.volumeAbove(level_w_m2);
+    c.dense_level_volume_m3 = dense.volumeAbove(level_w_m2);
   }
   return c;
 }

@@ -24,16 +24,25 @@ struct FieldComparison {
   std::array<double, 3> threshold_shares{0.01, 0.1, 0.5};
   std::array<double, 3> adaptive_volume_m3{};
   std::array<double, 3> dense_volume_m3{};
+  /// A level of irradiance given to compareFields (the MPE: then these are the nominal hazard
+  /// zone's volumes), 0 when none was, and the volume (m³) above it in either field.
+  double level_w_m2 = 0.0;
+  double adaptive_level_volume_m3 = 0.0;
+  double dense_level_volume_m3 = 0.0;
 
   /// @brief adaptive / dense volume above threshold @p t (1 where both are empty).
   [[nodiscard]] double volumeRatio(std::size_t t) const;
+  /// @brief adaptive / dense volume above level_w_m2 (1 where both are empty).
+  [[nodiscard]] double levelVolumeRatio() const;
   /// @brief The acceptance of the field against dense: error within allowed, every volume
   /// ratio within 1 %, no bright point skipped.
   [[nodiscard]] bool withinAccuracy() const;
 };
 
-/// @brief Compares @p adaptive with @p dense, computed over the same FieldSpec.
+/// @brief Compares @p adaptive with @p dense, computed over the same FieldSpec, and their
+/// volumes above @p level_w_m2 where it is > 0.
 /// @throws std::invalid_argument when their lattices differ.
-FieldComparison compareFields(const ObserverField& adaptive, const ObserverField& dense);
+FieldComparison compareFields(const ObserverField& adaptive, const ObserverField& dense,
+                              double level_w_m2 = 0.0);
 
 }  // namespace glint

@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -50,6 +51,70 @@ int vtiStride(const FieldSpec& spec) {
   };
   while (points(stride) > 16.7e6 && stride < spec.block_voxels) stride *= 2;
   return stride;
+}
+
+std::string mpeCitation(const Mpe& mpe) { return "ANSI Z136.1-2014 Table 5a: " + mpe.rule; }
+
+// The centre of the target's bounding box: the nominal hazard zone's reach is measured from it.
+Vec3 targetCentre(const Target& target) {
+  Vec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
+  for (std::size_t f = 0; f < target.facetCount(); ++f) {
+    const Vec3 origin = target.objects[target.object[f]].origin_m;
+    for (const Vec3& c : target.corners_m[f]) {
+      lo = glm::min(lo, origin + c);
+      hi = glm::max(hi, origin + c);
+    }
+  }
+  return target.facetCount() > 0 ? 0.5 * (lo + hi) : Vec3(0.0);
+}
+
+// The nominal hazard zone: where irradiance ≥ MPE (hazard ratio ≥ 1).
+struct HazardZone {
+  double peak_ratio = 0.0;
+  ObserverField::Region region;
+  Vec3 target_centre_m{0.0};
+  bool reaches_box_edge = false;  ///< then the zone may go on beyond the box
+};
+
+HazardZone hazardZone(const ObserverField& field, const Scene& scene, const Target& target) {
+  HazardZone z;
+  const double mpe = scene.hazard.mpe.irradiance_w_m2;
+  z.peak_ratio = field.stats().peak_w_m2 / mpe;
+  z.target_centre_m = targetCentre(target);
+  z.region = field.regionAbove(mpe, z.target_centre_m);
+  const FieldSpec& spec = field.spec();
+  const auto n = spec.nodes();
+  const Vec3 box_max = spec.position(n[0] - 1, n[1] - 1, n[2] - 1);
+  for (int a = 0; a < 3 && z.region.points > 0; ++a) {
+    const double half_voxel = 0.5 * spec.voxel_m;
+    z.reaches_box_edge = z.reaches_box_edge || z.region.min_m[a] < spec.min_m[a] + half_voxel ||
+                         z.region.max_m[a] > box_max[a] - half_voxel;
+  }
+  return z;
+}
+
+nlohmann::json hazardJson(const Scene& scene, const HazardZone& z) {
+  const HazardSpec& h = scene.hazard;
+  nlohmann::json j = {{"exposure_s", h.exposure_s},
+                      {"exposure_default", h.exposure_default},
+                      {"mpe_w_m2", h.mpe.irradiance_w_m2},
+                      {"mpe_j_m2", h.mpe.radiant_exposure_j_m2},
+                      {"mpe_limit", toString(h.mpe.limit)},
+                      {"mpe_rule", mpeCitation(h.mpe)},
+                      {"peak_hazard_ratio", z.peak_ratio}};
+  const ObserverField::Region& r = z.region;
+  nlohmann::json nhz = {{"points", r.points},
+                       {"volume_m3", r.volume_m3},
+                       {"reaches_box_edge", z.reaches_box_edge}};
+  if (r.points > 0) {
+    nhz["box"] = {{"min_m", {r.min_m.x, r.min_m.y, r.min_m.z}},
+                  {"max_m", {r.max_m.x, r.max_m.y, r.max_m.z}}};
+    nhz["farthest_from_target_m"] = r.farthest_m;
+    nhz["farthest_at_m"] = {r.farthest_at_m.x, r.farthest_at_m.y, r.farthest_at_m.z};
+    nhz["target_centre_m"] = {z.target_centre_m.x, z.target_centre_m.y, z.target_centre_m.z};
+  }
+  j["nominal_hazard_zone"] = nhz;
+  return j;
 }
 
 nlohmann::json summaryJson(const ObserverField& field, const RunInfo& info, const CullStats& cull) {
@@ -158,12 +223,17 @@ void runField(const RunArgs& args, std::ostream& err) {
   info.scheme = args.uniform ? "uniform" : "adaptive";
   info.wavelength_nm = scene.laser.wavelength_nm;
   info.power_w = scene.laser.power_w;
+  info.exposure_s = scene.hazard.exposure_s;
+  info.mpe_w_m2 = scene.hazard.mpe.irradiance_w_m2;
+  info.mpe_rule = mpeCitation(scene.hazard.mpe);
 
   writeVdb(vdb.stream(), *field, info);
-  writeVti(vti.stream(), *field, vtiStride(spec));
-  writeBlocksVtu(vtu.stream(), *field);
+  writeVti(vti.stream(), *field, vtiStride(spec), info.mpe_w_m2);
+  writeBlocksVtu(vtu.stream(), *field, info.mpe_w_m2);
   writeTargetVtp(vtp.stream(), integrator, 2);
-  const nlohmann::json j = summaryJson(*field, info, integrator.cullStats());
+  const HazardZone zone = hazardZone(*field, scene, integrator.target());
+  nlohmann::json j = summaryJson(*field, info, integrator.cullStats());
+  j["hazard"] = hazardJson(scene, zone);
   summary.stream() << j.dump(2) << "\n";
   for (AtomicFile* f : {&vdb, &vti, &vtu, &vtp, &summary}) f->commit();
 
@@ -187,6 +257,23 @@ void runField(const RunArgs& args, std::ostream& err) {
       << formatDuration(s.seconds) << "\n";
   err << "  peak irradiance: " << formatNumber("%.6g", s.peak_w_m2) << " W/m² at (" << s.peak_at_m.x
       << ", " << s.peak_at_m.y << ", " << s.peak_at_m.z << ")\n";
+  const HazardSpec& h = scene.hazard;
+  err << "  hazard: MPE " << formatNumber("%.4g", h.mpe.irradiance_w_m2) << " W/m² for "
+      << formatNumber("%g", h.exposure_s) << " s" << (h.exposure_default ? " (default)" : "")
+      << " (" << toString(h.mpe.limit) << "), peak hazard ratio "
+      << formatNumber("%.3g", zone.peak_ratio) << "\n";
+  if (zone.region.points > 0) {
+    const ObserverField::Region& r = zone.region;
+    err << "  nominal hazard zone (ratio ≥ 1): " << formatNumber("%.4g", r.volume_m3)
+        << " m³, reaching " << formatNumber("%.4g", r.farthest_m) << " m from the target centre, at ("
+        << r.farthest_at_m.x << ", " << r.farthest_at_m.y << ", " << r.farthest_at_m.z << ")\n";
+    if (zone.reaches_box_edge) {
+      err << "  warning: the hazard zone reaches the edge of the observer box and may go on "
+             "beyond it: enlarge the box to see its full extent\n";
+    }
+  } else {
+    err << "  nominal hazard zone: none in the box (no point reaches the MPE)\n";
+  }
   if (s.unconverged_points > 0) {
     err << "  warning: " << s.unconverged_points
         << " points did not reach the integration tolerance, within (" << s.unconverged_min_m.x

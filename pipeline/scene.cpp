@@ -230,13 +230,30 @@ class PathTracker {
   std::vector<Frame> frames_;
 };
 
-LaserSpec readLaser(ObjectReader r) {
+// The exposure and its MPE; the MPE table's range is checked here, at the boundary.
+HazardSpec readHazard(ObjectReader& r, const LaserSpec& laser) {
+  HazardSpec h;
+  if (!(laser.wavelength_nm >= 400.0 && laser.wavelength_nm <= 1.0e6)) {
+    r.fail("wavelength_nm", "must be in 400 nm to 1 mm, the range of the MPE table (ANSI "
+                            "Z136.1 / IEC 60825-1) that glint's hazard uses");
+  }
+  h.exposure_default = !laser.exposure_s.has_value();
+  h.exposure_s = laser.exposure_s.value_or(laser.wavelength_nm <= 700.0 ? 0.25 : 10.0);
+  if (!(h.exposure_s >= 1e-9 && h.exposure_s <= 3e4)) {
+    r.fail("exposure_s", "must be in 1e-9 s to 3e4 s, the range of the MPE table");
+  }
+  h.mpe = ocularMpe(laser.wavelength_nm, h.exposure_s);
+  return h;
+}
+
+LaserSpec readLaser(ObjectReader r, HazardSpec& hazard) {
   LaserSpec laser;
   laser.position_m = r.vec3("position");
   laser.direction = r.direction("direction");
   laser.power_w = positive(r, "power_w", r.number("power_w"));
   laser.wavelength_nm = positive(r, "wavelength_nm", r.number("wavelength_nm"));
   if (auto t = r.optionalNumber("exposure_s")) laser.exposure_s = positive(r, "exposure_s", *t);
+  hazard = readHazard(r, laser);
 
   ObjectReader beam = r.object("beam");
   const std::size_t profile = beam.choice("profile", {"flat_top", "gaussian"});
@@ -372,7 +389,7 @@ Scene parseScene(std::string_view text, const std::string& source) {
   scene.source = source;
   ObjectReader r(root, "", source);
   scene.description = r.string("description", "");
-  scene.laser = readLaser(r.object("laser"));
+  scene.laser = readLaser(r.object("laser"), scene.hazard);
 
   ObjectReader materials = r.object("materials");
   if (materials.raw().empty()) materials.failHere("must define at least one material");

@@ -13,6 +13,7 @@
 #include "facets/beam.h"
 #include "facets/patch.h"
 #include "facets/vec3.h"
+#include "pipeline/mpe.h"
 
 namespace glint {
 
@@ -22,7 +23,7 @@ struct LaserSpec {
   Vec3 direction{1.0, 0.0, 0.0};  ///< unit (the file's vector, normalised)
   double power_w = 0.0;
   double wavelength_nm = 0.0;
-  std::optional<double> exposure_s;  ///< only the hazard needs it
+  std::optional<double> exposure_s;  ///< as in the file; HazardSpec has the one in use
   BeamProfile profile = BeamProfile::FlatTop;
   double radius_m = 0.0;        ///< flat_top `radius_m` or gaussian `w_m`
   double divergence_rad = 0.0;  ///< full angle
@@ -66,7 +67,16 @@ struct ObserversSpec {
   double voxel_m = 0.0;
   double block_m = 0.0;  ///< coarsest block edge: voxel_m × a power of two (default 16 voxels)
   double tolerance = 1e-2;
-  std::optional<double> floor_w_m2;  ///< default: 1e-6 × the beam's peak irradiance
+  std::optional<double> floor_w_m2;  ///< default: 1e-3 × the MPE (HazardSpec)
+};
+
+/// @brief The exposure the hazard is judged for and its MPE (README "Hazard").
+struct HazardSpec {
+  /// `laser.exposure_s`, by default 0.25 s (the aversion response) for 400–700 nm and 10 s
+  /// beyond 700 nm, where nothing makes the eye turn away.
+  double exposure_s = 0.25;
+  bool exposure_default = true;  ///< exposure_s was not in the file
+  Mpe mpe;
 };
 
 /// @brief A validated scene: every number finite and in range, every reference resolved.
@@ -74,6 +84,7 @@ struct Scene {
   std::string source;  ///< the file name as given, for messages
   std::string description;
   LaserSpec laser;
+  HazardSpec hazard;
   std::vector<MaterialSpec> materials;
   std::vector<ObjectSpec> objects;
   AccuracySpec accuracy;

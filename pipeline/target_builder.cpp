@@ -64,7 +64,9 @@ FieldSpec fieldSpec(const Scene& scene) {
   f.voxel_m = o.voxel_m;
   f.block_voxels = static_cast<int>(std::lround(o.block_m / o.voxel_m));
   f.tolerance = o.tolerance;
-  f.floor_w_m2 = o.floor_w_m2 ? *o.floor_w_m2 : 1e-6 * beamOf(scene).peakIrradiance();
+  // A thousandth of the MPE: hazard ratios down to 1e-3 are resolved, below what a 50 mm
+  // binocular (about 50× the collected power of a 7 mm pupil) could lift to 1.
+  f.floor_w_m2 = o.floor_w_m2 ? *o.floor_w_m2 : 1e-3 * scene.hazard.mpe.irradiance_w_m2;
   return f;
 }
 

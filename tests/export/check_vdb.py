@@ -9,7 +9,8 @@ out = sys.argv[1]
 summary = json.load(open(f"{out}/summary.json"))
 grids, meta = vdb.readAll(f"{out}/irradiance.vdb")
 by_name = {g.name: g for g in grids}
-assert set(by_name) == {"irradiance_w_m2", "refinement_level", "status"}, by_name.keys()
+assert set(by_name) == {"irradiance_w_m2", "hazard_ratio", "refinement_level", "status"}, (
+    by_name.keys())
 voxel = summary["box"]["voxel_m"]
 for g in grids:
     size = g.transform.voxelSize()
@@ -22,7 +23,15 @@ peak = summary["peak_irradiance_w_m2"]
 assert abs(hi - peak) <= 1e-6 * peak, (hi, peak)  # the grid stores float32
 assert lo >= 0.0, lo
 for key in ("program", "scene_fnv1a64", "wavelength_nm", "power_w", "tolerance", "floor_w_m2",
-            "evaluations", "irradiance_unit"):
+            "evaluations", "irradiance_unit", "exposure_s", "mpe_w_m2", "mpe_rule"):
     assert key in meta, key
 assert meta["evaluations"] == summary["evaluations"]
+# The hazard ratio is irradiance / MPE voxel for voxel: same voxels, peak over MPE.
+hazard = summary["hazard"]
+assert meta["mpe_w_m2"] == hazard["mpe_w_m2"], (meta["mpe_w_m2"], hazard["mpe_w_m2"])
+ratio = by_name["hazard_ratio"]
+assert ratio.activeVoxelCount() == irr.activeVoxelCount()
+_, ratio_hi = ratio.evalMinMax()
+assert abs(ratio_hi - hazard["peak_hazard_ratio"]) <= 1e-6 * hazard["peak_hazard_ratio"], (
+    ratio_hi, hazard["peak_hazard_ratio"])
 print("vdb ok:", {g.name: g.activeVoxelCount() for g in grids})

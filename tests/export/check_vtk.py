@@ -1,5 +1,6 @@
 """Opens glint's VTK files in ParaView (pvpython, headless) and contours the irradiance at 10 %
-of the peak: each volume file must give a non-empty surface, the target its incident power."""
+of the peak and the hazard ratio at 1 (the nominal hazard zone's surface): each volume file
+must give non-empty surfaces, the target its incident power."""
 import json
 import sys
 
@@ -11,13 +12,17 @@ summary = json.load(open(f"{out}/summary.json"))
 level = 0.1 * summary["peak_irradiance_w_m2"]
 assert level > 0.0
 
+# The example must be hazardous for the hazard contour to have a surface.
+assert summary["hazard"]["peak_hazard_ratio"] > 1.0, summary["hazard"]
+
 for name in ("irradiance.vti", "blocks.vtu"):
     reader = OpenDataFile(f"{out}/{name}")
-    contour = Contour(Input=reader, ContourBy=["POINTS", "irradiance_w_m2"], Isosurfaces=[level])
-    contour.UpdatePipeline()
-    points = contour.GetDataInformation().GetNumberOfPoints()
-    assert points > 0, f"{name}: empty contour at {level} W/m^2"
-    print(f"{name}: contour at {level:.4g} W/m^2 has {points} points")
+    for array, value, unit in (("irradiance_w_m2", level, "W/m^2"), ("hazard_ratio", 1.0, "")):
+        contour = Contour(Input=reader, ContourBy=["POINTS", array], Isosurfaces=[value])
+        contour.UpdatePipeline()
+        points = contour.GetDataInformation().GetNumberOfPoints()
+        assert points > 0, f"{name}: empty contour of {array} at {value} {unit}"
+        print(f"{name}: contour of {array} at {value:.4g} {unit} has {points} points")
 
 target = OpenDataFile(f"{out}/target.vtp")
 target.UpdatePipeline()

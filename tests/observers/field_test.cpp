@@ -132,6 +132,45 @@ TEST(ObserverField, LobeEdgeOnAMiddleSamplePlaneIsResolved) {
   expectMatchesDense(compare(json), spec, "lobe edge on a sample plane");
 }
 
+TEST(ObserverField, RegionAboveAThresholdIsEveryLatticePointReachingIt) {
+  // The nominal hazard zone is regionAbove(MPE): checked here against a plain scan of every
+  // lattice point through the public accessors, at a threshold of a fifth of the peak.
+  const std::string json = cylinderScene(0.03);
+  const Scene scene = parseScene(json, "test.json");
+  const FieldSpec spec = fieldSpec(scene);
+  const FieldProblem p = fieldProblem(scene, spec);
+  const ObserverField field = computeField(p.integrator, spec, p.excluded);
+  const double threshold = 0.2 * field.stats().peak_w_m2;
+  const Vec3 from(0.25, -0.5, 0.1);
+  std::int64_t points = 0;
+  double farthest = 0.0;
+  Vec3 lo(1e300), hi(-1e300);
+  const auto n = spec.nodes();
+  for (int i = 0; i < n[0]; ++i)
+    for (int j = 0; j < n[1]; ++j)
+      for (int k = 0; k < n[2]; ++k) {
+        if (!(field.irradiance(i, j, k) >= threshold)) continue;
+        ++points;
+        const Vec3 x = spec.position(i, j, k);
+        lo = glm::min(lo, x);
+        hi = glm::max(hi, x);
+        farthest = std::max(farthest, glm::length(x - from));
+      }
+  ASSERT_GT(points, 10) << "the premise: a bright region";
+  const ObserverField::Region r = field.regionAbove(threshold, from);
+  EXPECT_EQ(r.points, points);
+  EXPECT_NEAR(r.volume_m3, static_cast<double>(points) * std::pow(spec.voxel_m, 3), 1e-12);
+  EXPECT_NEAR(r.farthest_m, farthest, 1e-12) << "the same lattice point";
+  EXPECT_NEAR(glm::length(r.farthest_at_m - from), farthest, 1e-12);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(r.min_m[a], lo[a], 1e-12) << "axis " << a;
+    EXPECT_NEAR(r.max_m[a], hi[a], 1e-12) << "axis " << a;
+  }
+  const ObserverField::Region none = field.regionAbove(2.0 * field.stats().peak_w_m2, from);
+  EXPECT_EQ(none.points, 0) << "nothing above twice the peak";
+  EXPECT_EQ(none.volume_m3, 0.0);
+}
+
 TEST(ObserverField, SphereFarFieldIsInterpolatedAlongItsFallOff) {
   // A mirror ball's glint fills the half-space in front of it and falls off as about 1/r².
   // Trilinear interpolation of 1/r² errs by about 0.75 (h/r)², more than 1 % for blocks

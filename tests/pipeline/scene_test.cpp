@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <nlohmann/json.hpp>
 
 #include "pipeline/input_error.h"
@@ -128,6 +130,10 @@ TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
        "scene.json: /accuracy/normals: must be one of: surface, flat"},
       {[](json& j) { j["materials"] = json::object(); },
        "scene.json: /materials: must define at least one material"},
+      {[](json& j) { j["laser"]["wavelength_nm"] = 355.0; },
+       "scene.json: /laser/wavelength_nm: must be in 400 nm to 1 mm, the range of the MPE table"},
+      {[](json& j) { j["laser"]["exposure_s"] = 1e5; },
+       "scene.json: /laser/exposure_s: must be in 1e-9 s to 3e4 s, the range of the MPE table"},
   };
   for (const Case& c : cases) {
     json j = minimal();
@@ -177,6 +183,24 @@ TEST(Scene, LoadNamesAMissingFile) {
 namespace glint {
 namespace {
 
+TEST(SceneHazard, ExposureDefaultsToTheAversionResponseInTheVisibleAndTenSecondsBeyond) {
+  json j = minimal();
+  j["laser"].erase("exposure_s");
+  j["laser"]["wavelength_nm"] = 532;
+  Scene s = parseScene(j.dump(), "scene.json");
+  EXPECT_TRUE(s.hazard.exposure_default);
+  EXPECT_EQ(s.hazard.exposure_s, 0.25) << "the aversion response";
+  EXPECT_NEAR(s.hazard.mpe.irradiance_w_m2, 18.0 * std::pow(0.25, -0.25), 1e-9) << "25.46 W/m²";
+  j["laser"]["wavelength_nm"] = 1064;
+  s = parseScene(j.dump(), "scene.json");
+  EXPECT_EQ(s.hazard.exposure_s, 10.0) << "no aversion response beyond 700 nm";
+  EXPECT_NEAR(s.hazard.mpe.irradiance_w_m2, 50.0, 1e-9) << "1064 nm from 10 s: 50 C_C W/m²";
+  j["laser"]["exposure_s"] = 1.0;
+  s = parseScene(j.dump(), "scene.json");
+  EXPECT_FALSE(s.hazard.exposure_default);
+  EXPECT_EQ(s.hazard.exposure_s, 1.0) << "the file's value";
+}
+
 TEST(SceneObservers, BoxLoadsWithDefaultsAndRefusesBadValues) {
   json j = minimal();
   j["observers"] = json::parse(R"({"min": [-1, -1, -1], "max": [1, 2, 3], "voxel_m": 0.1})");
@@ -188,7 +212,8 @@ TEST(SceneObservers, BoxLoadsWithDefaultsAndRefusesBadValues) {
   EXPECT_EQ(spec.block_voxels, 16);
   // 2 m, 3 m, 4 m at 0.1 m: 20, 30, 40 voxels, rounded up to whole 16-voxel blocks.
   EXPECT_EQ(spec.nodes(), (std::array<int, 3>{33, 33, 49})) << "box extended to whole blocks";
-  EXPECT_NEAR(spec.floor_w_m2, 1e-6 * 1000.0 / (kPi * 4.0), 1e-18) << "1e-6 × beam peak";
+  // 1064 nm for 0.25 s: 90 C_C t^0.75 J/m² over t = 90 × 0.25^-0.25 = 127.28 W/m².
+  EXPECT_NEAR(spec.floor_w_m2, 1e-3 * 90.0 * std::pow(0.25, -0.25), 1e-12) << "1e-3 × MPE";
 
   auto refused = [&](const char* key, const json& value) {
     json bad = j;
