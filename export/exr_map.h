@@ -1,0 +1,44 @@
+#pragma once
+/// @file
+/// @brief Maps over a plane of observers as OpenEXR images (FLOAT channels: irradiance
+/// overflows HALF's 65504 in any hazardous glint).
+
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "facets/vec3.h"
+
+namespace glint {
+
+/// @brief Values on a width × height lattice of a plane: point (i, j) lies at
+/// origin_m + pixel_m (i u_axis + j v_axis). Arrays are indexed [j × width + i].
+struct PlaneMap {
+  int width = 0;   ///< lattice points along u_axis
+  int height = 0;  ///< lattice points along v_axis
+  Vec3 origin_m{0.0};
+  Vec3 u_axis{1.0, 0.0, 0.0};  ///< unit
+  Vec3 v_axis{0.0, 1.0, 0.0};  ///< unit, orthogonal to u_axis
+  double pixel_m = 0.0;        ///< lattice spacing
+  std::vector<float> irradiance_w_m2;
+  std::vector<float> hazard_ratio;  ///< irradiance / MPE
+  std::vector<float> level;         ///< refinement level (or any per-point count)
+};
+
+/// @brief What the header records besides the plane's geometry.
+struct ExrInfo {
+  std::string program_version;
+  double wavelength_nm = 0.0;
+  double mpe_w_m2 = 0.0;
+};
+
+/// @brief Writes @p map as a scanline OpenEXR image with FLOAT channels `irradiance_w_m2`,
+/// `hazard_ratio` and `level` (ZIP compressed). The image's top row is the plane's highest v,
+/// so viewers show v upwards. Header attributes: `glint_origin_m`, `glint_u_axis`,
+/// `glint_v_axis` (V3d), `glint_pixel_m`, `glint_wavelength_nm`, `glint_mpe_w_m2` (double),
+/// `glint_program` (string).
+/// @throw std::invalid_argument when the arrays do not hold width × height values;
+/// OutputError when the stream fails.
+void writeExr(std::ostream& out, const PlaneMap& map, const ExrInfo& info);
+
+}  // namespace glint
