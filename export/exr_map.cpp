@@ -43,12 +43,12 @@ Imath::V3d v3d(const Vec3& v) { return {v.x, v.y, v.z}; }
 void writeExr(std::ostream& out, const PlaneMap& map, const ExrInfo& info) {
   const auto n = static_cast<std::size_t>(map.width) * static_cast<std::size_t>(map.height);
   if (map.width <= 0 || map.height <= 0 || map.irradiance_w_m2.size() != n ||
-      map.hazard_ratio.size() != n || map.level.size() != n) {
+      map.hazard_ratio.size() != n || map.level.size() != n || map.status.size() != n) {
     throw std::invalid_argument("writeExr: every channel must hold width × height values");
   }
   Imf::Header header(map.width, map.height);
   header.compression() = Imf::ZIP_COMPRESSION;
-  const char* names[] = {"irradiance_w_m2", "hazard_ratio", "level"};
+  const char* names[] = {"irradiance_w_m2", "hazard_ratio", "level", "status"};
   for (const char* name : names) header.channels().insert(name, Imf::Channel(Imf::FLOAT));
   header.insert("glint_origin_m", Imf::V3dAttribute(v3d(map.origin_m)));
   header.insert("glint_u_axis", Imf::V3dAttribute(v3d(map.u_axis)));
@@ -59,11 +59,12 @@ void writeExr(std::ostream& out, const PlaneMap& map, const ExrInfo& info) {
   header.insert("glint_program", Imf::StringAttribute(info.program_version));
 
   // Image row y holds lattice row j = height − 1 − y.
-  const std::vector<float>* channels[] = {&map.irradiance_w_m2, &map.hazard_ratio, &map.level};
-  std::vector<std::vector<float>> rows_down(3, std::vector<float>(n));
+  const std::vector<float>* channels[] = {&map.irradiance_w_m2, &map.hazard_ratio, &map.level,
+                                          &map.status};
+  std::vector<std::vector<float>> rows_down(4, std::vector<float>(n));
   Imf::FrameBuffer frame;
   const auto w = static_cast<std::size_t>(map.width);
-  for (std::size_t c = 0; c < 3; ++c) {
+  for (std::size_t c = 0; c < 4; ++c) {
     for (std::size_t y = 0; y < static_cast<std::size_t>(map.height); ++y) {
       const std::size_t j = static_cast<std::size_t>(map.height) - 1 - y;
       std::copy_n(channels[c]->begin() + static_cast<std::ptrdiff_t>(j * w), w,

@@ -22,7 +22,8 @@ struct PlaneMap {
   double pixel_m = 0.0;        ///< lattice spacing
   std::vector<float> irradiance_w_m2;
   std::vector<float> hazard_ratio;  ///< irradiance / MPE
-  std::vector<float> level;         ///< refinement level (or any per-point count)
+  std::vector<float> level;         ///< refinement level (0 = coarsest block)
+  std::vector<float> status;        ///< VoxelStatus: why a 0 is 0 (proven below floor, ...)
 };
 
 /// @brief What the header records besides the plane's geometry.
@@ -33,7 +34,7 @@ struct ExrInfo {
 };
 
 /// @brief Writes @p map as a scanline OpenEXR image with FLOAT channels `irradiance_w_m2`,
-/// `hazard_ratio` and `level` (ZIP compressed). The image's top row is the plane's highest v,
+/// `hazard_ratio`, `level` and `status` (ZIP compressed). The image's top row is the plane's highest v,
 /// so viewers show v upwards. Header attributes: `glint_origin_m`, `glint_u_axis`,
 /// `glint_v_axis` (V3d), `glint_pixel_m`, `glint_wavelength_nm`, `glint_mpe_w_m2` (double),
 /// `glint_program` (string).

@@ -52,11 +52,13 @@ struct Lattice {
 };
 
 // Calls fn(origin, size) for every block of the coarsest level.
+// A plane's lattice has one layer (n[2] == 1): its blocks are squares at k = 0.
 template <class Fn>
 void forEachCoarseBlock(const Lattice& lattice, int size, Fn&& fn) {
+  const bool flat = lattice.n[2] == 1;
   for (int i = 0; i + 1 < lattice.n[0]; i += size)
     for (int j = 0; j + 1 < lattice.n[1]; j += size)
-      for (int k = 0; k + 1 < lattice.n[2]; k += size) fn(Index3{i, j, k}, size);
+      for (int k = 0; flat ? k == 0 : k + 1 < lattice.n[2]; k += size) fn(Index3{i, j, k}, size);
 }
 
 // A block of the octree: lattice points o .. o + size on each axis. It owns the voxels
@@ -109,9 +111,20 @@ void forEachSample(int size, Fn&& fn) {
 }
 
 openvdb::math::Transform::Ptr fieldTransform(const FieldSpec& spec) {
-  auto transform = openvdb::math::Transform::createLinearTransform(spec.voxel_m);
-  transform->postTranslate(openvdb::Vec3d(spec.min_m.x, spec.min_m.y, spec.min_m.z));
-  return transform;
+  const std::array<Vec3, 3>& e = spec.axes;
+  if (e[0] == Vec3(1.0, 0.0, 0.0) && e[1] == Vec3(0.0, 1.0, 0.0) && e[2] == Vec3(0.0, 0.0, 1.0)) {
+    auto transform = openvdb::math::Transform::createLinearTransform(spec.voxel_m);
+    transform->postTranslate(openvdb::Vec3d(spec.min_m.x, spec.min_m.y, spec.min_m.z));
+    return transform;
+  }
+  // OpenVDB maps index to world as a row vector times this matrix: rows are the scaled axes.
+  openvdb::Mat4d m = openvdb::Mat4d::identity();
+  for (int a = 0; a < 3; ++a) {
+    const Vec3 row = spec.voxel_m * e[static_cast<std::size_t>(a)];
+    m.setRow(a, openvdb::Vec4d(row.x, row.y, row.z, 0.0));
+  }
+  m.setRow(3, openvdb::Vec4d(spec.min_m.x, spec.min_m.y, spec.min_m.z, 1.0));
+  return openvdb::math::Transform::createLinearTransform(m);
 }
 
 std::unique_ptr<FieldGrids> makeGrids(const FieldSpec& spec) {
@@ -145,7 +158,7 @@ openvdb::CoordBBox ownedBox(const Block& b, const Lattice& lattice) {
   openvdb::Coord lo(b.o[0], b.o[1], b.o[2]), hi;
   for (int a = 0; a < 3; ++a) {
     const int end = b.o[a] + b.size;
-    hi[a] = end == lattice.n[a] - 1 ? end : end - 1;
+    hi[a] = lattice.n[a] == 1 ? 0 : end == lattice.n[a] - 1 ? end : end - 1;
   }
   return {lo, hi};
 }
@@ -292,9 +305,24 @@ class FieldBuilder {
     return glm::length(centre(b) - lit_centre_m_) > 1.5 * diagonal_m;
   }
 
+  [[nodiscard]] bool flat() const { return lattice_.n[2] == 1; }
+
+  // Lattice point (di, dj, dk) of block b; a plane's blocks have no depth, so dk maps to its
+  // one layer and the 3×3×3 samples of the checks repeat the 3×3 ones: the trilinear checks
+  // and fill then are bilinear ones, exactly.
+  [[nodiscard]] Index3 at(const Block& b, int di, int dj, int dk) const {
+    return {b.o[0] + di, b.o[1] + dj, flat() ? 0 : b.o[2] + dk};
+  }
+  [[nodiscard]] std::uint64_t keyAt(const Block& b, int di, int dj, int dk) const {
+    const Index3 p = at(b, di, dj, dk);
+    return lattice_.key(p[0], p[1], p[2]);
+  }
+
   [[nodiscard]] Vec3 centre(const Block& b) const {
     const double half = 0.5 * b.size;
-    return spec_.position(b.o[0], b.o[1], b.o[2]) + spec_.voxel_m * Vec3(half, half, half);
+    const std::array<Vec3, 3>& e = spec_.axes;
+    return spec_.position(b.o[0], b.o[1], b.o[2]) +
+           spec_.voxel_m * half * (e[0] + e[1] + (flat() ? Vec3(0.0) : e[2]));
   }
 
   void boundBlocks(const std::vector<Block>& blocks,
@@ -311,7 +339,7 @@ class FieldBuilder {
       options.drop_allowance_w_m2 = kDropShareOfFloor * spec_.floor_w_m2;
       options.sample_spacing_m = spec_.voxel_m * std::max(1, b.size / 2);
       options.max_split_depth = kMaxBoundSplitDepth;
-      const double radius = 0.5 * std::sqrt(3.0) * spec_.voxel_m * b.size;
+      const double radius = 0.5 * std::sqrt(flat() ? 2.0 : 3.0) * spec_.voxel_m * b.size;
       bounds[i] = integrator_.boundRegion(centre(b), radius, inherited,
                                           root ? 0.0 : parent_dropped[b.parent], options, lists[i]);
       bound_evaluations.local() += bounds[i].bound_evaluations;
@@ -352,7 +380,7 @@ class FieldBuilder {
       if (skipped(bounds[i])) continue;
       const Block& b = blocks[i];
       forEachSample(b.size, [&](int di, int dj, int dk) {
-        const std::uint64_t key = lattice_.key(b.o[0] + di, b.o[1] + dj, b.o[2] + dk);
+        const std::uint64_t key = keyAt(b, di, dj, dk);
         if (!values_.contains(key)) wanted.emplace_back(key, static_cast<std::uint32_t>(i));
       });
     }
@@ -418,12 +446,12 @@ class FieldBuilder {
     if (b.size <= 2) return {Verdict::Finest};  // every lattice point of it is a sample
     // The 3×3×3 lattice (v[9a + 3c + e]) and the octant centres, in forEachSample's order.
     std::array<double, 35> v{};
-    std::array<Index3, 35> at{};
+    std::array<Index3, 35> where{};
     std::size_t n = 0;
     bool excluded = false;
     forEachSample(b.size, [&](int di, int dj, int dk) {
-      at[n] = {b.o[0] + di, b.o[1] + dj, b.o[2] + dk};
-      const PointValue& p = values_.at(lattice_.key(at[n][0], at[n][1], at[n][2]));
+      where[n] = at(b, di, dj, dk);
+      const PointValue& p = values_.at(lattice_.key(where[n][0], where[n][1], where[n][2]));
       excluded = excluded || p.excluded;
       v[n++] = p.irradiance_w_m2;
     });
@@ -439,7 +467,9 @@ class FieldBuilder {
     for (const int power : kInterpolationPowers) {
       if (power > 0 && !far) break;
       std::array<double, 35> w{};  // the weights r^power
-      for (std::size_t s = 0; s < n; ++s) w[s] = spreadWeight(at[s][0], at[s][1], at[s][2], power);
+      for (std::size_t s = 0; s < n; ++s) {
+        w[s] = spreadWeight(where[s][0], where[s][1], where[s][2], power);
+      }
       if (interpolates(v, w, allowed)) return {Verdict::Accept, power};
     }
     return {Verdict::Refine};
@@ -496,10 +526,10 @@ class FieldBuilder {
           for (int a = 0; a < 3; ++a)
             for (int c = 0; c < 3; ++c)
               for (int e = 0; e < 3; ++e) {
-                const int i = b.o[0] + a * h, j = b.o[1] + c * h, k = b.o[2] + e * h;
+                const Index3 p = at(b, a * h, c * h, e * h);
                 v[static_cast<std::size_t>(9 * a + 3 * c + e)] =
-                    values_.at(lattice_.key(i, j, k)).irradiance_w_m2 *
-                    spreadWeight(i, j, k, power);
+                    values_.at(lattice_.key(p[0], p[1], p[2])).irradiance_w_m2 *
+                    spreadWeight(p[0], p[1], p[2], power);
               }
           // Each octant from its own corners: the finer samples the check compared against.
           for (auto it = box.begin(); it; ++it) {
@@ -507,7 +537,7 @@ class FieldBuilder {
             int oct[3];
             double t3[3];
             for (int a = 0; a < 3; ++a) {
-              const int local = p[a] - b.o[a];
+              const int local = p[a] - b.o[a];  // 0 along a plane's normal
               oct[a] = std::min(local / h, 1);
               t3[a] = static_cast<double>(local - oct[a] * h) / h;
             }
@@ -587,8 +617,14 @@ void validate(const FieldSpec& spec) {
       !(spec.tolerance >= 0.0) || !(spec.floor_w_m2 >= 0.0)) {
     throw std::invalid_argument("FieldSpec out of range");
   }
-  for (int a = 0; a < 3; ++a) {
-    if (!(spec.max_m[a] > spec.min_m[a])) throw std::invalid_argument("FieldSpec: empty box");
+  for (std::size_t a = 0; a < 3; ++a) {
+    if (!(std::abs(glm::length(spec.axes[a]) - 1.0) < 1e-9) ||
+        !(std::abs(glm::dot(spec.axes[a], spec.axes[(a + 1) % 3])) < 1e-9)) {
+      throw std::invalid_argument("FieldSpec: axes must be unit and orthogonal");
+    }
+    if (spec.plane && a == 2) continue;
+    if (!(glm::dot(spec.max_m - spec.min_m, spec.axes[a]) > 0.0))
+      throw std::invalid_argument("FieldSpec: empty box");
   }
 }
 
@@ -597,8 +633,12 @@ void validate(const FieldSpec& spec) {
 std::array<int, 3> FieldSpec::nodes() const {
   std::array<int, 3> n{};
   for (int a = 0; a < 3; ++a) {
+    if (plane && a == 2) {
+      n[2] = 1;
+      continue;
+    }
     // A box edge within a millionth of a voxel of a whole number of voxels is that number.
-    const double voxels = (max_m[a] - min_m[a]) / voxel_m;
+    const double voxels = glm::dot(max_m - min_m, axes[static_cast<std::size_t>(a)]) / voxel_m;
     const auto whole = static_cast<std::int64_t>(std::ceil(voxels - 1e-6));
     const std::int64_t blocks =
         (std::max<std::int64_t>(whole, 1) + block_voxels - 1) / block_voxels;

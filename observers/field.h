@@ -17,14 +17,18 @@
 
 namespace glint {
 
-/// @brief The observer box and its accuracy (scene key `observers`).
+/// @brief The observer box or plane and its accuracy (scene keys `observers`, `planes`).
 ///
-/// Observers sit on a lattice of spacing voxel_m starting at min_m; the box is extended up to
-/// whole coarse blocks of block_voxels × voxel_m. Lattice point (i, j, k) is OpenVDB voxel
-/// (i, j, k) at world position min_m + voxel_m · (i, j, k).
+/// Observers sit on a lattice of spacing voxel_m starting at min_m; the region is extended up
+/// to whole coarse blocks of block_voxels × voxel_m. Lattice point (i, j, k) is OpenVDB voxel
+/// (i, j, k) at world position min_m + voxel_m · (i axes[0] + j axes[1] + k axes[2]).
 struct FieldSpec {
   Vec3 min_m{0.0};
-  Vec3 max_m{0.0};
+  Vec3 max_m{0.0};  ///< the far corner: its offset from min_m along each axis is the extent
+  /// Lattice directions, unit and orthogonal: the world axes for a box; a plane's u, v, normal.
+  std::array<Vec3, 3> axes{Vec3(1.0, 0.0, 0.0), Vec3(0.0, 1.0, 0.0), Vec3(0.0, 0.0, 1.0)};
+  /// A plane of observers: one lattice layer along axes[2], square blocks (a quadtree).
+  bool plane = false;
   double voxel_m = 0.0;   ///< finest lattice spacing
   int block_voxels = 16;  ///< coarsest block edge in voxels, a power of two
   /// A block is accepted (its voxels interpolated) when interpolation from its corners misses
@@ -35,7 +39,10 @@ struct FieldSpec {
   /// @brief Lattice points per axis (voxels + 1), after extending to whole blocks.
   [[nodiscard]] std::array<int, 3> nodes() const;
   /// @brief World position of lattice point (i, j, k).
-  [[nodiscard]] Vec3 position(int i, int j, int k) const { return min_m + voxel_m * Vec3(i, j, k); }
+  [[nodiscard]] Vec3 position(int i, int j, int k) const {
+    return min_m + voxel_m * (static_cast<double>(i) * axes[0] + static_cast<double>(j) * axes[1] +
+                              static_cast<double>(k) * axes[2]);
+  }
 };
 
 /// @brief What a voxel of the result holds (grid `status`). Inactive irradiance never stands

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "export/atomic_file.h"
+#include "export/exr_map.h"
 #include "export/field_files.h"
 #include "glint/version.h"
 #include "pipeline/input_error.h"
@@ -93,15 +94,18 @@ HazardZone hazardZone(const ObserverField& field, const Scene& scene, const Targ
   return z;
 }
 
-nlohmann::json hazardJson(const Scene& scene, const HazardZone& z) {
+// The hazard section of summary.json; the nominal hazard zone where there is a volume (`z`).
+nlohmann::json hazardJson(const Scene& scene, const HazardZone* zone) {
   const HazardSpec& h = scene.hazard;
   nlohmann::json j = {{"exposure_s", h.exposure_s},
                       {"exposure_default", h.exposure_default},
                       {"mpe_w_m2", h.mpe.irradiance_w_m2},
                       {"mpe_j_m2", h.mpe.radiant_exposure_j_m2},
                       {"mpe_limit", toString(h.mpe.limit)},
-                      {"mpe_rule", mpeCitation(h.mpe)},
-                      {"peak_hazard_ratio", z.peak_ratio}};
+                      {"mpe_rule", mpeCitation(h.mpe)}};
+  if (zone == nullptr) return j;
+  const HazardZone& z = *zone;
+  j["peak_hazard_ratio"] = z.peak_ratio;
   const ObserverField::Region& r = z.region;
   nlohmann::json nhz = {{"points", r.points},
                        {"volume_m3", r.volume_m3},
@@ -179,66 +183,11 @@ nlohmann::json summaryJson(const ObserverField& field, const RunInfo& info, cons
   return j;
 }
 
-}  // namespace
-
-void runField(const RunArgs& args, std::ostream& err) {
-  const Scene scene = loadScene(args.scene_path);
-  const FieldSpec spec = fieldSpec(scene);
-  std::filesystem::path dir = args.out_dir;
-  if (dir.empty()) {
-    dir = std::filesystem::path("out") / (std::filesystem::path(args.scene_path).stem().string() +
-                                          (args.uniform ? "_uniform" : ""));
-  }
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw OutputError(dir.string() + ": cannot create the output folder: " + ec.message());
-  // Opened before the work, so an unwritable folder stops the run at once.
-  AtomicFile vdb(dir / "irradiance.vdb"), vti(dir / "irradiance.vti"), vtu(dir / "blocks.vtu"),
-      vtp(dir / "target.vtp"), summary(dir / "summary.json");
-
-  std::unique_ptr<tbb::global_control> thread_limit;
-  if (args.threads > 0) {
-    thread_limit = std::make_unique<tbb::global_control>(
-        tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(args.threads));
-  }
-  const FieldProblem problem = fieldProblem(scene, spec);
-  const FacetIntegrator& integrator = problem.integrator;
-
-  WorkCounter counter;
-  std::unique_ptr<ObserverField> field;
-  {
-    std::unique_ptr<ProgressReporter> progress;
-    if (!args.quiet) {
-      progress = std::make_unique<ProgressReporter>(err, args.terminal, "points", 0, counter);
-    }
-    field = std::make_unique<ObserverField>(
-        args.uniform ? computeDenseField(integrator, spec, problem.excluded, &counter)
-                     : computeField(integrator, spec, problem.excluded, &counter));
-  }
-
-  RunInfo info;
-  info.program_version = std::string("glint ") + GLINT_VERSION;
-  info.scene_file = args.scene_path;
-  info.scene_fnv1a64 = fnv1a64(readBytes(args.scene_path));
-  info.scheme = args.uniform ? "uniform" : "adaptive";
-  info.wavelength_nm = scene.laser.wavelength_nm;
-  info.power_w = scene.laser.power_w;
-  info.exposure_s = scene.hazard.exposure_s;
-  info.mpe_w_m2 = scene.hazard.mpe.irradiance_w_m2;
-  info.mpe_rule = mpeCitation(scene.hazard.mpe);
-
-  writeVdb(vdb.stream(), *field, info);
-  writeVti(vti.stream(), *field, vtiStride(spec), info.mpe_w_m2);
-  writeBlocksVtu(vtu.stream(), *field, info.mpe_w_m2);
-  writeTargetVtp(vtp.stream(), integrator, 2);
-  const HazardZone zone = hazardZone(*field, scene, integrator.target());
-  nlohmann::json j = summaryJson(*field, info, integrator.cullStats());
-  j["hazard"] = hazardJson(scene, zone);
-  summary.stream() << j.dump(2) << "\n";
-  for (AtomicFile* f : {&vdb, &vti, &vtu, &vtp, &summary}) f->commit();
-
-  if (args.quiet) return;
-  const FieldStats& s = field->stats();
+// The one-screen summary of the volume.
+void printVolume(std::ostream& err, const ObserverField& field, const Scene& scene,
+                 const HazardZone& zone, const RunInfo& info, bool uniform) {
+  const FieldSpec& spec = field.spec();
+  const FieldStats& s = field.stats();
   const double box_points = static_cast<double>(s.lattice_points);
   err << "glint run: " << info.scheme << ", " << s.nodes[0] << "×" << s.nodes[1] << "×"
       << s.nodes[2] << " lattice points at " << spec.voxel_m << " m, tolerance " << spec.tolerance
@@ -247,7 +196,7 @@ void runField(const RunArgs& args, std::ostream& err) {
       << formatNumber("%.3g", 100.0 * static_cast<double>(s.evaluated_points) / box_points)
       << " %), " << s.interpolated_points << " interpolated, " << s.below_floor_points
       << " proven below the floor, " << s.excluded_points << " inside the target\n";
-  if (!args.uniform) {
+  if (!uniform) {
     err << "  blocks: " << s.blocks_skipped << " skipped, " << s.blocks_accepted << " accepted ("
         << s.blocks_accepted_spread << " as E·r or E·r²), "
         << s.blocks_refined << " refined, " << s.blocks_finest << " at the finest level ("
@@ -287,8 +236,190 @@ void runField(const RunArgs& args, std::ostream& err) {
                                                         static_cast<double>(s.active_voxels)
                                                   : 0.0)
       << " bytes per active voxel\n";
-  err << "  wrote " << dir.string() << "/{irradiance.vdb, irradiance.vti, blocks.vtu, target.vtp, "
-      << "summary.json}\n";
+}
+
+// Computes one observer region (the box or a plane) with its own integrator settings, with
+// progress on stderr unless quiet.
+struct RegionResult {
+  FieldProblem problem;
+  std::unique_ptr<ObserverField> field;
+};
+
+RegionResult computeRegion(const Scene& scene, const FieldSpec& spec, const RunArgs& args,
+                           const char* what, std::ostream& err) {
+  RegionResult r{fieldProblem(scene, spec), nullptr};
+  WorkCounter counter;
+  std::unique_ptr<ProgressReporter> progress;
+  if (!args.quiet) progress = std::make_unique<ProgressReporter>(err, args.terminal, what, 0, counter);
+  r.field = std::make_unique<ObserverField>(
+      args.uniform ? computeDenseField(r.problem.integrator, spec, r.problem.excluded, &counter)
+                   : computeField(r.problem.integrator, spec, r.problem.excluded, &counter));
+  return r;
+}
+
+// A plane's field as an EXR map: lattice row j along v, column i along u.
+PlaneMap planeMap(const ObserverField& field, double mpe_w_m2) {
+  const FieldSpec& spec = field.spec();
+  const auto n = spec.nodes();
+  PlaneMap m;
+  m.width = n[0];
+  m.height = n[1];
+  m.origin_m = spec.min_m;
+  m.u_axis = spec.axes[0];
+  m.v_axis = spec.axes[1];
+  m.pixel_m = spec.voxel_m;
+  const std::size_t count = static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]);
+  for (auto* channel : {&m.irradiance_w_m2, &m.hazard_ratio, &m.level, &m.status})
+    channel->reserve(count);
+  for (int j = 0; j < n[1]; ++j)
+    for (int i = 0; i < n[0]; ++i) {
+      const double e = field.irradiance(i, j, 0);
+      m.irradiance_w_m2.push_back(static_cast<float>(e));
+      m.hazard_ratio.push_back(static_cast<float>(e / mpe_w_m2));
+      m.level.push_back(static_cast<float>(field.level(i, j, 0)));
+      m.status.push_back(static_cast<float>(static_cast<int>(field.status(i, j, 0))));
+    }
+  return m;
+}
+
+nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field, const Scene& scene,
+                         const Vec3& target_centre_m) {
+  const FieldStats& s = field.stats();
+  const FieldSpec& spec = field.spec();
+  const double mpe = scene.hazard.mpe.irradiance_w_m2;
+  const ObserverField::Region zone = field.regionAbove(mpe, target_centre_m);
+  nlohmann::json j = {{"name", plane.name},
+                      {"file", plane.name + ".exr"},
+                      {"pixels", {s.nodes[0], s.nodes[1]}},
+                      {"pixel_m", spec.voxel_m},
+                      {"tolerance", spec.tolerance},
+                      {"floor_w_m2", spec.floor_w_m2},
+                      {"points", {{"evaluated", s.evaluated_points},
+                                  {"interpolated", s.interpolated_points},
+                                  {"proven_below_floor", s.below_floor_points},
+                                  {"inside_target", s.excluded_points},
+                                  {"unconverged", s.unconverged_points}}},
+                      {"evaluations", s.evaluations},
+                      {"seconds", s.seconds},
+                      {"peak_irradiance_w_m2", s.peak_w_m2},
+                      {"peak_at_m", {s.peak_at_m.x, s.peak_at_m.y, s.peak_at_m.z}},
+                      {"peak_hazard_ratio", s.peak_w_m2 / mpe},
+                      {"hazardous_area_m2",
+                       static_cast<double>(zone.points) * spec.voxel_m * spec.voxel_m}};
+  if (zone.points > 0) {
+    j["hazard_farthest_from_target_m"] = zone.farthest_m;
+    j["hazard_farthest_at_m"] = {zone.farthest_at_m.x, zone.farthest_at_m.y, zone.farthest_at_m.z};
+  }
+  return j;
+}
+
+}  // namespace
+
+void runField(const RunArgs& args, std::ostream& err) {
+  const Scene scene = loadScene(args.scene_path);
+  if (!scene.observers && scene.planes.empty()) {
+    throw InputError(scene.source +
+                     ": /observers: missing (glint run needs an observer box or `planes`)");
+  }
+  std::filesystem::path dir = args.out_dir;
+  if (dir.empty()) {
+    dir = std::filesystem::path("out") / (std::filesystem::path(args.scene_path).stem().string() +
+                                          (args.uniform ? "_uniform" : ""));
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw OutputError(dir.string() + ": cannot create the output folder: " + ec.message());
+  // Opened before the work, so an unwritable folder stops the run at once.
+  std::vector<std::unique_ptr<AtomicFile>> files;
+  auto open = [&](const std::string& name) -> AtomicFile& {
+    files.push_back(std::make_unique<AtomicFile>(dir / name));
+    return *files.back();
+  };
+  AtomicFile& summary = open("summary.json");
+  std::vector<std::string> written = {"summary.json"};
+  AtomicFile *vdb = nullptr, *vti = nullptr, *vtu = nullptr, *vtp = nullptr;
+  if (scene.observers) {
+    vdb = &open("irradiance.vdb");
+    vti = &open("irradiance.vti");
+    vtu = &open("blocks.vtu");
+    vtp = &open("target.vtp");
+    written.insert(written.end(), {"irradiance.vdb", "irradiance.vti", "blocks.vtu", "target.vtp"});
+  }
+  std::vector<AtomicFile*> exrs;
+  for (const PlaneSpec& plane : scene.planes) {
+    exrs.push_back(&open(plane.name + ".exr"));
+    written.push_back(plane.name + ".exr");
+  }
+
+  std::unique_ptr<tbb::global_control> thread_limit;
+  if (args.threads > 0) {
+    thread_limit = std::make_unique<tbb::global_control>(
+        tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(args.threads));
+  }
+
+  RunInfo info;
+  info.program_version = std::string("glint ") + GLINT_VERSION;
+  info.scene_file = args.scene_path;
+  info.scene_fnv1a64 = fnv1a64(readBytes(args.scene_path));
+  info.scheme = args.uniform ? "uniform" : "adaptive";
+  info.wavelength_nm = scene.laser.wavelength_nm;
+  info.power_w = scene.laser.power_w;
+  info.exposure_s = scene.hazard.exposure_s;
+  info.mpe_w_m2 = scene.hazard.mpe.irradiance_w_m2;
+  info.mpe_rule = mpeCitation(scene.hazard.mpe);
+
+  nlohmann::json j;
+  if (scene.observers) {
+    const FieldSpec spec = fieldSpec(scene);
+    const RegionResult box = computeRegion(scene, spec, args, "points", err);
+    const ObserverField& field = *box.field;
+    const FacetIntegrator& integrator = box.problem.integrator;
+    writeVdb(vdb->stream(), field, info);
+    writeVti(vti->stream(), field, vtiStride(spec), info.mpe_w_m2);
+    writeBlocksVtu(vtu->stream(), field, info.mpe_w_m2);
+    writeTargetVtp(vtp->stream(), integrator, 2);
+    const HazardZone zone = hazardZone(field, scene, integrator.target());
+    j = summaryJson(field, info, integrator.cullStats());
+    j["hazard"] = hazardJson(scene, &zone);
+    if (!args.quiet) printVolume(err, field, scene, zone, info, args.uniform);
+  } else {
+    j = {{"program", info.program_version},
+         {"scene_file", info.scene_file},
+         {"scene_fnv1a64", info.scene_fnv1a64},
+         {"scheme", info.scheme}};
+    j["hazard"] = hazardJson(scene, nullptr);
+  }
+
+  if (!scene.planes.empty()) {
+    const Vec3 centre = targetCentre(buildTarget(scene));
+    nlohmann::json planes = nlohmann::json::array();
+    for (std::size_t p = 0; p < scene.planes.size(); ++p) {
+      const PlaneSpec& plane = scene.planes[p];
+      const FieldSpec spec = planeFieldSpec(scene, plane);
+      const RegionResult r = computeRegion(scene, spec, args, plane.name.c_str(), err);
+      writeExr(exrs[p]->stream(), planeMap(*r.field, info.mpe_w_m2),
+               {info.program_version, info.wavelength_nm, info.mpe_w_m2});
+      planes.push_back(planeJson(plane, *r.field, scene, centre));
+      if (!args.quiet) {
+        const nlohmann::json& pj = planes.back();
+        const auto n = spec.nodes();
+        err << "plane " << plane.name << ": " << n[0] << "×" << n[1] << " pixels at "
+            << spec.voxel_m << " m, " << r.field->stats().evaluated_points << " evaluated, "
+            << formatNumber("%.4g", static_cast<double>(r.field->stats().evaluations))
+            << " evaluations in " << formatDuration(r.field->stats().seconds)
+            << "; peak hazard ratio "
+            << formatNumber("%.3g", pj["peak_hazard_ratio"].get<double>()) << ", hazardous area "
+            << formatNumber("%.4g", pj["hazardous_area_m2"].get<double>()) << " m²\n";
+      }
+    }
+    j["planes"] = planes;
+  }
+  summary.stream() << j.dump(2) << "\n";
+  for (const auto& f : files) f->commit();
+  if (args.quiet) return;
+  std::string list;
+  for (const std::string& w : written) list += (list.empty() ? "" : ", ") + w;
+  err << "  wrote " << dir.string() << "/{" << list << "}\n";
 }
 
 }  // namespace glint

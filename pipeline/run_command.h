@@ -1,6 +1,7 @@
 #pragma once
 /// @file
-/// @brief `glint run`: the adaptive hazard volume over the scene's observer box (the main job).
+/// @brief `glint run`: the adaptive hazard volume over the scene's observer box (the main job)
+/// and the maps over its observer planes.
 
 #include <ostream>
 #include <string>
@@ -17,8 +18,9 @@ struct RunArgs {
   bool terminal = false;
 };
 
-/// @brief Runs the command: writes irradiance.vdb, irradiance.vti, blocks.vtu, target.vtp and
-/// summary.json into the output folder, each whole or not at all.
+/// @brief Runs the command: writes irradiance.vdb, irradiance.vti, blocks.vtu and target.vtp
+/// for the box, `<name>.exr` for each plane, and summary.json into the output folder, each
+/// whole or not at all.
 /// @throw InputError, OutputError on bad input or an unwritable folder.
 void runField(const RunArgs& args, std::ostream& err);
 

@@ -1,6 +1,7 @@
 #include "pipeline/scene.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -335,6 +336,19 @@ AccuracySpec readAccuracy(ObjectReader r) {
   return a;
 }
 
+// A coarsest block of `block_key`: `lattice_m` times a power of two (default 16).
+double blockSize(ObjectReader& r, const char* block_key, const char* lattice_key,
+                 double lattice_m) {
+  const double block_m = r.number(block_key, 16.0 * lattice_m);
+  const double ratio = block_m / lattice_m;
+  const double power = std::round(std::log2(ratio));
+  if (!(ratio >= 1.0) || std::abs(ratio - std::exp2(power)) > 1e-9 * ratio || power > 12) {
+    r.fail(block_key, std::string("must be ") + lattice_key +
+                          " times a power of two (1, 2, 4, ..., 4096)");
+  }
+  return lattice_m * std::exp2(power);
+}
+
 ObserversSpec readObservers(ObjectReader r) {
   ObserversSpec o;
   o.min_m = r.vec3("min");
@@ -348,13 +362,7 @@ ObserversSpec readObservers(ObjectReader r) {
   // Bounds the lattice (and the dense twin) to what a 32-bit OpenVDB index and memory allow.
   if (longest / o.voxel_m > 65536.0)
     r.fail("voxel_m", "gives more than 65536 voxels along an axis");
-  o.block_m = r.number("block_m", 16.0 * o.voxel_m);
-  const double ratio = o.block_m / o.voxel_m;
-  const double power = std::round(std::log2(ratio));
-  if (!(ratio >= 1.0) || std::abs(ratio - std::exp2(power)) > 1e-9 * ratio || power > 12) {
-    r.fail("block_m", "must be voxel_m times a power of two (1, 2, 4, ..., 4096)");
-  }
-  o.block_m = o.voxel_m * std::exp2(power);
+  o.block_m = blockSize(r, "block_m", "voxel_m", o.voxel_m);
   o.tolerance = r.number("tolerance", o.tolerance);
   if (!(o.tolerance > 0.0 && o.tolerance < 1.0)) r.fail("tolerance", "must be in (0, 1)");
   if (auto floor = r.optionalNumber("floor_w_m2")) {
@@ -363,6 +371,49 @@ ObserversSpec readObservers(ObjectReader r) {
   }
   r.finish();
   return o;
+}
+
+PlaneSpec readPlane(ObjectReader r, const std::vector<PlaneSpec>& earlier) {
+  PlaneSpec p;
+  p.name = r.string("name");
+  const bool safe = !p.name.empty() && p.name.size() <= 64 &&
+                    std::all_of(p.name.begin(), p.name.end(), [](char c) {
+                      return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' ||
+                             c == '-';
+                    });
+  if (!safe) r.fail("name", "must be 1 to 64 letters, digits, '_' or '-' (it names the .exr file)");
+  for (const PlaneSpec& e : earlier) {
+    if (e.name == p.name) r.fail("name", "\"" + p.name + "\" names two planes");
+  }
+  p.origin_m = r.vec3("origin");
+  p.u_axis = r.direction("u_axis");
+  p.v_axis = r.direction("v_axis");
+  if (!(std::abs(glm::dot(p.u_axis, p.v_axis)) <= 1e-6)) {
+    r.fail("v_axis", "must be perpendicular to u_axis");
+  }
+  // Exactly perpendicular from here on: the lattice's axes must be orthonormal.
+  p.v_axis = glm::normalize(p.v_axis - glm::dot(p.v_axis, p.u_axis) * p.u_axis);
+  const json& size = r.require("size_m");
+  if (!size.is_array() || size.size() != 2 || !size[0].is_number() || !size[1].is_number())
+    r.fail("size_m", "must be an array of 2 numbers (extent along u_axis, along v_axis)");
+  p.width_m = size[0].get<double>();
+  p.height_m = size[1].get<double>();
+  if (!(p.width_m > 0.0 && p.height_m > 0.0 && std::isfinite(p.width_m) &&
+        std::isfinite(p.height_m))) {
+    r.fail("size_m", "must be finite and > 0");
+  }
+  p.pixel_m = positive(r, "pixel_m", r.number("pixel_m"));
+  if (std::max(p.width_m, p.height_m) / p.pixel_m > 65536.0)
+    r.fail("pixel_m", "gives more than 65536 pixels along an axis");
+  p.block_m = blockSize(r, "block_m", "pixel_m", p.pixel_m);
+  p.tolerance = r.number("tolerance", p.tolerance);
+  if (!(p.tolerance > 0.0 && p.tolerance < 1.0)) r.fail("tolerance", "must be in (0, 1)");
+  if (auto floor = r.optionalNumber("floor_w_m2")) {
+    if (!(*floor > 0.0)) r.fail("floor_w_m2", "must be > 0");
+    p.floor_w_m2 = *floor;
+  }
+  r.finish();
+  return p;
 }
 
 }  // namespace
@@ -410,6 +461,14 @@ Scene parseScene(std::string_view text, const std::string& source) {
 
   if (r.has("accuracy")) scene.accuracy = readAccuracy(r.object("accuracy"));
   if (r.has("observers")) scene.observers = readObservers(r.object("observers"));
+  if (r.has("planes")) {
+    const json& planes = r.require("planes");
+    if (!planes.is_array()) r.fail("planes", "must be an array of planes");
+    for (std::size_t i = 0; i < planes.size(); ++i) {
+      scene.planes.push_back(readPlane(
+          ObjectReader(planes[i], "/planes/" + std::to_string(i), source), scene.planes));
+    }
+  }
   r.finish();
   return scene;
 }

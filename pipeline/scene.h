@@ -70,6 +70,21 @@ struct ObserversSpec {
   std::optional<double> floor_w_m2;  ///< default: 1e-3 × the MPE (HazardSpec)
 };
 
+/// @brief A plane of observers (key `planes/<i>`): a ground plane, a slice at eye height, a
+/// wall. Lattice point (i, j) lies at origin_m + pixel_m (i u_axis + j v_axis).
+struct PlaneSpec {
+  std::string name;  ///< names the output `<name>.exr`: letters, digits, '_' and '-'
+  Vec3 origin_m{0.0};
+  Vec3 u_axis{1.0, 0.0, 0.0};  ///< unit
+  Vec3 v_axis{0.0, 1.0, 0.0};  ///< unit, perpendicular to u_axis
+  double width_m = 0.0;        ///< extent along u_axis
+  double height_m = 0.0;       ///< extent along v_axis
+  double pixel_m = 0.0;
+  double block_m = 0.0;  ///< coarsest square block: pixel_m × a power of two (default 16 px)
+  double tolerance = 1e-2;
+  std::optional<double> floor_w_m2;  ///< default: 1e-3 × the MPE
+};
+
 /// @brief The exposure the hazard is judged for and its MPE (README "Hazard").
 struct HazardSpec {
   /// `laser.exposure_s`, by default 0.25 s (the aversion response) for 400–700 nm and 10 s
@@ -88,7 +103,8 @@ struct Scene {
   std::vector<MaterialSpec> materials;
   std::vector<ObjectSpec> objects;
   AccuracySpec accuracy;
-  std::optional<ObserversSpec> observers;  ///< required by `glint run` only
+  std::optional<ObserversSpec> observers;  ///< `glint run` needs this or planes
+  std::vector<PlaneSpec> planes;
 };
 
 /// @brief Reads and validates a scene file.

@@ -70,6 +70,19 @@ FieldSpec fieldSpec(const Scene& scene) {
   return f;
 }
 
+FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane) {
+  FieldSpec f;
+  f.plane = true;
+  f.axes = {plane.u_axis, plane.v_axis, glm::cross(plane.u_axis, plane.v_axis)};
+  f.min_m = plane.origin_m;
+  f.max_m = plane.origin_m + plane.width_m * plane.u_axis + plane.height_m * plane.v_axis;
+  f.voxel_m = plane.pixel_m;
+  f.block_voxels = static_cast<int>(std::lround(plane.block_m / plane.pixel_m));
+  f.tolerance = plane.tolerance;
+  f.floor_w_m2 = plane.floor_w_m2 ? *plane.floor_w_m2 : 1e-3 * scene.hazard.mpe.irradiance_w_m2;
+  return f;
+}
+
 IntegratorOptions fieldIntegratorOptions(const Scene& scene, const FieldSpec& field) {
   IntegratorOptions o = integratorOptions(scene);
   o.tolerance = 0.25 * field.tolerance;

@@ -19,10 +19,14 @@ Target buildTarget(const Scene& scene);
 /// irradiance, far below any exposure limit yet scaled to the scene.
 IntegratorOptions integratorOptions(const Scene& scene);
 
-/// @brief The observer box of the scene's `observers` section; the floor defaults to 1e-6 ×
-/// the beam's peak irradiance.
+/// @brief The observer box of the scene's `observers` section; the floor defaults to 1e-3 ×
+/// the MPE.
 /// @throw InputError when the scene has no `observers` section.
 FieldSpec fieldSpec(const Scene& scene);
+
+/// @brief The lattice of one of the scene's observer planes (axes u, v, u × v; one layer);
+/// the floor defaults to 1e-3 × the MPE.
+FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane);
 
 /// @brief Integrator settings for the points of an observer field: the scene's accuracy
 /// settings, with the tolerance and floor a quarter of the field's, so that the integration

@@ -47,6 +47,7 @@ TEST(ExrMap, ChannelsAreFloatAndKeepValuesBeyondHalfRange) {
   map.irradiance_w_m2 = {1.5e6f, 2.0f, 3e-9f, 4.0f, 70000.0f, 6.0f};
   for (float e : map.irradiance_w_m2) map.hazard_ratio.push_back(e / 25.0f);
   map.level = {0, 1, 2, 3, 4, 5};
+  map.status = {1, 2, 3, 1, 1, 5};
   std::ostringstream out;
   writeExr(out, map, {"glint test", 532.0, 25.0});
 
@@ -56,12 +57,12 @@ TEST(ExrMap, ChannelsAreFloatAndKeepValuesBeyondHalfRange) {
   const Imath::Box2i window = h.dataWindow();
   ASSERT_EQ(window.max.x - window.min.x + 1, 3);
   ASSERT_EQ(window.max.y - window.min.y + 1, 2);
-  for (const char* name : {"irradiance_w_m2", "hazard_ratio", "level"}) {
+  for (const char* name : {"irradiance_w_m2", "hazard_ratio", "level", "status"}) {
     const Imf::Channel* c = h.channels().findChannel(name);
     ASSERT_NE(c, nullptr) << name;
     EXPECT_EQ(c->type, Imf::FLOAT) << name << ": never HALF";
   }
-  std::vector<float> irradiance(6), ratio(6), level(6);
+  std::vector<float> irradiance(6), ratio(6), level(6), status(6);
   Imf::FrameBuffer frame;
   frame.insert("irradiance_w_m2", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(irradiance.data()),
                                              sizeof(float), 3 * sizeof(float)));
@@ -69,6 +70,8 @@ TEST(ExrMap, ChannelsAreFloatAndKeepValuesBeyondHalfRange) {
                                           sizeof(float), 3 * sizeof(float)));
   frame.insert("level", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(level.data()),
                                    sizeof(float), 3 * sizeof(float)));
+  frame.insert("status", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(status.data()),
+                                    sizeof(float), 3 * sizeof(float)));
   file.setFrameBuffer(frame);
   file.readPixels(window.min.y, window.max.y);
   // The top image row is the plane's highest v (lattice row 1).
@@ -79,6 +82,7 @@ TEST(ExrMap, ChannelsAreFloatAndKeepValuesBeyondHalfRange) {
       EXPECT_EQ(irradiance[image], map.irradiance_w_m2[lattice]) << "bit for bit, " << i << "," << y;
       EXPECT_EQ(ratio[image], map.hazard_ratio[lattice]) << i << "," << y;
       EXPECT_EQ(level[image], map.level[lattice]) << i << "," << y;
+      EXPECT_EQ(status[image], map.status[lattice]) << i << "," << y;
     }
   const auto* origin = h.findTypedAttribute<Imf::V3dAttribute>("glint_origin_m");
   ASSERT_NE(origin, nullptr);
@@ -104,6 +108,7 @@ TEST(ExrMap, RefusesChannelsOfTheWrongSize) {
   map.irradiance_w_m2 = {1, 2, 3};
   map.hazard_ratio = {1, 2, 3, 4};
   map.level = {1, 2, 3, 4};
+  map.status = {1, 1, 1, 1};
   std::ostringstream out;
   EXPECT_THROW(writeExr(out, map, {}), std::invalid_argument) << "3 irradiance values for 4 points";
 }

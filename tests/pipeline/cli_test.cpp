@@ -1,7 +1,14 @@
 #include "pipeline/cli.h"
 
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+
+#include <algorithm>
+#include <nlohmann/json.hpp>
 
 #include <cstdlib>
 #include <filesystem>
@@ -163,6 +170,52 @@ TEST_F(CliTest, UniformOptionRunsTheUniformTwin) {
   for (std::string c; std::getline(cs, c, ',');) cells.push_back(c);
   ASSERT_EQ(cells.size(), 7u) << line;
   EXPECT_EQ(std::stol(cells[5]) % 16, 0) << line;
+}
+
+TEST_F(CliTest, RunWritesEachPlaneAsAnExrMapAndSummarisesIt) {
+  // Planes only: a tilted wall across the narrow pencil of examples/disk_glint.json.
+  const std::string scene = write("wall.json", R"({
+    "laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "power_w": 1000.0,
+              "wavelength_nm": 1064, "exposure_s": 0.25,
+              "beam": {"profile": "flat_top", "radius_m": 0.5}},
+    "materials": {"mirror": {"specular_reflectance": 0.9, "sigma": 0.001}},
+    "objects": [{"shape": "disk", "center": [0.3, 0, 0.3], "normal": [-1, 1, 0], "radius": 0.05,
+                 "material": "mirror", "segments": 8}],
+    "planes": [{"name": "wall", "origin": [-1, 1.7, -0.6], "u_axis": [1, 0, 0],
+                "v_axis": [0, 0.6, 0.8], "size_m": [2, 2], "pixel_m": 0.0625, "block_m": 0.5,
+                "floor_w_m2": 1e-3}]})");
+  const Outcome r = glint({"run", scene, "-o", path("out"), "--quiet"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_FALSE(fs::exists(path("out/irradiance.vdb"))) << "no box, no volume";
+  const auto summary = nlohmann::json::parse(readFile(path("out/summary.json")));
+  const auto& plane = summary.at("planes").at(0);
+  EXPECT_EQ(plane.at("file"), "wall.exr");
+  const double mpe = summary.at("hazard").at("mpe_w_m2").get<double>();
+
+  Imf::InputFile file(path("out/wall.exr").c_str());
+  const Imath::Box2i w = file.header().dataWindow();
+  const int width = w.max.x - w.min.x + 1, height = w.max.y - w.min.y + 1;
+  ASSERT_EQ(width, 33);
+  ASSERT_EQ(height, 33);
+  std::vector<float> e(static_cast<std::size_t>(width * height)), ratio(e.size()), status(e.size());
+  Imf::FrameBuffer frame;
+  const std::size_t row = sizeof(float) * static_cast<std::size_t>(width);
+  frame.insert("irradiance_w_m2", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(e.data()),
+                                             sizeof(float), row));
+  frame.insert("hazard_ratio", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(ratio.data()),
+                                          sizeof(float), row));
+  frame.insert("status", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(status.data()),
+                                    sizeof(float), row));
+  file.setFrameBuffer(frame);
+  file.readPixels(w.min.y, w.max.y);
+  const double peak = *std::max_element(e.begin(), e.end());
+  EXPECT_NEAR(peak, plane.at("peak_irradiance_w_m2").get<double>(), 1e-6 * peak)
+      << "the map holds the summary's peak";
+  EXPECT_NEAR(*std::max_element(ratio.begin(), ratio.end()), peak / mpe, 1e-6 * peak / mpe);
+  EXPECT_GT(plane.at("peak_hazard_ratio").get<double>(), 1.0) << "the pencil is hazardous";
+  EXPECT_GT(plane.at("hazardous_area_m2").get<double>(), 0.0);
+  const auto below = std::count(status.begin(), status.end(), 3.0f);
+  EXPECT_GT(below, width * height / 2) << "most of the wall proven below the floor, and marked";
 }
 
 TEST_F(CliTest, TheBuiltCommandExitsTwoOnBadInput) {

@@ -201,6 +201,47 @@ TEST(SceneHazard, ExposureDefaultsToTheAversionResponseInTheVisibleAndTenSeconds
   EXPECT_EQ(s.hazard.exposure_s, 1.0) << "the file's value";
 }
 
+TEST(ScenePlanes, PlaneLoadsWithDefaultsAndRefusesBadValues) {
+  json j = minimal();
+  j["planes"] = json::parse(R"([{"name": "ground", "origin": [-5, -5, -1.5],
+      "u_axis": [2, 0, 0], "v_axis": [0, 3, 0], "size_m": [10, 8], "pixel_m": 0.1}])");
+  const Scene scene = parseScene(j.dump(), "scene.json");
+  ASSERT_EQ(scene.planes.size(), 1u);
+  const PlaneSpec& p = scene.planes[0];
+  EXPECT_EQ(p.name, "ground");
+  EXPECT_EQ(p.u_axis, Vec3(1, 0, 0)) << "normalised";
+  EXPECT_EQ(p.v_axis, Vec3(0, 1, 0));
+  EXPECT_NEAR(p.block_m, 1.6, 1e-12) << "16 pixels by default";
+  EXPECT_EQ(p.tolerance, 0.01);
+  const FieldSpec spec = planeFieldSpec(scene, p);
+  EXPECT_TRUE(spec.plane);
+  // 10 m and 8 m at 0.1 m: 100 and 80 pixels, rounded up to whole 16-pixel blocks; one layer.
+  EXPECT_EQ(spec.nodes(), (std::array<int, 3>{113, 81, 1}));
+  EXPECT_EQ(spec.axes[2], Vec3(0, 0, 1)) << "u × v";
+  EXPECT_NEAR(spec.floor_w_m2, 1e-3 * 90.0 * std::pow(0.25, -0.25), 1e-12) << "1e-3 × MPE";
+
+  auto refused = [&](const char* key, const json& value) {
+    json bad = j;
+    bad["planes"][0][key] = value;
+    return refusal(bad);
+  };
+  EXPECT_EQ(refused("name", "a/b").rfind("scene.json: /planes/0/name: must be 1 to 64 letters", 0),
+            0u)
+      << refused("name", "a/b");
+  EXPECT_EQ(refused("v_axis", json::array({1, 1, 0})),
+            "scene.json: /planes/0/v_axis: must be perpendicular to u_axis");
+  EXPECT_EQ(refused("size_m", json::array({10})).rfind("scene.json: /planes/0/size_m: must be", 0),
+            0u);
+  EXPECT_EQ(refused("size_m", json::array({10, -1})),
+            "scene.json: /planes/0/size_m: must be finite and > 0");
+  EXPECT_EQ(refused("block_m", 0.3),
+            "scene.json: /planes/0/block_m: must be pixel_m times a power of two (1, 2, 4, ..., "
+            "4096)");
+  json twice = j;
+  twice["planes"].push_back(twice["planes"][0]);
+  EXPECT_EQ(refusal(twice), "scene.json: /planes/1/name: \"ground\" names two planes");
+}
+
 TEST(SceneObservers, BoxLoadsWithDefaultsAndRefusesBadValues) {
   json j = minimal();
   j["observers"] = json::parse(R"({"min": [-1, -1, -1], "max": [1, 2, 3], "voxel_m": 0.1})");
