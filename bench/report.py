@@ -121,6 +121,15 @@ def facet_sections(out):
                 continue
             curves.append((sigma, normals, data))
             lines += [f"#### sigma = {sigma}, {normals} normals", ""]
+            log = os.path.join(out, f"facets_sigma{sigma}_{normals}.log")
+            if os.path.exists(log):
+                with open(log) as f:
+                    ref = [l.strip() for l in f if l.startswith("reference:")]
+                if ref:
+                    what = ref[-1][len("reference:"):].strip()
+                    caveat = (": errors no larger than that change cannot be told apart from the "
+                              "reference's own" if "change" in what else "")
+                    lines += [f"Reference: {what}{caveat}.", ""]
             lines += table_head("scheme", "tolerance / level", "evaluations per observer",
                                 "time (s)", "max error", "RMS error", "unconverged")
             for r in data:
@@ -150,8 +159,8 @@ def facet_sections(out):
     return lines
 
 
-def field_section(out):
-    data = rows(os.path.join(out, "field.csv"))
+def field_section(out, name="field.csv", plot=True):
+    data = rows(os.path.join(out, name))
     if not data:
         return ["No observer-field results."]
     lines = table_head("scene", "voxel (m)", "tolerance", "points",
@@ -171,6 +180,8 @@ def field_section(out):
             f"{float(r['volume_ratio_10pct']):.4f}, {float(r['volume_ratio_50pct']):.4f} | "
             + (f"{g(r['dense_volume_above_mpe_m3'])}, {float(r['volume_ratio_mpe']):.4f} |"
                if r.get("volume_ratio_mpe") else "not measured |"))
+    if not plot:
+        return lines
     lines += ["", "How cost grows as the finest voxel halves (tolerance 0.01; dense grows about 8x):", ""]
     for scene in sorted({r["scene"] for r in data}):
         pts = sorted(((float(r["voxel_m"]), float(r["adaptive_evaluations"]),
@@ -219,6 +230,15 @@ def main():
              "Allowed error: tolerance x peak + floor. Peak RSS is the process's resident set "
              "during the adaptive field (the dense twin's grids included).", ""]
     text += field_section(out) + [""]
+    # Further runs of glint_field_bench beside the suite's (field_<what>.csv), each its own table.
+    for extra in sorted(f for f in os.listdir(out) if f.startswith("field_") and f.endswith(".csv")
+                        and f != "field_row.csv"):
+        text += [f"### `{extra}`", ""]
+        about = os.path.join(out, extra[:-4] + ".md")  # what produced it, written beside it
+        if os.path.exists(about):
+            with open(about) as f:
+                text += [f.read().strip(), ""]
+        text += field_section(out, extra, plot=False) + [""]
     with open(report, "w") as f:
         f.write("\n".join(text))
 

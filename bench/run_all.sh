@@ -14,6 +14,7 @@ build=${BUILD:-build}
 out=${OUT:-build/bench-results}
 quick=0
 [[ "${1:-}" == "--quick" ]] && quick=1
+command="bash bench/run_all.sh $*"
 mkdir -p "$out"
 cmake --build "$build" --target glint_kernel_bench glint_sweep glint_field_bench >/dev/null
 
@@ -35,9 +36,11 @@ for case in "cylinder 0.003" "cylinder_broad 0.03"; do
     levels=2,3,4,5,6,7
     [[ $2 == 0.003 ]] && { reference=(--reference-tolerance 1e-7); levels=2,3,4,5,6,7,8; }
     [[ $quick == 1 ]] && { [[ $2 == 0.03 ]] && reference=(--reference-level 7); levels=3,5; }
+    # The sweep's log names the reference and how settled it is: the report quotes it.
     "$build/glint_sweep" "examples/$1.json" examples/cylinder_186.csv "${reference[@]}" \
       --tolerances "$tolerances" --levels "$levels" --normals "$normals" \
-      --out "$out/facets_sigma$2_$normals.csv"
+      --out "$out/facets_sigma$2_$normals.csv" 2>&1 |
+      tee "$out/facets_sigma$2_$normals.log" >&2
   done
 done
 
@@ -67,4 +70,4 @@ else
 fi
 
 echo "== report" >&2
-/usr/bin/python3 bench/report.py "$out" bench/RESULTS.md "bash bench/run_all.sh $*"
+/usr/bin/python3 bench/report.py "$out" bench/RESULTS.md "$command"
