@@ -679,7 +679,12 @@ ObserverField::Region ObserverField::regionAbove(double threshold_w_m2,
   Region r;
   r.min_m = Vec3(std::numeric_limits<double>::infinity());
   r.max_m = -r.min_m;
+  const auto n = spec_.nodes();
   const auto add = [&](const openvdb::Coord& c) {
+    for (int a = 0; a < 3; ++a) {
+      const auto last = n[static_cast<std::size_t>(a)] - 1;
+      r.reaches_edge = r.reaches_edge || (last > 0 && (c[a] == 0 || c[a] == last));
+    }
     const Vec3 x = spec_.position(c.x(), c.y(), c.z());
     r.min_m = glm::min(r.min_m, x);
     r.max_m = glm::max(r.max_m, x);

@@ -137,6 +137,9 @@ class ObserverField {
     Vec3 max_m{0.0};
     double farthest_m = 0.0;  ///< the largest distance of such a point from `from_m`
     Vec3 farthest_at_m{0.0};
+    /// Some such point lies on the lattice's outer layer (a plane's normal aside): the region
+    /// may go on beyond the box or plane.
+    bool reaches_edge = false;
   };
   /// @brief The lattice points whose irradiance is at least @p threshold_w_m2, with their
   /// box and the farthest of them from @p from_m.

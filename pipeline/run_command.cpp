@@ -69,29 +69,16 @@ Vec3 targetCentre(const Target& target) {
   return target.facetCount() > 0 ? 0.5 * (lo + hi) : Vec3(0.0);
 }
 
-// The nominal hazard zone: where irradiance ≥ MPE (hazard ratio ≥ 1).
+// The nominal hazard zone: where irradiance ≥ MPE (hazard ratio ≥ 1), in a box or on a plane.
 struct HazardZone {
   double peak_ratio = 0.0;
-  ObserverField::Region region;
+  ObserverField::Region region;  ///< measured from the target's centre
   Vec3 target_centre_m{0.0};
-  bool reaches_box_edge = false;  ///< then the zone may go on beyond the box
 };
 
-HazardZone hazardZone(const ObserverField& field, const Scene& scene, const Target& target) {
-  HazardZone z;
+HazardZone hazardZone(const ObserverField& field, const Scene& scene, const Vec3& target_centre_m) {
   const double mpe = scene.hazard.mpe.irradiance_w_m2;
-  z.peak_ratio = field.stats().peak_w_m2 / mpe;
-  z.target_centre_m = targetCentre(target);
-  z.region = field.regionAbove(mpe, z.target_centre_m);
-  const FieldSpec& spec = field.spec();
-  const auto n = spec.nodes();
-  const Vec3 box_max = spec.position(n[0] - 1, n[1] - 1, n[2] - 1);
-  for (int a = 0; a < 3 && z.region.points > 0; ++a) {
-    const double half_voxel = 0.5 * spec.voxel_m;
-    z.reaches_box_edge = z.reaches_box_edge || z.region.min_m[a] < spec.min_m[a] + half_voxel ||
-                         z.region.max_m[a] > box_max[a] - half_voxel;
-  }
-  return z;
+  return {field.stats().peak_w_m2 / mpe, field.regionAbove(mpe, target_centre_m), target_centre_m};
 }
 
 // The hazard section of summary.json; the nominal hazard zone where there is a volume (`z`).
@@ -109,7 +96,7 @@ nlohmann::json hazardJson(const Scene& scene, const HazardZone* zone) {
   const ObserverField::Region& r = z.region;
   nlohmann::json nhz = {{"points", r.points},
                        {"volume_m3", r.volume_m3},
-                       {"reaches_box_edge", z.reaches_box_edge}};
+                       {"reaches_box_edge", r.reaches_edge}};
   if (r.points > 0) {
     nhz["box"] = {{"min_m", {r.min_m.x, r.min_m.y, r.min_m.z}},
                   {"max_m", {r.max_m.x, r.max_m.y, r.max_m.z}}};
@@ -216,7 +203,7 @@ void printVolume(std::ostream& err, const ObserverField& field, const Scene& sce
     err << "  nominal hazard zone (ratio ≥ 1): " << formatNumber("%.4g", r.volume_m3)
         << " m³, reaching " << formatNumber("%.4g", r.farthest_m) << " m from the target centre, at ("
         << r.farthest_at_m.x << ", " << r.farthest_at_m.y << ", " << r.farthest_at_m.z << ")\n";
-    if (zone.reaches_box_edge) {
+    if (zone.region.reaches_edge) {
       err << "  warning: the hazard zone reaches the edge of the observer box and may go on "
              "beyond it: enlarge the box to see its full extent\n";
     }
@@ -257,6 +244,11 @@ RegionResult computeRegion(const Scene& scene, const FieldSpec& spec, const RunA
   return r;
 }
 
+// A plane's lattice points stand for pixel_m² each.
+double hazardousArea(const ObserverField& field, const HazardZone& zone) {
+  return static_cast<double>(zone.region.points) * field.spec().voxel_m * field.spec().voxel_m;
+}
+
 // A plane's field as an EXR map: lattice row j along v, column i along u.
 PlaneMap planeMap(const ObserverField& field, double mpe_w_m2) {
   const FieldSpec& spec = field.spec();
@@ -282,12 +274,11 @@ PlaneMap planeMap(const ObserverField& field, double mpe_w_m2) {
   return m;
 }
 
-nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field, const Scene& scene,
-                         const Vec3& target_centre_m) {
+nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
+                         const HazardZone& zone) {
   const FieldStats& s = field.stats();
   const FieldSpec& spec = field.spec();
-  const double mpe = scene.hazard.mpe.irradiance_w_m2;
-  const ObserverField::Region zone = field.regionAbove(mpe, target_centre_m);
+  const ObserverField::Region& r = zone.region;
   nlohmann::json j = {{"name", plane.name},
                       {"file", plane.name + ".exr"},
                       {"pixels", {s.nodes[0], s.nodes[1]}},
@@ -303,12 +294,11 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field, con
                       {"seconds", s.seconds},
                       {"peak_irradiance_w_m2", s.peak_w_m2},
                       {"peak_at_m", {s.peak_at_m.x, s.peak_at_m.y, s.peak_at_m.z}},
-                      {"peak_hazard_ratio", s.peak_w_m2 / mpe},
-                      {"hazardous_area_m2",
-                       static_cast<double>(zone.points) * spec.voxel_m * spec.voxel_m}};
-  if (zone.points > 0) {
-    j["hazard_farthest_from_target_m"] = zone.farthest_m;
-    j["hazard_farthest_at_m"] = {zone.farthest_at_m.x, zone.farthest_at_m.y, zone.farthest_at_m.z};
+                      {"peak_hazard_ratio", zone.peak_ratio},
+                      {"hazardous_area_m2", hazardousArea(field, zone)}};
+  if (r.points > 0) {
+    j["hazard_farthest_from_target_m"] = r.farthest_m;
+    j["hazard_farthest_at_m"] = {r.farthest_at_m.x, r.farthest_at_m.y, r.farthest_at_m.z};
   }
   return j;
 }
@@ -378,7 +368,7 @@ void runField(const RunArgs& args, std::ostream& err) {
     writeVti(vti->stream(), field, vtiStride(spec), info.mpe_w_m2);
     writeBlocksVtu(vtu->stream(), field, info.mpe_w_m2);
     writeTargetVtp(vtp->stream(), integrator, 2);
-    const HazardZone zone = hazardZone(field, scene, integrator.target());
+    const HazardZone zone = hazardZone(field, scene, targetCentre(integrator.target()));
     j = summaryJson(field, info, integrator.cullStats());
     j["hazard"] = hazardJson(scene, &zone);
     if (!args.quiet) printVolume(err, field, scene, zone, info, args.uniform);
@@ -391,25 +381,25 @@ void runField(const RunArgs& args, std::ostream& err) {
   }
 
   if (!scene.planes.empty()) {
-    const Vec3 centre = targetCentre(buildTarget(scene));
     nlohmann::json planes = nlohmann::json::array();
     for (std::size_t p = 0; p < scene.planes.size(); ++p) {
       const PlaneSpec& plane = scene.planes[p];
       const FieldSpec spec = planeFieldSpec(scene, plane);
       const RegionResult r = computeRegion(scene, spec, args, plane.name.c_str(), err);
-      writeExr(exrs[p]->stream(), planeMap(*r.field, info.mpe_w_m2),
+      const ObserverField& field = *r.field;
+      writeExr(exrs[p]->stream(), planeMap(field, info.mpe_w_m2),
                {info.program_version, info.wavelength_nm, info.mpe_w_m2});
-      planes.push_back(planeJson(plane, *r.field, scene, centre));
+      const HazardZone zone =
+          hazardZone(field, scene, targetCentre(r.problem.integrator.target()));
+      planes.push_back(planeJson(plane, field, zone));
       if (!args.quiet) {
-        const nlohmann::json& pj = planes.back();
-        const auto n = spec.nodes();
-        err << "plane " << plane.name << ": " << n[0] << "×" << n[1] << " pixels at "
-            << spec.voxel_m << " m, " << r.field->stats().evaluated_points << " evaluated, "
-            << formatNumber("%.4g", static_cast<double>(r.field->stats().evaluations))
-            << " evaluations in " << formatDuration(r.field->stats().seconds)
-            << "; peak hazard ratio "
-            << formatNumber("%.3g", pj["peak_hazard_ratio"].get<double>()) << ", hazardous area "
-            << formatNumber("%.4g", pj["hazardous_area_m2"].get<double>()) << " m²\n";
+        const FieldStats& s = field.stats();
+        err << "plane " << plane.name << ": " << s.nodes[0] << "×" << s.nodes[1] << " pixels at "
+            << spec.voxel_m << " m, " << s.evaluated_points << " evaluated, "
+            << formatNumber("%.4g", static_cast<double>(s.evaluations)) << " evaluations in "
+            << formatDuration(s.seconds) << "; peak hazard ratio "
+            << formatNumber("%.3g", zone.peak_ratio) << ", hazardous area "
+            << formatNumber("%.4g", hazardousArea(field, zone)) << " m²\n";
       }
     }
     j["planes"] = planes;

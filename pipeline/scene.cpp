@@ -349,6 +349,17 @@ double blockSize(ObjectReader& r, const char* block_key, const char* lattice_key
   return lattice_m * std::exp2(power);
 }
 
+// The refinement's `tolerance` (kept as given when absent) and `floor_w_m2` of an observer
+// box or plane.
+void readRefinement(ObjectReader& r, double& tolerance, std::optional<double>& floor_w_m2) {
+  tolerance = r.number("tolerance", tolerance);
+  if (!(tolerance > 0.0 && tolerance < 1.0)) r.fail("tolerance", "must be in (0, 1)");
+  if (auto floor = r.optionalNumber("floor_w_m2")) {
+    if (!(*floor > 0.0)) r.fail("floor_w_m2", "must be > 0");
+    floor_w_m2 = *floor;
+  }
+}
+
 ObserversSpec readObservers(ObjectReader r) {
   ObserversSpec o;
   o.min_m = r.vec3("min");
@@ -363,12 +374,7 @@ ObserversSpec readObservers(ObjectReader r) {
   if (longest / o.voxel_m > 65536.0)
     r.fail("voxel_m", "gives more than 65536 voxels along an axis");
   o.block_m = blockSize(r, "block_m", "voxel_m", o.voxel_m);
-  o.tolerance = r.number("tolerance", o.tolerance);
-  if (!(o.tolerance > 0.0 && o.tolerance < 1.0)) r.fail("tolerance", "must be in (0, 1)");
-  if (auto floor = r.optionalNumber("floor_w_m2")) {
-    if (!(*floor > 0.0)) r.fail("floor_w_m2", "must be > 0");
-    o.floor_w_m2 = *floor;
-  }
+  readRefinement(r, o.tolerance, o.floor_w_m2);
   r.finish();
   return o;
 }
@@ -406,12 +412,7 @@ PlaneSpec readPlane(ObjectReader r, const std::vector<PlaneSpec>& earlier) {
   if (std::max(p.width_m, p.height_m) / p.pixel_m > 65536.0)
     r.fail("pixel_m", "gives more than 65536 pixels along an axis");
   p.block_m = blockSize(r, "block_m", "pixel_m", p.pixel_m);
-  p.tolerance = r.number("tolerance", p.tolerance);
-  if (!(p.tolerance > 0.0 && p.tolerance < 1.0)) r.fail("tolerance", "must be in (0, 1)");
-  if (auto floor = r.optionalNumber("floor_w_m2")) {
-    if (!(*floor > 0.0)) r.fail("floor_w_m2", "must be > 0");
-    p.floor_w_m2 = *floor;
-  }
+  readRefinement(r, p.tolerance, p.floor_w_m2);
   r.finish();
   return p;
 }

@@ -34,9 +34,8 @@ struct Comparison {
   FieldStats adaptive, dense;
 };
 
-Comparison compare(const std::string& json) {
-  const Scene scene = parseScene(json, "test.json");
-  const FieldSpec spec = fieldSpec(scene);
+// The adaptive field and its dense twin over `spec` (the scene's box or one of its planes).
+Comparison compare(const Scene& scene, const FieldSpec& spec) {
   const FieldProblem p = fieldProblem(scene, spec);
   const ObserverField a = computeField(p.integrator, spec, p.excluded);
   const ObserverField d = computeDenseField(p.integrator, spec, p.excluded);
@@ -52,6 +51,11 @@ Comparison compare(const std::string& json) {
         c.coarse_sample_max_w_m2 = std::max(c.coarse_sample_max_w_m2, d.irradiance(i, j, k));
       }
   return c;
+}
+
+Comparison compare(const std::string& json) {
+  const Scene scene = parseScene(json, "test.json");
+  return compare(scene, fieldSpec(scene));
 }
 
 // The properties the issue asks of every scene: the error within the field's accuracy, the
@@ -193,13 +197,7 @@ TEST(ObserverPlane, TiltedWallFindsTheNarrowGlintAsDense) {
   const Scene scene = parseScene(json, "test.json");
   const FieldSpec spec = planeFieldSpec(scene, scene.planes.at(0));
   ASSERT_EQ(spec.nodes(), (std::array<int, 3>{33, 33, 1})) << "one layer of 33 × 33";
-  const FieldProblem p = fieldProblem(scene, spec);
-  const ObserverField a = computeField(p.integrator, spec, p.excluded);
-  const ObserverField d = computeDenseField(p.integrator, spec, p.excluded);
-  Comparison c;
-  c.fields = compareFields(a, d);
-  c.adaptive = a.stats();
-  c.dense = d.stats();
+  const Comparison c = compare(scene, spec);
   expectMatchesDense(c, spec, "tilted wall");
   // The premise: the pencil hits the wall (x = 0.3 → i = 20.8, z = 0.3 → j = 18).
   EXPECT_GT(c.fields.peak_w_m2, 100.0) << "the pencil reaches the wall";
