@@ -1,10 +1,12 @@
 #include "export/exr_map.h"
 
+#include <IexBaseExc.h>
 #include <ImathVec.h>
 #include <ImfAttribute.h>
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfInputFile.h>
 #include <ImfIO.h>
 #include <ImfOutputFile.h>
 #include <ImfStandardAttributes.h>
@@ -40,43 +42,87 @@ Imath::V3d v3d(const Vec3& v) { return {v.x, v.y, v.z}; }
 
 }  // namespace
 
-void writeExr(std::ostream& out, const PlaneMap& map, const ExrInfo& info) {
-  const auto n = static_cast<std::size_t>(map.width) * static_cast<std::size_t>(map.height);
-  if (map.width <= 0 || map.height <= 0 || map.irradiance_w_m2.size() != n ||
-      map.hazard_ratio.size() != n || map.level.size() != n || map.status.size() != n) {
-    throw std::invalid_argument("writeExr: every channel must hold width × height values");
+void writeExr(std::ostream& out, const PlaneGrid& grid, const std::vector<ExrChannel>& channels,
+              const ExrInfo& info) {
+  const auto n = static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height);
+  if (grid.width <= 0 || grid.height <= 0 || channels.empty()) {
+    throw std::invalid_argument("writeExr: an empty map");
   }
-  Imf::Header header(map.width, map.height);
+  for (const ExrChannel& c : channels) {
+    if (c.values == nullptr || c.values->size() != n)
+      throw std::invalid_argument("writeExr: channel " + c.name + " must hold width × height values");
+  }
+  Imf::Header header(grid.width, grid.height);
   header.compression() = Imf::ZIP_COMPRESSION;
-  const char* names[] = {"irradiance_w_m2", "hazard_ratio", "level", "status"};
-  for (const char* name : names) header.channels().insert(name, Imf::Channel(Imf::FLOAT));
-  header.insert("glint_origin_m", Imf::V3dAttribute(v3d(map.origin_m)));
-  header.insert("glint_u_axis", Imf::V3dAttribute(v3d(map.u_axis)));
-  header.insert("glint_v_axis", Imf::V3dAttribute(v3d(map.v_axis)));
-  header.insert("glint_pixel_m", Imf::DoubleAttribute(map.pixel_m));
+  for (const ExrChannel& c : channels) header.channels().insert(c.name, Imf::Channel(Imf::FLOAT));
+  header.insert("glint_origin_m", Imf::V3dAttribute(v3d(grid.origin_m)));
+  header.insert("glint_u_axis", Imf::V3dAttribute(v3d(grid.u_axis)));
+  header.insert("glint_v_axis", Imf::V3dAttribute(v3d(grid.v_axis)));
+  header.insert("glint_pixel_m", Imf::DoubleAttribute(grid.pixel_m));
   header.insert("glint_wavelength_nm", Imf::DoubleAttribute(info.wavelength_nm));
   header.insert("glint_mpe_w_m2", Imf::DoubleAttribute(info.mpe_w_m2));
   header.insert("glint_program", Imf::StringAttribute(info.program_version));
 
   // Image row y holds lattice row j = height − 1 − y.
-  const std::vector<float>* channels[] = {&map.irradiance_w_m2, &map.hazard_ratio, &map.level,
-                                          &map.status};
-  std::vector<std::vector<float>> rows_down(4, std::vector<float>(n));
+  std::vector<std::vector<float>> rows_down(channels.size(), std::vector<float>(n));
   Imf::FrameBuffer frame;
-  const auto w = static_cast<std::size_t>(map.width);
-  for (std::size_t c = 0; c < 4; ++c) {
-    for (std::size_t y = 0; y < static_cast<std::size_t>(map.height); ++y) {
-      const std::size_t j = static_cast<std::size_t>(map.height) - 1 - y;
-      std::copy_n(channels[c]->begin() + static_cast<std::ptrdiff_t>(j * w), w,
+  const auto w = static_cast<std::size_t>(grid.width);
+  for (std::size_t c = 0; c < channels.size(); ++c) {
+    for (std::size_t y = 0; y < static_cast<std::size_t>(grid.height); ++y) {
+      const std::size_t j = static_cast<std::size_t>(grid.height) - 1 - y;
+      std::copy_n(channels[c].values->begin() + static_cast<std::ptrdiff_t>(j * w), w,
                   rows_down[c].begin() + static_cast<std::ptrdiff_t>(y * w));
     }
-    frame.insert(names[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(rows_down[c].data()),
-                                      sizeof(float), sizeof(float) * w));
+    frame.insert(channels[c].name,
+                 Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(rows_down[c].data()),
+                            sizeof(float), sizeof(float) * w));
   }
   StdOStream stream(out);
   Imf::OutputFile file(stream, header);
   file.setFrameBuffer(frame);
-  file.writePixels(map.height);
+  file.writePixels(grid.height);
+}
+
+void writeExr(std::ostream& out, const PlaneMap& map, const ExrInfo& info) {
+  writeExr(out, static_cast<const PlaneGrid&>(map),
+           {{"irradiance_w_m2", &map.irradiance_w_m2},
+            {"hazard_ratio", &map.hazard_ratio},
+            {"level", &map.level},
+            {"status", &map.status}},
+           info);
+}
+
+std::vector<float> readExrChannel(const std::string& path, const std::string& name, int& width,
+                                  int& height) {
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imath::Box2i window = file.header().dataWindow();
+    width = window.max.x - window.min.x + 1;
+    height = window.max.y - window.min.y + 1;
+    const Imf::Channel* channel = file.header().channels().findChannel(name);
+    if (channel == nullptr || channel->type != Imf::FLOAT || width <= 0 || height <= 0)
+      throw std::runtime_error(path + ": no FLOAT channel " + name);
+    const auto w = static_cast<std::size_t>(width);
+    std::vector<float> rows_down(w * static_cast<std::size_t>(height));
+    Imf::FrameBuffer frame;
+    // The slice's base is offset so that data-window pixel (min.x, min.y) lands at index 0.
+    char* base = reinterpret_cast<char*>(rows_down.data()) -
+                 (static_cast<std::ptrdiff_t>(window.min.x) +
+                  static_cast<std::ptrdiff_t>(window.min.y) * static_cast<std::ptrdiff_t>(w)) *
+                     static_cast<std::ptrdiff_t>(sizeof(float));
+    frame.insert(name, Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * w));
+    file.setFrameBuffer(frame);
+    file.readPixels(window.min.y, window.max.y);
+    std::vector<float> out(rows_down.size());
+    for (std::size_t y = 0; y < static_cast<std::size_t>(height); ++y) {
+      const std::size_t j = static_cast<std::size_t>(height) - 1 - y;
+      std::copy_n(rows_down.begin() + static_cast<std::ptrdiff_t>(y * w), w,
+                  out.begin() + static_cast<std::ptrdiff_t>(j * w));
+    }
+    return out;
+  } catch (const Iex::BaseExc& e) {
+    throw std::runtime_error(path + ": cannot read the OpenEXR map: " + e.what());
+  }
 }
 
 }  // namespace glint

@@ -11,19 +11,29 @@
 
 namespace glint {
 
-/// @brief Values on a width × height lattice of a plane: point (i, j) lies at
-/// origin_m + pixel_m (i u_axis + j v_axis). Arrays are indexed [j × width + i].
-struct PlaneMap {
+/// @brief A width × height lattice on a plane: point (i, j) lies at
+/// origin_m + pixel_m (i u_axis + j v_axis).
+struct PlaneGrid {
   int width = 0;   ///< lattice points along u_axis
   int height = 0;  ///< lattice points along v_axis
   Vec3 origin_m{0.0};
   Vec3 u_axis{1.0, 0.0, 0.0};  ///< unit
   Vec3 v_axis{0.0, 1.0, 0.0};  ///< unit, orthogonal to u_axis
   double pixel_m = 0.0;        ///< lattice spacing
+};
+
+/// @brief The map `glint run` writes for a plane. Arrays are indexed [j × width + i].
+struct PlaneMap : PlaneGrid {
   std::vector<float> irradiance_w_m2;
   std::vector<float> hazard_ratio;  ///< irradiance / MPE
   std::vector<float> level;         ///< refinement level (0 = coarsest block)
   std::vector<float> status;        ///< VoxelStatus: why a 0 is 0 (proven below floor, ...)
+};
+
+/// @brief One FLOAT channel: width × height values indexed [j × width + i].
+struct ExrChannel {
+  std::string name;
+  const std::vector<float>* values = nullptr;
 };
 
 /// @brief What the header records besides the plane's geometry.
@@ -33,13 +43,23 @@ struct ExrInfo {
   double mpe_w_m2 = 0.0;
 };
 
-/// @brief Writes @p map as a scanline OpenEXR image with FLOAT channels `irradiance_w_m2`,
-/// `hazard_ratio`, `level` and `status` (ZIP compressed). The image's top row is the plane's highest v,
-/// so viewers show v upwards. Header attributes: `glint_origin_m`, `glint_u_axis`,
-/// `glint_v_axis` (V3d), `glint_pixel_m`, `glint_wavelength_nm`, `glint_mpe_w_m2` (double),
-/// `glint_program` (string).
-/// @throw std::invalid_argument when the arrays do not hold width × height values;
+/// @brief Writes @p channels over @p grid as a scanline OpenEXR image with FLOAT channels (ZIP
+/// compressed). The image's top row is the plane's highest v, so viewers show v upwards. Header
+/// attributes: `glint_origin_m`, `glint_u_axis`, `glint_v_axis` (V3d), `glint_pixel_m`,
+/// `glint_wavelength_nm`, `glint_mpe_w_m2` (double), `glint_program` (string).
+/// @throw std::invalid_argument when a channel does not hold width × height values;
 /// OutputError when the stream fails.
+void writeExr(std::ostream& out, const PlaneGrid& grid, const std::vector<ExrChannel>& channels,
+              const ExrInfo& info);
+
+/// @brief Writes @p map with its channels `irradiance_w_m2`, `hazard_ratio`, `level` and
+/// `status` (see the overload above).
 void writeExr(std::ostream& out, const PlaneMap& map, const ExrInfo& info);
+
+/// @brief Reads FLOAT channel @p name of an EXR glint wrote, indexed [j × width + i] like the
+/// maps it came from, and the lattice's size.
+/// @throw std::runtime_error when the file cannot be read or has no such channel.
+std::vector<float> readExrChannel(const std::string& path, const std::string& name, int& width,
+                                  int& height);
 
 }  // namespace glint

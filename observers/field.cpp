@@ -110,23 +110,6 @@ void forEachSample(int size, Fn&& fn) {
   }
 }
 
-openvdb::math::Transform::Ptr fieldTransform(const FieldSpec& spec) {
-  const std::array<Vec3, 3>& e = spec.axes;
-  if (e[0] == Vec3(1.0, 0.0, 0.0) && e[1] == Vec3(0.0, 1.0, 0.0) && e[2] == Vec3(0.0, 0.0, 1.0)) {
-    auto transform = openvdb::math::Transform::createLinearTransform(spec.voxel_m);
-    transform->postTranslate(openvdb::Vec3d(spec.min_m.x, spec.min_m.y, spec.min_m.z));
-    return transform;
-  }
-  // OpenVDB maps index to world as a row vector times this matrix: rows are the scaled axes.
-  openvdb::Mat4d m = openvdb::Mat4d::identity();
-  for (int a = 0; a < 3; ++a) {
-    const Vec3 row = spec.voxel_m * e[static_cast<std::size_t>(a)];
-    m.setRow(a, openvdb::Vec4d(row.x, row.y, row.z, 0.0));
-  }
-  m.setRow(3, openvdb::Vec4d(spec.min_m.x, spec.min_m.y, spec.min_m.z, 1.0));
-  return openvdb::math::Transform::createLinearTransform(m);
-}
-
 std::unique_ptr<FieldGrids> makeGrids(const FieldSpec& spec) {
   auto g = std::make_unique<FieldGrids>();
   const auto transform = fieldTransform(spec);
@@ -630,6 +613,24 @@ void validate(const FieldSpec& spec) {
 
 }  // namespace
 
+openvdb::math::Transform::Ptr fieldTransform(const FieldSpec& spec) {
+  const std::array<Vec3, 3>& e = spec.axes;
+  if (e[0] == Vec3(1.0, 0.0, 0.0) && e[1] == Vec3(0.0, 1.0, 0.0) && e[2] == Vec3(0.0, 0.0, 1.0)) {
+    auto transform = openvdb::math::Transform::createLinearTransform(spec.voxel_m);
+    transform->postTranslate(openvdb::Vec3d(spec.min_m.x, spec.min_m.y, spec.min_m.z));
+    return transform;
+  }
+  // OpenVDB maps index to world as a row vector times this matrix: rows are the scaled axes.
+  openvdb::Mat4d m = openvdb::Mat4d::identity();
+  for (int a = 0; a < 3; ++a) {
+    const Vec3 row = spec.voxel_m * e[static_cast<std::size_t>(a)];
+    m.setRow(a, openvdb::Vec4d(row.x, row.y, row.z, 0.0));
+  }
+  m.setRow(3, openvdb::Vec4d(spec.min_m.x, spec.min_m.y, spec.min_m.z, 1.0));
+  return openvdb::math::Transform::createLinearTransform(m);
+}
+
+
 std::array<int, 3> FieldSpec::nodes() const {
   std::array<int, 3> n{};
   for (int a = 0; a < 3; ++a) {
@@ -656,6 +657,25 @@ ObserverField& ObserverField::operator=(ObserverField&&) noexcept = default;
 
 double ObserverField::irradiance(int i, int j, int k) const {
   return grids_->irradiance->tree().getValue(openvdb::Coord(i, j, k));
+}
+std::vector<float> ObserverField::irradianceLattice() const {
+  const auto n = spec_.nodes();
+  std::vector<float> out(static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]) *
+                             static_cast<std::size_t>(n[2]),
+                         0.0f);
+  for (auto it = grids_->irradiance->cbeginValueOn(); it; ++it) {
+    const openvdb::CoordBBox box = it.getBoundingBox();
+    for (auto c = box.begin(); c; ++c) {
+      const openvdb::Coord& q = *c;
+      if (q.x() < 0 || q.y() < 0 || q.z() < 0 || q.x() >= n[0] || q.y() >= n[1] || q.z() >= n[2])
+        continue;
+      out[(static_cast<std::size_t>(q.z()) * static_cast<std::size_t>(n[1]) +
+           static_cast<std::size_t>(q.y())) *
+              static_cast<std::size_t>(n[0]) +
+          static_cast<std::size_t>(q.x())] = *it;
+    }
+  }
+  return out;
 }
 VoxelStatus ObserverField::status(int i, int j, int k) const {
   return static_cast<VoxelStatus>(

@@ -122,6 +122,9 @@ class ObserverField {
 
   /// @brief Irradiance at lattice point (i, j, k); 0 where not computed (see status()).
   [[nodiscard]] double irradiance(int i, int j, int k) const;
+  /// @brief The irradiance of every lattice point (W/m²), as stored (float), 0 where not
+  /// computed; indexed [(k · nodes[1] + j) · nodes[0] + i].
+  [[nodiscard]] std::vector<float> irradianceLattice() const;
   [[nodiscard]] VoxelStatus status(int i, int j, int k) const;
   [[nodiscard]] int level(int i, int j, int k) const;
 

@@ -5,7 +5,12 @@
 
 #include <openvdb/openvdb.h>
 
+#include "observers/field.h"
+
 namespace glint {
+
+/// @brief Index (i, j, k) to world: lattice point (i, j, k) of @p spec, axes and all.
+openvdb::math::Transform::Ptr fieldTransform(const FieldSpec& spec);
 
 /// @brief All at the finest voxel size, index (i, j, k) = lattice point (i, j, k).
 struct FieldGrids {

@@ -7,11 +7,39 @@
 
 #include "export/atomic_file.h"
 #include "glint/version.h"
+#include "pipeline/batch_command.h"
+#include "pipeline/cluster.h"
 #include "pipeline/input_error.h"
 #include "pipeline/points_command.h"
 #include "pipeline/run_command.h"
 
 namespace glint {
+namespace {
+
+// `glint batch` on one process or as one rank of an MPI job. An error on one rank ends them
+// all (MPI_Abort): the others would wait for it for ever.
+int runBatchCommand(BatchArgs& batch, std::ostream& err) {
+  Cluster cluster;
+  const std::string who =
+      cluster.size() > 1 ? " (rank " + std::to_string(cluster.rank()) + ")" : std::string();
+  auto fail = [&](const char* kind, const char* what, int status) {
+    err << "glint" << who << ": " << kind << what << "\n" << std::flush;
+    if (cluster.size() > 1) cluster.abort(status);
+    return status;
+  };
+  try {
+    runBatch(batch, cluster, err);
+    return 0;
+  } catch (const InputError& e) {
+    return fail("error: ", e.what(), 2);
+  } catch (const OutputError& e) {
+    return fail("error: ", e.what(), 2);
+  } catch (const std::exception& e) {
+    return fail("internal error: ", e.what(), 1);
+  }
+}
+
+}  // namespace
 
 int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
   CLI::App app{
@@ -64,6 +92,19 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
       ->check(CLI::Range(1, 4096));
   run_cmd->add_flag("-q,--quiet", run.quiet, "No progress and no summary on standard error");
 
+  BatchArgs batch;
+  CLI::App* batch_cmd = app.add_subcommand(
+      "batch",
+      "A study: many scenarios of a base scene (poses, jitter, materials), aggregated into "
+      "maximum-irradiance and coverage-probability maps; under mpirun, shared among the ranks");
+  batch_cmd->add_option("study", batch.study_path, "Study file (JSON)")->required();
+  batch_cmd->add_option("-o,--out", batch.out_dir, "Output folder (default: out/<study name>)");
+  batch_cmd->add_option("--threads", batch.threads, "Worker threads per process (default: all cores)")
+      ->check(CLI::Range(1, 4096));
+  batch_cmd->add_flag("--fresh", batch.fresh,
+                      "Discard the scenarios an earlier run left in the output folder");
+  batch_cmd->add_flag("-q,--quiet", batch.quiet, "No progress and no summary on standard error");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -82,6 +123,10 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
     if (app.got_subcommand(run_cmd)) {
       run.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
       runField(run, err);
+    }
+    if (app.got_subcommand(batch_cmd)) {
+      batch.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
+      return runBatchCommand(batch, err);
     }
     return 0;
   } catch (const InputError& e) {

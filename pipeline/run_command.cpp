@@ -3,43 +3,22 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
-#include <cstdio>
-#include <fstream>
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "export/atomic_file.h"
 #include "export/exr_map.h"
 #include "export/field_files.h"
 #include "glint/version.h"
 #include "pipeline/input_error.h"
+#include "pipeline/json_reader.h"
 #include "pipeline/progress.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
 
 namespace glint {
 namespace {
-
-// FNV-1a, 64 bit: identifies the scene file a result came from (not a security measure).
-std::string fnv1a64(const std::string& bytes) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : bytes) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return buf;
-}
-
-std::string readBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 // The largest power-of-two stride that keeps the .vti resample under 16.7 M points.
 int vtiStride(const FieldSpec& spec) {
@@ -249,31 +228,6 @@ double hazardousArea(const ObserverField& field, const HazardZone& zone) {
   return static_cast<double>(zone.region.points) * field.spec().voxel_m * field.spec().voxel_m;
 }
 
-// A plane's field as an EXR map: lattice row j along v, column i along u.
-PlaneMap planeMap(const ObserverField& field, double mpe_w_m2) {
-  const FieldSpec& spec = field.spec();
-  const auto n = spec.nodes();
-  PlaneMap m;
-  m.width = n[0];
-  m.height = n[1];
-  m.origin_m = spec.min_m;
-  m.u_axis = spec.axes[0];
-  m.v_axis = spec.axes[1];
-  m.pixel_m = spec.voxel_m;
-  const std::size_t count = static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]);
-  for (auto* channel : {&m.irradiance_w_m2, &m.hazard_ratio, &m.level, &m.status})
-    channel->reserve(count);
-  for (int j = 0; j < n[1]; ++j)
-    for (int i = 0; i < n[0]; ++i) {
-      const double e = field.irradiance(i, j, 0);
-      m.irradiance_w_m2.push_back(static_cast<float>(e));
-      m.hazard_ratio.push_back(static_cast<float>(e / mpe_w_m2));
-      m.level.push_back(static_cast<float>(field.level(i, j, 0)));
-      m.status.push_back(static_cast<float>(static_cast<int>(field.status(i, j, 0))));
-    }
-  return m;
-}
-
 nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
                          const HazardZone& zone) {
   const FieldStats& s = field.stats();
@@ -304,6 +258,30 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
 }
 
 }  // namespace
+
+PlaneMap planeMap(const ObserverField& field, double mpe_w_m2) {
+  const FieldSpec& spec = field.spec();
+  const auto n = spec.nodes();
+  PlaneMap m;
+  m.width = n[0];
+  m.height = n[1];
+  m.origin_m = spec.min_m;
+  m.u_axis = spec.axes[0];
+  m.v_axis = spec.axes[1];
+  m.pixel_m = spec.voxel_m;
+  const std::size_t count = static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]);
+  for (auto* channel : {&m.irradiance_w_m2, &m.hazard_ratio, &m.level, &m.status})
+    channel->reserve(count);
+  for (int j = 0; j < n[1]; ++j)
+    for (int i = 0; i < n[0]; ++i) {
+      const double e = field.irradiance(i, j, 0);
+      m.irradiance_w_m2.push_back(static_cast<float>(e));
+      m.hazard_ratio.push_back(static_cast<float>(e / mpe_w_m2));
+      m.level.push_back(static_cast<float>(field.level(i, j, 0)));
+      m.status.push_back(static_cast<float>(static_cast<int>(field.status(i, j, 0))));
+    }
+  return m;
+}
 
 void runField(const RunArgs& args, std::ostream& err) {
   const Scene scene = loadScene(args.scene_path);
@@ -350,7 +328,7 @@ void runField(const RunArgs& args, std::ostream& err) {
   RunInfo info;
   info.program_version = std::string("glint ") + GLINT_VERSION;
   info.scene_file = args.scene_path;
-  info.scene_fnv1a64 = fnv1a64(readBytes(args.scene_path));
+  info.scene_fnv1a64 = fnv1a64Hex(readUserFile(args.scene_path, "scene file"));
   info.scheme = args.uniform ? "uniform" : "adaptive";
   info.wavelength_nm = scene.laser.wavelength_nm;
   info.power_w = scene.laser.power_w;

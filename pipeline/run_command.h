@@ -6,6 +6,9 @@
 #include <ostream>
 #include <string>
 
+#include "export/exr_map.h"
+#include "observers/field.h"
+
 namespace glint {
 
 /// @brief The arguments of `glint run`.
@@ -23,5 +26,9 @@ struct RunArgs {
 /// whole or not at all.
 /// @throw InputError, OutputError on bad input or an unwritable folder.
 void runField(const RunArgs& args, std::ostream& err);
+
+/// @brief A plane's field as the map `glint run` writes: lattice row j along v, column i along
+/// u; hazard_ratio = irradiance / @p mpe_w_m2.
+PlaneMap planeMap(const ObserverField& field, double mpe_w_m2);
 
 }  // namespace glint

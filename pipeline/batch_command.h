@@ -1,0 +1,33 @@
+#pragma once
+/// @file
+/// @brief `glint batch`: a study's scenarios run one after another (each with TBB inside), or
+/// shared among the ranks of an MPI job, and aggregated into maximum-irradiance and coverage
+/// maps (README "Batch studies").
+
+#include <ostream>
+#include <string>
+
+namespace glint {
+
+class Cluster;
+
+/// @brief The arguments of `glint batch`.
+struct BatchArgs {
+  std::string study_path;
+  std::string out_dir;  ///< empty: out/<study file stem>
+  int threads = 0;      ///< per process; 0: all cores
+  bool fresh = false;   ///< discard the results of an earlier run in out_dir
+  bool quiet = false;
+  bool terminal = false;
+};
+
+/// @brief Runs the study. Each scenario leaves scenarios/sNNNNNN/ (its scene.json, maps and
+/// result.json, written last); a later run in the same folder redoes only the scenarios
+/// without a result. Rank 0 then writes scenarios.csv, the aggregated `<plane>.exr` and
+/// `box.vdb`, and summary.json, each whole or not at all, the same bytes on any number of
+/// ranks (summary.json aside: it records the ranks and the wall time).
+/// @throw InputError, OutputError on bad input, an unwritable folder, or an output folder
+/// holding another study's results (without `fresh`).
+void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err);
+
+}  // namespace glint

@@ -1,0 +1,297 @@
+#include "pipeline/study.h"
+
+#include <cmath>
+#include <glm/mat3x3.hpp>
+
+#include "pipeline/json_reader.h"
+#include "pipeline/progress.h"
+
+namespace glint {
+namespace {
+
+// Enough for any study a cluster finishes; beyond it a misplaced "count" is the likelier cause.
+constexpr std::size_t kMaxScenarios = 1'000'000;
+
+// The values of a sweep: an array of numbers, or {"from", "to", "count"} evenly spaced.
+std::vector<double> readValues(ObjectReader& r, const std::string& key) {
+  const json& v = r.require(key);
+  std::vector<double> out;
+  if (v.is_array()) {
+    for (const json& x : v) {
+      if (!x.is_number() || !std::isfinite(x.get<double>()))
+        r.fail(key, "must be an array of finite numbers or {\"from\", \"to\", \"count\"}");
+      out.push_back(x.get<double>());
+    }
+  } else if (v.is_object()) {
+    ObjectReader range(v, r.at(key), r.source());
+    const double from = range.number("from");
+    const double to = range.number("to");
+    const std::int64_t count = range.integer("count", 0);
+    if (count < 1 || count > 100000) range.fail("count", "must be an integer in [1, 100000]");
+    range.finish();
+    for (std::int64_t i = 0; i < count; ++i) {
+      out.push_back(count == 1 ? from
+                               : from + (to - from) * static_cast<double>(i) /
+                                            static_cast<double>(count - 1));
+    }
+  } else {
+    r.fail(key, "must be an array of numbers or {\"from\", \"to\", \"count\"}");
+  }
+  if (out.empty()) r.fail(key, "must hold at least one value");
+  return out;
+}
+
+std::vector<double> readAngles(ObjectReader& r, const std::string& key) {
+  if (!r.has(key)) return {0.0};
+  std::vector<double> out = readValues(r, key);
+  for (double a : out) {
+    if (!(std::abs(a) <= 360.0)) r.fail(key, "angles must be in [-360, 360] degrees");
+  }
+  return out;
+}
+
+Pose readPose(ObjectReader r) {
+  Pose p;
+  p.time_s = r.number("time_s");
+  if (r.has("offset_m")) p.offset_m = r.vec3("offset_m");
+  p.yaw_deg = r.number("yaw_deg", 0.0);
+  p.pitch_deg = r.number("pitch_deg", 0.0);
+  p.roll_deg = r.number("roll_deg", 0.0);
+  for (const char* key : {"yaw_deg", "pitch_deg", "roll_deg"}) {
+    const double a = key[0] == 'y' ? p.yaw_deg : key[0] == 'p' ? p.pitch_deg : p.roll_deg;
+    if (!(std::abs(a) <= 3600.0)) r.fail(key, "must be in [-3600, 3600] degrees");
+  }
+  r.finish();
+  return p;
+}
+
+// The trajectory's poses, and with `step_s` the poses between them every step_s (linear in
+// offset and angles).
+std::vector<Pose> readTrajectory(ObjectReader r) {
+  const json& list = r.require("poses");
+  if (!list.is_array() || list.empty()) r.fail("poses", "must be a non-empty array of poses");
+  std::vector<Pose> keys;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    keys.push_back(readPose(ObjectReader(list[i], r.at("poses") + "/" + std::to_string(i),
+                                         r.source())));
+    if (i > 0 && !(keys[i].time_s > keys[i - 1].time_s))
+      r.fail("poses", "times must increase from pose to pose (pose " + std::to_string(i) + ")");
+  }
+  const std::optional<double> step = r.optionalNumber("step_s");
+  r.finish();
+  if (!step) return keys;
+  const double span = keys.back().time_s - keys.front().time_s;
+  if (!(*step > 0.0) || span / *step > static_cast<double>(kMaxScenarios))
+    r.fail("step_s", "must be > 0 and give at most 1 000 000 poses");
+  std::vector<Pose> out;
+  const auto steps = static_cast<std::size_t>(std::floor(span / *step * (1.0 + 1e-12)));
+  std::size_t seg = 0;
+  for (std::size_t s = 0; s <= steps; ++s) {
+    const double t = keys.front().time_s + static_cast<double>(s) * *step;
+    while (seg + 2 < keys.size() && t > keys[seg + 1].time_s) ++seg;
+    const Pose& a = keys[seg];
+    const Pose& b = keys[std::min(seg + 1, keys.size() - 1)];
+    const double w = b.time_s > a.time_s ? std::clamp((t - a.time_s) / (b.time_s - a.time_s), 0.0, 1.0) : 0.0;
+    auto mix = [w](double x, double y) { return x + w * (y - x); };
+    out.push_back({t, a.offset_m + w * (b.offset_m - a.offset_m), mix(a.yaw_deg, b.yaw_deg),
+                   mix(a.pitch_deg, b.pitch_deg), mix(a.roll_deg, b.roll_deg)});
+  }
+  // The last key pose belongs to the trajectory even when step_s does not land on it.
+  if (out.back().time_s < keys.back().time_s - 1e-9 * std::max(1.0, span)) out.push_back(keys.back());
+  return out;
+}
+
+// SplitMix64 (Steele, Lea, Flood 2014): a fully specified generator, so a seed gives the same
+// jitter on every platform and standard library (std::normal_distribution does not promise that).
+std::uint64_t splitMix64(std::uint64_t& state) {
+  std::uint64_t z = (state += 0x9e3779b97f4a7c15ull);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+// A uniform double in (0, 1]: 53 random bits, never 0 (Box–Muller takes its log).
+double uniform01(std::uint64_t& state) {
+  return (static_cast<double>(splitMix64(state) >> 11) + 1.0) * 0x1.0p-53;
+}
+
+// Jitter sample k: two independent N(0, σ²) angles by Box–Muller, from a stream that depends on
+// (seed, k) alone, so sample k is the same in every combination of the other parameters.
+std::pair<double, double> jitterAngles(std::uint64_t seed, int k, double sigma_rad) {
+  std::uint64_t state = seed ^ (0xd1b54a32d192ed03ull * (static_cast<std::uint64_t>(k) + 1));
+  splitMix64(state);  // decorrelates neighbouring seeds
+  const double r = std::sqrt(-2.0 * std::log(uniform01(state)));
+  const double phi = 2.0 * kPi * uniform01(state);
+  return {sigma_rad * r * std::cos(phi), sigma_rad * r * std::sin(phi)};
+}
+
+json vecJson(const Vec3& v) { return json::array({v.x, v.y, v.z}); }
+
+}  // namespace
+
+Vec3 rotateYawPitchRoll(const Vec3& v, double yaw_deg, double pitch_deg, double roll_deg) {
+  const double deg = kPi / 180.0;
+  const double cy = std::cos(yaw_deg * deg), sy = std::sin(yaw_deg * deg);
+  const double cp = std::cos(pitch_deg * deg), sp = std::sin(pitch_deg * deg);
+  const double cr = std::cos(roll_deg * deg), sr = std::sin(roll_deg * deg);
+  // glm matrices are column-major: each Vec3 below is a column of Rz Ry Rx.
+  const glm::dmat3 rz(Vec3(cy, sy, 0.0), Vec3(-sy, cy, 0.0), Vec3(0.0, 0.0, 1.0));
+  const glm::dmat3 ry(Vec3(cp, 0.0, -sp), Vec3(0.0, 1.0, 0.0), Vec3(sp, 0.0, cp));
+  const glm::dmat3 rx(Vec3(1.0, 0.0, 0.0), Vec3(0.0, cr, sr), Vec3(0.0, -sr, cr));
+  return rz * (ry * (rx * v));
+}
+
+Study parseStudy(std::string_view text, const std::string& source,
+                 const std::filesystem::path& dir) {
+  const json root = parseJson(text, source);
+  Study study;
+  study.source = source;
+  ObjectReader r(root, "", source);
+  study.description = r.string("description", "");
+  const std::string scene_name = r.string("scene");
+  study.scene_path = dir / scene_name;
+  try {
+    study.scene_text = readUserFile(study.scene_path, "scene file");
+    study.base = parseScene(study.scene_text, study.scene_path.string());
+  } catch (const InputError& e) {
+    throw InputError(source + ": /scene: " + e.what());
+  }
+  if (!study.base.observers && study.base.planes.empty()) {
+    r.fail("scene", "the scene has no observer box or planes: a study needs one");
+  }
+
+  Vec3 sum(0.0);
+  for (const ObjectSpec& o : study.base.objects) sum += o.center_m;
+  study.pivot_m = r.has("pivot") ? r.vec3("pivot")
+                                 : sum / static_cast<double>(study.base.objects.size());
+
+  std::vector<double> yaw{0.0}, pitch{0.0}, roll{0.0};
+  std::vector<std::optional<double>> sigma{std::nullopt}, reflectance{std::nullopt};
+  if (r.has("sweep")) {
+    ObjectReader s = r.object("sweep");
+    yaw = readAngles(s, "yaw_deg");
+    pitch = readAngles(s, "pitch_deg");
+    roll = readAngles(s, "roll_deg");
+    if (s.has("sigma")) {
+      sigma.clear();
+      for (double x : readValues(s, "sigma")) {
+        if (!(x > 0.0)) s.fail("sigma", "values must be > 0");
+        sigma.emplace_back(x);
+      }
+    }
+    if (s.has("specular_reflectance")) {
+      reflectance.clear();
+      for (double x : readValues(s, "specular_reflectance")) {
+        if (!(x >= 0.0 && x <= 1.0)) s.fail("specular_reflectance", "values must be in [0, 1]");
+        reflectance.emplace_back(x);
+      }
+    }
+    study.material = s.string("material", "");
+    if (!study.material.empty()) {
+      const auto& m = study.base.materials;
+      if (std::none_of(m.begin(), m.end(),
+                       [&](const MaterialSpec& x) { return x.name == study.material; }))
+        s.fail("material", "the scene has no material \"" + study.material + "\"");
+    }
+    s.finish();
+  }
+
+  int jitter_samples = 0;
+  if (r.has("pointing_jitter")) {
+    ObjectReader j = r.object("pointing_jitter");
+    study.jitter_sigma_rad = j.number("sigma_rad");
+    if (!(study.jitter_sigma_rad >= 0.0 && study.jitter_sigma_rad <= 0.1))
+      j.fail("sigma_rad", "must be in [0, 0.1] rad (a pointing error, not a new direction)");
+    const std::int64_t n = j.integer("samples", 0);
+    if (n < 1 || n > 100000) j.fail("samples", "must be an integer in [1, 100000]");
+    jitter_samples = static_cast<int>(n);
+    const std::int64_t seed = j.integer("seed", 1);
+    if (seed < 0) j.fail("seed", "must be an integer ≥ 0");
+    study.jitter_seed = static_cast<std::uint64_t>(seed);
+    j.finish();
+  }
+
+  std::vector<Pose> poses{Pose{}};
+  if (r.has("trajectory")) poses = readTrajectory(r.object("trajectory"));
+  r.finish();
+
+  const double count = static_cast<double>(poses.size()) * static_cast<double>(yaw.size()) *
+                       static_cast<double>(pitch.size()) * static_cast<double>(roll.size()) *
+                       static_cast<double>(sigma.size()) * static_cast<double>(reflectance.size()) *
+                       std::max(1, jitter_samples);
+  if (count > static_cast<double>(kMaxScenarios)) {
+    throw InputError(source + ": " + formatNumber("%.4g", count) +
+                     " scenarios: at most 1 000 000 (split the study)");
+  }
+  // Nested in this order, the jitter innermost; without jitter one pass with sample −1.
+  const int first_sample = jitter_samples > 0 ? 0 : -1;
+  const int end_sample = jitter_samples > 0 ? jitter_samples : 0;
+  for (const Pose& pose : poses)
+    for (double y : yaw)
+      for (double p : pitch)
+        for (double ro : roll)
+          for (const auto& sg : sigma)
+            for (const auto& re : reflectance)
+              for (int k = first_sample; k < end_sample; ++k) {
+                Scenario s;
+                s.index = study.scenarios.size();
+                s.pose = pose;
+                s.yaw_deg = y;
+                s.pitch_deg = p;
+                s.roll_deg = ro;
+                s.sigma = sg;
+                s.specular_reflectance = re;
+                s.jitter_sample = k;
+                if (k >= 0) {
+                  std::tie(s.jitter_u_rad, s.jitter_v_rad) =
+                      jitterAngles(study.jitter_seed, k, study.jitter_sigma_rad);
+                }
+                study.scenarios.push_back(s);
+              }
+  study.fnv1a64 = fnv1a64Hex(std::string(text) + '\0' + study.scene_text);
+  for (const Scenario& s : study.scenarios) (void)scenarioScene(study, s);
+  return study;
+}
+
+Study loadStudy(const std::filesystem::path& path) {
+  return parseStudy(readUserFile(path, "study file"), path.string(), path.parent_path());
+}
+
+std::string scenarioSceneJson(const Study& study, const Scenario& s) {
+  json scene = json::parse(study.scene_text);
+  auto turn = [&](const Vec3& v) {
+    return rotateYawPitchRoll(rotateYawPitchRoll(v, s.yaw_deg, s.pitch_deg, s.roll_deg),
+                              s.pose.yaw_deg, s.pose.pitch_deg, s.pose.roll_deg);
+  };
+  auto vec = [](const json& j) { return Vec3(j[0].get<double>(), j[1].get<double>(), j[2].get<double>()); };
+  for (json& o : scene["objects"]) {
+    const Vec3 c = vec(o["center"]);
+    o["center"] = vecJson(study.pivot_m + s.pose.offset_m + turn(c - study.pivot_m));
+    for (const char* key : {"axis", "normal"}) {
+      if (o.contains(key)) o[key] = vecJson(turn(vec(o[key])));
+    }
+  }
+  for (auto& [name, m] : scene["materials"].items()) {
+    if (!study.material.empty() && name != study.material) continue;
+    if (s.sigma) m["sigma"] = *s.sigma;
+    if (s.specular_reflectance) m["specular_reflectance"] = *s.specular_reflectance;
+  }
+  if (s.jitter_sample >= 0) {
+    const Vec3 d = glm::normalize(vec(scene["laser"]["direction"]));
+    const Vec3 eu = anyPerpendicular(d);
+    const Vec3 ev = glm::cross(d, eu);
+    scene["laser"]["direction"] =
+        vecJson(glm::normalize(d + std::tan(s.jitter_u_rad) * eu + std::tan(s.jitter_v_rad) * ev));
+  }
+  const std::string what = "scenario " + std::to_string(s.index) + " of " + study.source;
+  const std::string base = scene.value("description", std::string());
+  scene["description"] = base.empty() ? what : base + " [" + what + "]";
+  return scene.dump(2) + "\n";
+}
+
+Scene scenarioScene(const Study& study, const Scenario& s) {
+  return parseScene(scenarioSceneJson(study, s),
+                    study.source + " scenario " + std::to_string(s.index));
+}
+
+}  // namespace glint

@@ -1,0 +1,83 @@
+#pragma once
+/// @file
+/// @brief A batch study: a base scene and the scenarios made from it by sweeps of the target's
+/// orientation and material, seeded laser pointing jitter and a trajectory of target poses
+/// (README "Batch studies").
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "facets/vec3.h"
+#include "pipeline/scene.h"
+
+namespace glint {
+
+/// @brief A pose of the target: turned about the study's pivot (yaw about z, then pitch about
+/// the turned y, then roll about the turned x: R = Rz(yaw) Ry(pitch) Rx(roll)) and moved by
+/// offset_m.
+struct Pose {
+  double time_s = 0.0;
+  Vec3 offset_m{0.0};
+  double yaw_deg = 0.0;
+  double pitch_deg = 0.0;
+  double roll_deg = 0.0;
+};
+
+/// @brief One scenario: the base scene with these changes.
+struct Scenario {
+  std::size_t index = 0;
+  Pose pose;  ///< from the trajectory (identity without one)
+  /// The swept orientation, applied before the pose: the target turns by R_pose · R_sweep.
+  double yaw_deg = 0.0;
+  double pitch_deg = 0.0;
+  double roll_deg = 0.0;
+  std::optional<double> sigma;                 ///< swept σ; unset: as in the scene
+  std::optional<double> specular_reflectance;  ///< swept; unset: as in the scene
+  int jitter_sample = -1;                      ///< −1: no jitter
+  /// Pointing error: the laser's direction d becomes d + tan(u) e_u + tan(v) e_v, normalised,
+  /// with e_u = anyPerpendicular(d) and e_v = d × e_u.
+  double jitter_u_rad = 0.0;
+  double jitter_v_rad = 0.0;
+};
+
+/// @brief A loaded, validated study.
+struct Study {
+  std::string source;  ///< the study file as given, for messages
+  std::string description;
+  std::filesystem::path scene_path;  ///< the base scene (relative to the study file)
+  std::string scene_text;            ///< its bytes
+  Scene base;
+  Vec3 pivot_m{0.0};  ///< centre of the target's turns (default: mean of object centres)
+  std::string material;  ///< the material the σ and reflectance sweeps change ("": all)
+  double jitter_sigma_rad = 0.0;
+  std::uint64_t jitter_seed = 0;
+  std::vector<Scenario> scenarios;
+  /// FNV-1a of the study's and the base scene's bytes: a resumed study must match it.
+  std::string fnv1a64;
+};
+
+/// @brief Reads a study file and its base scene, expands its scenarios and validates every
+/// scenario's scene, so that a bad value stops the study before any work.
+/// @throw InputError naming the file and JSON pointer (or the scenario) of the first problem.
+Study loadStudy(const std::filesystem::path& path);
+
+/// @brief Validates study JSON text; @p dir is where its `scene` path starts from.
+Study parseStudy(std::string_view json_text, const std::string& source,
+                 const std::filesystem::path& dir);
+
+/// @brief The scene file of one scenario: the base scene's JSON with objects turned and moved,
+/// materials and the laser's direction changed (`glint run` can run it alone).
+std::string scenarioSceneJson(const Study& study, const Scenario& scenario);
+
+/// @brief The validated scene of one scenario.
+/// @throw InputError naming the scenario when its changes make the scene invalid.
+Scene scenarioScene(const Study& study, const Scenario& scenario);
+
+/// @brief The rotation of a pose's angles applied to @p v (see Pose).
+Vec3 rotateYawPitchRoll(const Vec3& v, double yaw_deg, double pitch_deg, double roll_deg);
+
+}  // namespace glint

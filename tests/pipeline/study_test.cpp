@@ -1,0 +1,189 @@
+// Study files: expansion into scenarios, the pose and jitter they apply, and refusals.
+#include "pipeline/study.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <string>
+
+#include "pipeline/input_error.h"
+
+namespace glint {
+namespace {
+
+// The batch tests' base scene: one vertical cylinder at the origin, material "polished".
+const std::filesystem::path kDataDir = GLINT_TEST_DATA_DIR;
+
+Study study(const std::string& body) {
+  return parseStudy("{\"scene\": \"study_scene.json\"" + (body.empty() ? "" : ", " + body) + "}",
+                    "study.json", kDataDir);
+}
+
+std::string refusal(const std::string& body) {
+  try {
+    study(body);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
+void expectNear(const Vec3& a, const Vec3& b, double tol, const std::string& what) {
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(a[i], b[i], tol) << what << " component " << i;
+}
+
+TEST(Study, WithoutSweepsIsTheBaseSceneOnce) {
+  const Study s = study("");
+  ASSERT_EQ(s.scenarios.size(), 1u);
+  const Scene scene = scenarioScene(s, s.scenarios[0]);
+  expectNear(scene.objects[0].center_m, s.base.objects[0].center_m, 0.0, "centre");
+  expectNear(scene.laser.direction, s.base.laser.direction, 0.0, "laser direction");
+  EXPECT_EQ(scene.materials[0].sigma, s.base.materials[0].sigma) << "σ as in the scene";
+}
+
+TEST(Study, SweepsMultiplyInNestedOrderWithJitterInnermost) {
+  const Study s = study(
+      R"("sweep": {"yaw_deg": [0, 10, 20], "sigma": {"from": 0.01, "to": 0.03, "count": 3}},
+         "pointing_jitter": {"sigma_rad": 1e-3, "samples": 2})");
+  ASSERT_EQ(s.scenarios.size(), 3u * 3u * 2u);
+  for (std::size_t i = 0; i < s.scenarios.size(); ++i) {
+    const Scenario& c = s.scenarios[i];
+    EXPECT_EQ(c.index, i);
+    EXPECT_EQ(c.jitter_sample, static_cast<int>(i % 2)) << "scenario " << i;
+    ASSERT_TRUE(c.sigma.has_value());
+    EXPECT_NEAR(*c.sigma, 0.01 + 0.01 * static_cast<double>((i / 2) % 3), 1e-15) << "scenario " << i;
+    EXPECT_EQ(c.yaw_deg, 10.0 * static_cast<double>(i / 6)) << "scenario " << i;
+  }
+  // Common random numbers: sample k has the same pointing error for every other parameter.
+  EXPECT_EQ(s.scenarios[0].jitter_u_rad, s.scenarios[16].jitter_u_rad);
+  EXPECT_EQ(s.scenarios[1].jitter_v_rad, s.scenarios[17].jitter_v_rad);
+  EXPECT_NE(s.scenarios[0].jitter_u_rad, s.scenarios[1].jitter_u_rad);
+}
+
+TEST(Study, TurnsTheTargetAboutThePivotYawThenPitch) {
+  // Yaw 90° about z carries x to y; pitch 90° about y carries z to x (R = Rz Ry Rx).
+  expectNear(rotateYawPitchRoll(Vec3(1, 0, 0), 90, 0, 0), Vec3(0, 1, 0), 1e-15, "yaw");
+  expectNear(rotateYawPitchRoll(Vec3(0, 0, 1), 0, 90, 0), Vec3(1, 0, 0), 1e-15, "pitch");
+  expectNear(rotateYawPitchRoll(Vec3(0, 1, 0), 0, 0, 90), Vec3(0, 0, 1), 1e-15, "roll");
+  expectNear(rotateYawPitchRoll(Vec3(0, 0, 1), 90, 90, 0), Vec3(0, 1, 0), 1e-15,
+             "pitch first, then yaw");
+
+  const Study s = study(R"("pivot": [0, 0, -1], "sweep": {"pitch_deg": [90]})");
+  const Scene scene = scenarioScene(s, s.scenarios[0]);
+  // The centre (0, 0, 0) is 1 m above the pivot: the pitch swings it to (1, 0, -1).
+  expectNear(scene.objects[0].center_m, Vec3(1, 0, -1), 1e-12, "centre");
+  expectNear(scene.objects[0].axis, Vec3(1, 0, 0), 1e-12, "axis");
+}
+
+TEST(Study, TrajectoryIsSampledEveryStepBetweenItsPoses) {
+  const Study s = study(R"("trajectory": {"step_s": 0.5, "poses": [
+      {"time_s": 0, "offset_m": [0, 0, 0], "yaw_deg": 0},
+      {"time_s": 1, "offset_m": [2, 0, 0], "yaw_deg": 30},
+      {"time_s": 2.25, "offset_m": [2, 5, 0], "yaw_deg": 30}]})");
+  // t = 0, 0.5, 1, 1.5, 2 and the last pose at 2.25.
+  ASSERT_EQ(s.scenarios.size(), 6u);
+  const Scenario& half = s.scenarios[1];
+  EXPECT_DOUBLE_EQ(half.pose.time_s, 0.5);
+  expectNear(half.pose.offset_m, Vec3(1, 0, 0), 1e-15, "linear offset at 0.5 s");
+  EXPECT_DOUBLE_EQ(half.pose.yaw_deg, 15.0);
+  expectNear(s.scenarios[3].pose.offset_m, Vec3(2, 2, 0), 1e-12, "offset at 1.5 s");
+  EXPECT_DOUBLE_EQ(s.scenarios[5].pose.time_s, 2.25);
+  const Scene moved = scenarioScene(s, s.scenarios[3]);
+  expectNear(moved.objects[0].center_m, Vec3(2, 2, 0), 1e-12, "the target moves with its pose");
+}
+
+TEST(Study, PointingJitterIsSeededGaussianAndReproducible) {
+  const double sigma = 2e-3;
+  const int n = 4000;
+  const Study s = study(R"("pointing_jitter": {"sigma_rad": 2e-3, "samples": 4000, "seed": 11})");
+  const Study again = study(R"("pointing_jitter": {"sigma_rad": 2e-3, "samples": 4000, "seed": 11})");
+  const Study other = study(R"("pointing_jitter": {"sigma_rad": 2e-3, "samples": 4000, "seed": 12})");
+  double sum = 0.0, sum2 = 0.0;
+  int differ = 0;
+  for (int k = 0; k < n; ++k) {
+    const Scenario& c = s.scenarios[static_cast<std::size_t>(k)];
+    EXPECT_EQ(c.jitter_u_rad, again.scenarios[static_cast<std::size_t>(k)].jitter_u_rad);
+    differ += c.jitter_u_rad != other.scenarios[static_cast<std::size_t>(k)].jitter_u_rad ? 1 : 0;
+    for (double a : {c.jitter_u_rad, c.jitter_v_rad}) {
+      sum += a;
+      sum2 += a * a;
+    }
+  }
+  EXPECT_EQ(differ, n) << "another seed gives other samples";
+  const double m = 2.0 * n;
+  const double mean = sum / m, sd = std::sqrt(sum2 / m - mean * mean);
+  // Five standard errors: σ/√m for the mean, σ/√(2m) for the standard deviation.
+  EXPECT_NEAR(mean, 0.0, 5.0 * sigma / std::sqrt(m)) << "unbiased";
+  EXPECT_NEAR(sd, sigma, 5.0 * sigma / std::sqrt(2.0 * m)) << "the requested spread";
+
+  // The laser turns by the angle of the two jitter components.
+  const Scenario& c = s.scenarios[3];
+  const Scene scene = scenarioScene(s, c);
+  const double expected = std::atan(std::hypot(std::tan(c.jitter_u_rad), std::tan(c.jitter_v_rad)));
+  EXPECT_NEAR(angleBetween(scene.laser.direction, s.base.laser.direction), expected, 1e-12);
+}
+
+TEST(Study, MaterialSweepChangesOnlyTheNamedMaterial) {
+  const Study s = study(R"("sweep": {"specular_reflectance": [0.5, 0.7], "material": "polished"})");
+  ASSERT_EQ(s.scenarios.size(), 2u);
+  EXPECT_DOUBLE_EQ(scenarioScene(s, s.scenarios[1]).materials[0].specular_reflectance, 0.7);
+  EXPECT_NE(refusal(R"("sweep": {"sigma": [0.1], "material": "matte"})").find(
+                "/sweep/material: the scene has no material \"matte\""),
+            std::string::npos);
+}
+
+TEST(Study, RefusesBadStudiesNamingThePlace) {
+  const auto expectRefused = [](const std::string& body, const std::string& part) {
+    const std::string message = refusal(body);
+    EXPECT_NE(message.find(part), std::string::npos) << body << "\n gave: " << message;
+  };
+  expectRefused(R"("sweeps": {})", "study.json: /sweeps: unknown key");
+  expectRefused(R"("sweep": {"yaw_deg": []})", "/sweep/yaw_deg: must hold at least one value");
+  expectRefused(R"("sweep": {"yaw_deg": {"from": 0, "to": 1, "count": 0}})",
+                "/sweep/yaw_deg/count: must be an integer in [1, 100000]");
+  expectRefused(R"("sweep": {"sigma": [0.1, -1]})", "/sweep/sigma: values must be > 0");
+  expectRefused(R"("pointing_jitter": {"sigma_rad": 1e-3})",
+                "/pointing_jitter/samples: must be an integer in [1, 100000]");
+  expectRefused(R"("trajectory": {"poses": [{"time_s": 1}, {"time_s": 1}]})",
+                "/trajectory/poses: times must increase");
+  expectRefused(R"("sweep": {"yaw_deg": {"from": 0, "to": 1, "count": 100000},
+                             "pitch_deg": {"from": 0, "to": 1, "count": 100}})",
+                "scenarios: at most 1 000 000");
+  // A key said twice never silently means the second.
+  EXPECT_NE(refusal(R"("sweep": {"specular_reflectance": [0.5, 1.0]}, "scene": "x")")
+                .find("duplicate key"),
+            std::string::npos);
+  try {
+    parseStudy(R"({"scene": "no_such_scene.json"})", "study.json", kDataDir);
+    ADD_FAILURE() << "a missing scene was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("study.json: /scene:"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Study, ScenarioThatBreaksTheSceneIsRefusedByNumber) {
+  // Diffuse 0.2 + specular 0.9 exceeds 1 only in the second scenario.
+  const std::string dir = ::testing::TempDir();
+  std::ofstream(dir + "/scene_diffuse.json") << R"({
+    "laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "power_w": 1, "wavelength_nm": 532,
+              "beam": {"profile": "flat_top", "radius_m": 1}},
+    "materials": {"m": {"specular_reflectance": 0.5, "diffuse_reflectance": 0.2, "sigma": 0.1}},
+    "objects": [{"shape": "sphere", "center": [0, 0, 0], "radius": 0.5, "material": "m"}],
+    "planes": [{"name": "p", "origin": [-5, -1, 0], "u_axis": [1, 0, 0], "v_axis": [0, 1, 0],
+                "size_m": [1, 1], "pixel_m": 0.5}]})";
+  try {
+    parseStudy(R"({"scene": "scene_diffuse.json", "sweep": {"specular_reflectance": [0.5, 0.9]}})",
+               "study.json", dir);
+    ADD_FAILURE() << "an invalid scenario was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("study.json scenario 1: /materials/m: "
+                                         "specular_reflectance + diffuse_reflectance must be ≤ 1"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace glint
