@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <nlohmann/json.hpp>
 
 #include "export/atomic_file.h"
@@ -64,6 +65,8 @@ std::vector<Region> studyRegions(const Scene& base) {
 // Adds one scenario's irradiance to a region's maximum and hazard count. The count compares the
 // stored float with the MPE, so a scenario read back from its file counts as it did when fresh.
 void accumulate(Region& r, const std::vector<float>& e_w_m2, double mpe_w_m2) {
+  if (e_w_m2.size() != r.max_w_m2.size())
+    throw std::logic_error("batch: a scenario's map does not fit its region's lattice");
   for (std::size_t i = 0; i < e_w_m2.size(); ++i) {
     r.max_w_m2[i] = std::max(r.max_w_m2[i], e_w_m2[i]);
     if (static_cast<double>(e_w_m2[i]) / mpe_w_m2 >= 1.0) ++r.hazardous[i];
@@ -98,14 +101,14 @@ nlohmann::json parametersJson(const Scenario& s) {
 std::string runScenario(const Study& study, const Scenario& s, std::vector<Region>& regions,
                         const fs::path& out_dir) {
   const auto start = Clock::now();
-  const Scene scene = scenarioScene(study, s);
+  const std::string scene_json = scenarioSceneJson(study, s);
+  const Scene scene = parseScene(scene_json, study.source + " scenario " + std::to_string(s.index));
   const double mpe = scene.hazard.mpe.irradiance_w_m2;
   const fs::path dir = out_dir / "scenarios" / scenarioDirName(s.index);
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw OutputError(dir.string() + ": cannot create the scenario folder: " + ec.message());
 
-  const std::string scene_json = scenarioSceneJson(study, s);
   AtomicFile scene_file(dir / "scene.json");
   scene_file.stream() << scene_json;
   scene_file.commit();
@@ -127,10 +130,10 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Regio
   nlohmann::json results = nlohmann::json::array();
   std::int64_t evaluations = 0, unconverged = 0;
   for (Region& r : regions) {
-    const FieldSpec spec =
-        r.plane ? planeFieldSpec(scene, scene.planes[r.plane_index]) : fieldSpec(scene);
-    const FieldProblem problem = fieldProblem(scene, spec);
-    const ObserverField field = computeField(problem.integrator, spec, problem.excluded);
+    // The region's own lattice (the observers do not move with the target), so every
+    // scenario's map adds point for point.
+    const FieldProblem problem = fieldProblem(scene, r.spec);
+    const ObserverField field = computeField(problem.integrator, r.spec, problem.excluded);
     AtomicFile map(dir / r.scenarioFile());
     std::vector<float> e;
     if (r.plane) {
@@ -176,19 +179,27 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
   std::error_code ec;
   if (!fs::is_regular_file(dir / "result.json", ec)) return std::nullopt;
   nlohmann::json record;
+  std::string fnv;
+  bool matches = false;
   try {
     record = nlohmann::json::parse(readUserFile(dir / "result.json", "scenario result"));
+    fnv = record.at("study_fnv1a64").get<std::string>();
+    matches = record.at("scenario").get<std::size_t>() == s.index &&
+              record.at("regions").size() == regions.size();
   } catch (const std::exception&) {
     if (!quiet) err << "glint batch: " << (dir / "result.json").string() << " unreadable: redone\n";
     return std::nullopt;
   }
-  const std::string fnv = record.value("study_fnv1a64", std::string());
   if (fnv != study.fnv1a64) {
     if (fresh) return std::nullopt;
     throw InputError(out_dir.string() + ": holds results of another study (or of this study " +
                      "before it changed): " + (dir / "result.json").string() + " has study " +
                      fnv + ", this study is " + study.fnv1a64 +
                      ". Use --fresh to discard them, or another --out folder");
+  }
+  if (!matches) {
+    if (!quiet) err << "glint batch: " << (dir / "result.json").string() << " does not match: redone\n";
+    return std::nullopt;
   }
   // Maps read in full before any is added, so a damaged file leaves the aggregates untouched.
   const double mpe = study.base.hazard.mpe.irradiance_w_m2;
@@ -247,8 +258,7 @@ std::string scenariosCsv(const std::vector<Region>& regions,
   csv += ",unconverged_points,evaluations,seconds\n";
   for (const auto& [index, rec] : records) {
     const nlohmann::json& p = rec.at("parameters");
-    std::string row = std::to_string(index);
-    for (const char* key : {"time_s"}) row += "," + csvNumber(p.at(key).get<double>());
+    std::string row = std::to_string(index) + "," + csvNumber(p.at("time_s").get<double>());
     for (int a = 0; a < 3; ++a) row += "," + csvNumber(p.at("offset_m")[static_cast<std::size_t>(a)].get<double>());
     for (const char* key : {"pose_yaw_deg", "pose_pitch_deg", "pose_roll_deg", "yaw_deg",
                             "pitch_deg", "roll_deg"})

@@ -185,5 +185,19 @@ TEST(Study, ScenarioThatBreaksTheSceneIsRefusedByNumber) {
   }
 }
 
+TEST(Study, ExampleStudyHasTwentyValidScenarios) {
+  const Study s = loadStudy(std::string(GLINT_EXAMPLES_DIR) + "/cylinder_study.json");
+  ASSERT_EQ(s.scenarios.size(), 20u) << "5 pitches × 4 jitter samples";
+  std::set<double> pitches;
+  for (const Scenario& c : s.scenarios) pitches.insert(c.pitch_deg);
+  EXPECT_EQ(pitches, (std::set<double>{-6.0, -3.0, 0.0, 3.0, 6.0}));
+  ASSERT_EQ(s.base.planes.size(), 1u);
+  EXPECT_EQ(s.base.planes[0].name, "eye_level");
+  // The pivot is the cylinder's centre, 3 m up: tipping it does not move it.
+  expectNear(s.pivot_m, Vec3(0, 0, 3), 0.0, "pivot");
+  expectNear(scenarioScene(s, s.scenarios[0]).objects[0].center_m, Vec3(0, 0, 3), 1e-12,
+             "centre of a tipped cylinder");
+}
+
 }  // namespace
 }  // namespace glint
