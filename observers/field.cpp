@@ -630,7 +630,6 @@ openvdb::math::Transform::Ptr fieldTransform(const FieldSpec& spec) {
   return openvdb::math::Transform::createLinearTransform(m);
 }
 
-
 std::array<int, 3> FieldSpec::nodes() const {
   std::array<int, 3> n{};
   for (int a = 0; a < 3; ++a) {
