@@ -54,16 +54,15 @@ std::string header(const char* type) {
   return buf;
 }
 
-// irradiance / MPE, computed in double.
-std::vector<float> ratioOf(const std::vector<float>& irradiance_w_m2, double mpe_w_m2) {
+}  // namespace
+
+std::vector<float> hazardRatio(const std::vector<float>& irradiance_w_m2, double mpe_w_m2) {
   std::vector<float> ratio(irradiance_w_m2.size());
   for (std::size_t i = 0; i < ratio.size(); ++i) {
     ratio[i] = static_cast<float>(static_cast<double>(irradiance_w_m2[i]) / mpe_w_m2);
   }
   return ratio;
 }
-
-}  // namespace
 
 void writeVdb(std::ostream& out, const ObserverField& field, const RunInfo& info) {
   const FieldGrids& g = field.grids();
@@ -147,7 +146,7 @@ void writeVti(std::ostream& out, const ObserverField& field, int stride, double 
   out << "<Piece Extent=\"0 " << m[0] - 1 << " 0 " << m[1] - 1 << " 0 " << m[2] - 1 << "\">\n";
   out << "<PointData Scalars=\"irradiance_w_m2\">\n";
   out << arrays.add("irradiance_w_m2", "Float32", 1, irradiance);
-  if (mpe_w_m2 > 0.0) out << arrays.add("hazard_ratio", "Float32", 1, ratioOf(irradiance, mpe_w_m2));
+  if (mpe_w_m2 > 0.0) out << arrays.add("hazard_ratio", "Float32", 1, hazardRatio(irradiance, mpe_w_m2));
   out << arrays.add("refinement_level", "Int32", 1, level);
   out << arrays.add("status", "Int32", 1, status);
   out << "</PointData>\n</Piece>\n</ImageData>\n";
@@ -202,7 +201,7 @@ void writeBlocksVtu(std::ostream& out, const ObserverField& field, double mpe_w_
       << arrays.add("offsets", "Int64", 1, offsets) << arrays.add("types", "UInt8", 1, types)
       << "</Cells>\n<PointData Scalars=\"irradiance_w_m2\">\n"
       << arrays.add("irradiance_w_m2", "Float32", 1, irradiance)
-      << (mpe_w_m2 > 0.0 ? arrays.add("hazard_ratio", "Float32", 1, ratioOf(irradiance, mpe_w_m2))
+      << (mpe_w_m2 > 0.0 ? arrays.add("hazard_ratio", "Float32", 1, hazardRatio(irradiance, mpe_w_m2))
                          : std::string())
       << "</PointData>\n<CellData>\n"
       << arrays.add("refinement_level", "Int32", 1, level)

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "facets/integrator.h"
 #include "observers/field.h"
@@ -23,6 +24,9 @@ struct RunInfo {
   double mpe_w_m2 = 0.0;  ///< > 0: `hazard_ratio` (irradiance / MPE) is written beside irradiance
   std::string mpe_rule;   ///< the MPE table row that applied
 };
+
+/// @brief irradiance / MPE for each value, computed in double and stored as float.
+std::vector<float> hazardRatio(const std::vector<float>& irradiance_w_m2, double mpe_w_m2);
 
 /// @brief The grids `irradiance_w_m2`, `hazard_ratio` (irradiance / MPE, where
 /// info.mpe_w_m2 > 0), `refinement_level` and `status` (see VoxelStatus) with the field's

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "export/fnv1a.h"
 #include "observers/field_grids.h"
 
 namespace glint {
@@ -24,14 +25,6 @@ std::size_t latticeSize(const std::array<int, 3>& n) {
 constexpr std::size_t kUuidAt = 21;
 constexpr std::size_t kUuidSize = 36;
 
-std::uint64_t fnv1a64(const std::string& bytes, std::uint64_t h) {
-  for (unsigned char c : bytes) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  return h;
-}
-
 // OpenVDB gives every archive a random UUID, so two writes of the same grids differ. This one
 // is derived from the file's content instead (two FNV-1a hashes of it with the UUID blanked),
 // so equal aggregates are equal files, whichever ranks computed them, and different ones
@@ -46,7 +39,7 @@ void stampContentUuid(std::string& file) {
       return;
   }
   std::fill(file.begin() + kUuidAt, file.begin() + kUuidAt + kUuidSize, '0');
-  const std::uint64_t a = fnv1a64(file, 1469598103934665603ull);
+  const std::uint64_t a = fnv1a64(file);
   const std::uint64_t b = fnv1a64(file, a ^ 0x9e3779b97f4a7c15ull);
   char hex[33];
   std::snprintf(hex, sizeof hex, "%016llx%016llx", static_cast<unsigned long long>(a),
@@ -97,31 +90,19 @@ void writeLatticeVdb(std::ostream& out, const FieldSpec& spec,
 std::vector<float> readLatticeVdb(const std::string& path, const std::string& grid_name,
                                   const FieldSpec& spec) {
   openvdb::initialize();
-  const auto n = spec.nodes();
-  std::vector<float> out(latticeSize(n), 0.0f);
   try {
     openvdb::io::File file(path);
     file.open(false);
     auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(grid_name));
     file.close();
     if (!grid) throw std::runtime_error(path + ": " + grid_name + " is not a float grid");
-    for (auto it = grid->cbeginValueOn(); it; ++it) {
-      const openvdb::CoordBBox box = it.getBoundingBox();
-      for (auto c = box.begin(); c; ++c) {
-        const openvdb::Coord& q = *c;
-        if (q.x() < 0 || q.y() < 0 || q.z() < 0 || q.x() >= n[0] || q.y() >= n[1] ||
-            q.z() >= n[2])
-          throw std::runtime_error(path + ": " + grid_name + " reaches beyond the box");
-        out[(static_cast<std::size_t>(q.z()) * static_cast<std::size_t>(n[1]) +
-             static_cast<std::size_t>(q.y())) *
-                static_cast<std::size_t>(n[0]) +
-            static_cast<std::size_t>(q.x())] = *it;
-      }
-    }
+    std::size_t outside = 0;
+    std::vector<float> out = activeOnLattice(*grid, spec.nodes(), outside);
+    if (outside > 0) throw std::runtime_error(path + ": " + grid_name + " reaches beyond the box");
+    return out;
   } catch (const openvdb::Exception& e) {
     throw std::runtime_error(path + ": cannot read the VDB file: " + e.what());
   }
-  return out;
 }
 
 }  // namespace glint

@@ -630,6 +630,31 @@ openvdb::math::Transform::Ptr fieldTransform(const FieldSpec& spec) {
   return openvdb::math::Transform::createLinearTransform(m);
 }
 
+std::vector<float> activeOnLattice(const openvdb::FloatGrid& grid, const std::array<int, 3>& n,
+                                   std::size_t& outside) {
+  std::vector<float> out(static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]) *
+                             static_cast<std::size_t>(n[2]),
+                         0.0f);
+  outside = 0;
+  for (auto it = grid.cbeginValueOn(); it; ++it) {
+    // A tile stands for all its voxels.
+    const openvdb::CoordBBox box = it.getBoundingBox();
+    for (auto c = box.begin(); c; ++c) {
+      const openvdb::Coord& q = *c;
+      if (q.x() < 0 || q.y() < 0 || q.z() < 0 || q.x() >= n[0] || q.y() >= n[1] ||
+          q.z() >= n[2]) {
+        ++outside;
+        continue;
+      }
+      out[(static_cast<std::size_t>(q.z()) * static_cast<std::size_t>(n[1]) +
+           static_cast<std::size_t>(q.y())) *
+              static_cast<std::size_t>(n[0]) +
+          static_cast<std::size_t>(q.x())] = *it;
+    }
+  }
+  return out;
+}
+
 std::array<int, 3> FieldSpec::nodes() const {
   std::array<int, 3> n{};
   for (int a = 0; a < 3; ++a) {
@@ -658,23 +683,8 @@ double ObserverField::irradiance(int i, int j, int k) const {
   return grids_->irradiance->tree().getValue(openvdb::Coord(i, j, k));
 }
 std::vector<float> ObserverField::irradianceLattice() const {
-  const auto n = spec_.nodes();
-  std::vector<float> out(static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]) *
-                             static_cast<std::size_t>(n[2]),
-                         0.0f);
-  for (auto it = grids_->irradiance->cbeginValueOn(); it; ++it) {
-    const openvdb::CoordBBox box = it.getBoundingBox();
-    for (auto c = box.begin(); c; ++c) {
-      const openvdb::Coord& q = *c;
-      if (q.x() < 0 || q.y() < 0 || q.z() < 0 || q.x() >= n[0] || q.y() >= n[1] || q.z() >= n[2])
-        continue;
-      out[(static_cast<std::size_t>(q.z()) * static_cast<std::size_t>(n[1]) +
-           static_cast<std::size_t>(q.y())) *
-              static_cast<std::size_t>(n[0]) +
-          static_cast<std::size_t>(q.x())] = *it;
-    }
-  }
-  return out;
+  std::size_t outside = 0;
+  return activeOnLattice(*grids_->irradiance, spec_.nodes(), outside);
 }
 VoxelStatus ObserverField::status(int i, int j, int k) const {
   return static_cast<VoxelStatus>(

@@ -5,12 +5,21 @@
 
 #include <openvdb/openvdb.h>
 
+#include <array>
+#include <vector>
+
 #include "observers/field.h"
 
 namespace glint {
 
 /// @brief Index (i, j, k) to world: lattice point (i, j, k) of @p spec, axes and all.
 openvdb::math::Transform::Ptr fieldTransform(const FieldSpec& spec);
+
+/// @brief The active values of @p grid on the dense lattice of @p nodes points per axis,
+/// indexed [(k · nodes[1] + j) · nodes[0] + i], 0 elsewhere; @p outside counts the active
+/// voxels beyond the lattice, which are left out.
+std::vector<float> activeOnLattice(const openvdb::FloatGrid& grid, const std::array<int, 3>& nodes,
+                                   std::size_t& outside);
 
 /// @brief All at the finest voxel size, index (i, j, k) = lattice point (i, j, k).
 struct FieldGrids {

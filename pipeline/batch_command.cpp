@@ -62,15 +62,21 @@ std::vector<Region> studyRegions(const Scene& base) {
   return regions;
 }
 
-// Adds one scenario's irradiance to a region's maximum and hazard count. The count compares the
-// stored float with the MPE, so a scenario read back from its file counts as it did when fresh.
-void accumulate(Region& r, const std::vector<float>& e_w_m2, double mpe_w_m2) {
+// Adds one scenario's irradiance to a region's maximum and hazard count, and returns how many
+// of its points reach the MPE. The count compares the stored float with the MPE, so a
+// scenario read back from its file counts as it did when fresh.
+std::int64_t accumulate(Region& r, const std::vector<float>& e_w_m2, double mpe_w_m2) {
   if (e_w_m2.size() != r.max_w_m2.size())
     throw std::logic_error("batch: a scenario's map does not fit its region's lattice");
+  std::int64_t hazardous = 0;
   for (std::size_t i = 0; i < e_w_m2.size(); ++i) {
     r.max_w_m2[i] = std::max(r.max_w_m2[i], e_w_m2[i]);
-    if (static_cast<double>(e_w_m2[i]) / mpe_w_m2 >= 1.0) ++r.hazardous[i];
+    if (static_cast<double>(e_w_m2[i]) / mpe_w_m2 >= 1.0) {
+      ++r.hazardous[i];
+      ++hazardous;
+    }
   }
+  return hazardous;
 }
 
 std::string scenarioDirName(std::size_t index) {
@@ -102,7 +108,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Regio
                         const fs::path& out_dir) {
   const auto start = Clock::now();
   const std::string scene_json = scenarioSceneJson(study, s);
-  const Scene scene = parseScene(scene_json, study.source + " scenario " + std::to_string(s.index));
+  const Scene scene = scenarioScene(study, s, scene_json);
   const double mpe = scene.hazard.mpe.irradiance_w_m2;
   const fs::path dir = out_dir / "scenarios" / scenarioDirName(s.index);
   std::error_code ec;
@@ -113,16 +119,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Regio
   scene_file.stream() << scene_json;
   scene_file.commit();
 
-  RunInfo info;
-  info.program_version = std::string("glint ") + GLINT_VERSION;
-  info.scene_file = (dir / "scene.json").string();
-  info.scene_fnv1a64 = fnv1a64Hex(scene_json);
-  info.scheme = "adaptive";
-  info.wavelength_nm = scene.laser.wavelength_nm;
-  info.power_w = scene.laser.power_w;
-  info.exposure_s = scene.hazard.exposure_s;
-  info.mpe_w_m2 = mpe;
-  info.mpe_rule = "ANSI Z136.1-2014 Table 5a: " + scene.hazard.mpe.rule;
+  const RunInfo info = runInfo(scene, (dir / "scene.json").string(), scene_json, "adaptive");
 
   nlohmann::json record = {{"study_fnv1a64", study.fnv1a64},
                            {"scenario", s.index},
@@ -145,9 +142,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Regio
       e = field.irradianceLattice();
     }
     map.commit();
-    accumulate(r, e, mpe);
-    std::int64_t hazardous = 0;
-    for (float x : e) hazardous += static_cast<double>(x) / mpe >= 1.0 ? 1 : 0;
+    const std::int64_t hazardous = accumulate(r, e, mpe);
     const FieldStats& st = field.stats();
     results.push_back({{"name", r.name},
                        {"peak_hazard_ratio", st.peak_w_m2 / mpe},
@@ -258,27 +253,32 @@ std::string scenariosCsv(const std::vector<Region>& regions,
   csv += ",unconverged_points,evaluations,seconds\n";
   for (const auto& [index, rec] : records) {
     const nlohmann::json& p = rec.at("parameters");
-    std::string row = std::to_string(index) + "," + csvNumber(p.at("time_s").get<double>());
-    for (int a = 0; a < 3; ++a) row += "," + csvNumber(p.at("offset_m")[static_cast<std::size_t>(a)].get<double>());
+    std::string row = std::to_string(index);
+    auto cell = [&row](const std::string& value) {
+      row += ',';
+      row += value;
+    };
+    auto number = [&](const nlohmann::json& x) { cell(csvNumber(x.get<double>())); };
+    number(p.at("time_s"));
+    for (const nlohmann::json& x : p.at("offset_m")) number(x);
     for (const char* key : {"pose_yaw_deg", "pose_pitch_deg", "pose_roll_deg", "yaw_deg",
                             "pitch_deg", "roll_deg"})
-      row += "," + csvNumber(p.at(key).get<double>());
+      number(p.at(key));
     // Empty: as in the scene.
     for (const char* key : {"sigma", "specular_reflectance"})
-      row += "," + (p.contains(key) ? csvNumber(p.at(key).get<double>()) : std::string());
+      p.contains(key) ? number(p.at(key)) : cell("");
     const int sample = p.at("jitter_sample").get<int>();
-    row += "," + (sample >= 0 ? std::to_string(sample) : std::string());
-    row += "," + csvNumber(p.at("jitter_u_rad").get<double>());
-    row += "," + csvNumber(p.at("jitter_v_rad").get<double>());
+    cell(sample >= 0 ? std::to_string(sample) : std::string());
+    number(p.at("jitter_u_rad"));
+    number(p.at("jitter_v_rad"));
     for (const nlohmann::json& r : rec.at("regions")) {
-      row += "," + csvNumber(r.at("peak_hazard_ratio").get<double>());
-      row += "," + csvNumber((r.contains("hazardous_area_m2") ? r.at("hazardous_area_m2")
-                                                              : r.at("hazard_volume_m3"))
-                                 .get<double>());
+      number(r.at("peak_hazard_ratio"));
+      number(r.contains("hazardous_area_m2") ? r.at("hazardous_area_m2") : r.at("hazard_volume_m3"));
     }
-    row += "," + std::to_string(rec.at("unconverged_points").get<std::int64_t>());
-    row += "," + std::to_string(rec.at("evaluations").get<std::int64_t>());
-    row += "," + formatNumber("%.3f", rec.at("seconds").get<double>()) + "\n";
+    cell(std::to_string(rec.at("unconverged_points").get<std::int64_t>()));
+    cell(std::to_string(rec.at("evaluations").get<std::int64_t>()));
+    cell(formatNumber("%.3f", rec.at("seconds").get<double>()));
+    row += '\n';
     csv += row;
   }
   return csv;
@@ -292,17 +292,10 @@ std::vector<float> coverage(const Region& r, std::size_t scenarios) {
   return c;
 }
 
-std::vector<float> ratio(const std::vector<float>& e_w_m2, double mpe_w_m2) {
-  std::vector<float> out(e_w_m2.size());
-  for (std::size_t i = 0; i < out.size(); ++i)
-    out[i] = static_cast<float>(static_cast<double>(e_w_m2[i]) / mpe_w_m2);
-  return out;
-}
-
 void writeRegionMap(const fs::path& path, const Region& r, const Study& study,
                     std::size_t scenarios) {
   const HazardSpec& h = study.base.hazard;
-  const std::vector<float> max_ratio = ratio(r.max_w_m2, h.mpe.irradiance_w_m2);
+  const std::vector<float> max_ratio = hazardRatio(r.max_w_m2, h.mpe.irradiance_w_m2);
   const std::vector<float> cover = coverage(r, scenarios);
   const std::string program = std::string("glint ") + GLINT_VERSION;
   AtomicFile file(path);
@@ -327,7 +320,7 @@ void writeRegionMap(const fs::path& path, const Region& r, const Study& study,
                     {"study_file", study.source},
                     {"study_fnv1a64", study.fnv1a64},
                     {"length_unit", "m"},
-                    {"mpe_rule", "ANSI Z136.1-2014 Table 5a: " + h.mpe.rule}};
+                    {"mpe_rule", mpeCitation(h.mpe)}};
     meta.numbers = {{"scenarios", static_cast<double>(scenarios)},
                     {"wavelength_nm", study.base.laser.wavelength_nm},
                     {"exposure_s", h.exposure_s},
@@ -359,7 +352,7 @@ nlohmann::json summaryJson(const Study& study, const std::vector<Region>& region
                       {"hazard",
                        {{"exposure_s", h.exposure_s},
                         {"mpe_w_m2", h.mpe.irradiance_w_m2},
-                        {"mpe_rule", "ANSI Z136.1-2014 Table 5a: " + h.mpe.rule}}}};
+                        {"mpe_rule", mpeCitation(h.mpe)}}}};
   std::vector<double> evaluations, seconds;
   for (const auto& [index, rec] : records) {
     evaluations.push_back(static_cast<double>(rec.at("evaluations").get<std::int64_t>()));

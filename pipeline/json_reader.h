@@ -263,8 +263,7 @@ inline json parseJson(std::string_view text, const std::string& source) {
 /// @throw InputError when it is a folder or cannot be read.
 std::string readUserFile(const std::filesystem::path& path, const std::string& what);
 
-/// @brief FNV-1a, 64 bit, as 16 hex digits: names the inputs a result came from (not a
-/// security measure).
+/// @brief fnv1a64() of @p bytes as 16 hex digits.
 std::string fnv1a64Hex(std::string_view bytes);
 
 }  // namespace glint

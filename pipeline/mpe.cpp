@@ -165,4 +165,6 @@ const char* toString(MpeLimit limit) {
   return limit == MpeLimit::Photochemical ? "photochemical" : "thermal";
 }
 
+std::string mpeCitation(const Mpe& mpe) { return "ANSI Z136.1-2014 Table 5a: " + mpe.rule; }
+
 }  // namespace glint

@@ -31,6 +31,9 @@ struct Mpe {
 /// std::out_of_range naming the range: the table is never extrapolated.
 Mpe ocularMpe(double wavelength_nm, double exposure_s);
 
+/// @brief The table row of @p mpe with the table's name, as outputs record it.
+std::string mpeCitation(const Mpe& mpe);
+
 /// @brief "thermal" or "photochemical".
 const char* toString(MpeLimit limit);
 

@@ -33,8 +33,6 @@ int vtiStride(const FieldSpec& spec) {
   return stride;
 }
 
-std::string mpeCitation(const Mpe& mpe) { return "ANSI Z136.1-2014 Table 5a: " + mpe.rule; }
-
 // The centre of the target's bounding box: the nominal hazard zone's reach is measured from it.
 Vec3 targetCentre(const Target& target) {
   Vec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
@@ -283,6 +281,21 @@ PlaneMap planeMap(const ObserverField& field, double mpe_w_m2) {
   return m;
 }
 
+RunInfo runInfo(const Scene& scene, const std::string& scene_file, std::string_view scene_text,
+                const std::string& scheme) {
+  RunInfo info;
+  info.program_version = std::string("glint ") + GLINT_VERSION;
+  info.scene_file = scene_file;
+  info.scene_fnv1a64 = fnv1a64Hex(scene_text);
+  info.scheme = scheme;
+  info.wavelength_nm = scene.laser.wavelength_nm;
+  info.power_w = scene.laser.power_w;
+  info.exposure_s = scene.hazard.exposure_s;
+  info.mpe_w_m2 = scene.hazard.mpe.irradiance_w_m2;
+  info.mpe_rule = mpeCitation(scene.hazard.mpe);
+  return info;
+}
+
 void runField(const RunArgs& args, std::ostream& err) {
   const Scene scene = loadScene(args.scene_path);
   if (!scene.observers && scene.planes.empty()) {
@@ -325,16 +338,8 @@ void runField(const RunArgs& args, std::ostream& err) {
         tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(args.threads));
   }
 
-  RunInfo info;
-  info.program_version = std::string("glint ") + GLINT_VERSION;
-  info.scene_file = args.scene_path;
-  info.scene_fnv1a64 = fnv1a64Hex(readUserFile(args.scene_path, "scene file"));
-  info.scheme = args.uniform ? "uniform" : "adaptive";
-  info.wavelength_nm = scene.laser.wavelength_nm;
-  info.power_w = scene.laser.power_w;
-  info.exposure_s = scene.hazard.exposure_s;
-  info.mpe_w_m2 = scene.hazard.mpe.irradiance_w_m2;
-  info.mpe_rule = mpeCitation(scene.hazard.mpe);
+  const RunInfo info = runInfo(scene, args.scene_path, readUserFile(args.scene_path, "scene file"),
+                               args.uniform ? "uniform" : "adaptive");
 
   nlohmann::json j;
   if (scene.observers) {

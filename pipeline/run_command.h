@@ -5,9 +5,12 @@
 
 #include <ostream>
 #include <string>
+#include <string_view>
 
 #include "export/exr_map.h"
+#include "export/field_files.h"
 #include "observers/field.h"
+#include "pipeline/scene.h"
 
 namespace glint {
 
@@ -26,6 +29,11 @@ struct RunArgs {
 /// whole or not at all.
 /// @throw InputError, OutputError on bad input or an unwritable folder.
 void runField(const RunArgs& args, std::ostream& err);
+
+/// @brief What the files of a run of @p scene record about it: the program, the scene file and
+/// the hash of its text @p scene_text, the scheme ("adaptive" or "uniform"), the laser and MPE.
+RunInfo runInfo(const Scene& scene, const std::string& scene_file, std::string_view scene_text,
+                const std::string& scheme);
 
 /// @brief A plane's field as the map `glint run` writes: lattice row j along v, column i along
 /// u; hazard_ratio = irradiance / @p mpe_w_m2.

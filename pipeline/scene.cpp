@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "export/fnv1a.h"
 #include "pipeline/input_error.h"
 #include "pipeline/json_reader.h"
 
@@ -257,13 +258,8 @@ std::string readUserFile(const std::filesystem::path& path, const std::string& w
 }
 
 std::string fnv1a64Hex(std::string_view bytes) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : bytes) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
   char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(fnv1a64(bytes)));
   return buf;
 }
 

@@ -54,13 +54,14 @@ Pose readPose(ObjectReader r) {
   Pose p;
   p.time_s = r.number("time_s");
   if (r.has("offset_m")) p.offset_m = r.vec3("offset_m");
-  p.yaw_deg = r.number("yaw_deg", 0.0);
-  p.pitch_deg = r.number("pitch_deg", 0.0);
-  p.roll_deg = r.number("roll_deg", 0.0);
-  for (const char* key : {"yaw_deg", "pitch_deg", "roll_deg"}) {
-    const double a = key[0] == 'y' ? p.yaw_deg : key[0] == 'p' ? p.pitch_deg : p.roll_deg;
+  auto angle = [&r](const char* key) {
+    const double a = r.number(key, 0.0);
     if (!(std::abs(a) <= 3600.0)) r.fail(key, "must be in [-3600, 3600] degrees");
-  }
+    return a;
+  };
+  p.yaw_deg = angle("yaw_deg");
+  p.pitch_deg = angle("pitch_deg");
+  p.roll_deg = angle("roll_deg");
   r.finish();
   return p;
 }
@@ -289,9 +290,12 @@ std::string scenarioSceneJson(const Study& study, const Scenario& s) {
   return scene.dump(2) + "\n";
 }
 
+Scene scenarioScene(const Study& study, const Scenario& s, std::string_view scene_json) {
+  return parseScene(scene_json, study.source + " scenario " + std::to_string(s.index));
+}
+
 Scene scenarioScene(const Study& study, const Scenario& s) {
-  return parseScene(scenarioSceneJson(study, s),
-                    study.source + " scenario " + std::to_string(s.index));
+  return scenarioScene(study, s, scenarioSceneJson(study, s));
 }
 
 }  // namespace glint

@@ -76,6 +76,8 @@ std::string scenarioSceneJson(const Study& study, const Scenario& scenario);
 /// @brief The validated scene of one scenario.
 /// @throw InputError naming the scenario when its changes make the scene invalid.
 Scene scenarioScene(const Study& study, const Scenario& scenario);
+/// @brief The same, from the scenario's scene file text already made.
+Scene scenarioScene(const Study& study, const Scenario& scenario, std::string_view scene_json);
 
 /// @brief The rotation of a pose's angles applied to @p v (see Pose).
 Vec3 rotateYawPitchRoll(const Vec3& v, double yaw_deg, double pitch_deg, double roll_deg);

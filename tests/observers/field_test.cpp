@@ -19,13 +19,21 @@ struct Case {
   std::string json;
 };
 
-// A scene with an observer box; `material` and `objects` JSON spliced in.
-std::string sceneJson(const std::string& beam, const std::string& material,
-                      const std::string& objects, const std::string& observers) {
+// A scene whose observers are `observers_key`: `observers`; beam, material and objects JSON
+// spliced in.
+std::string sceneWith(const std::string& beam, const std::string& material,
+                      const std::string& objects, const std::string& observers_key,
+                      const std::string& observers) {
   return R"({"laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "power_w": 1000.0,
              "wavelength_nm": 1064, "beam": )" +
          beam + R"(}, "materials": {"m": )" + material + R"(}, "objects": [)" + objects +
-         R"(], "observers": )" + observers + "}";
+         R"(], ")" + observers_key + R"(": )" + observers + "}";
+}
+
+// A scene with an observer box.
+std::string sceneJson(const std::string& beam, const std::string& material,
+                      const std::string& objects, const std::string& observers) {
+  return sceneWith(beam, material, objects, "observers", observers);
 }
 
 struct Comparison {
@@ -175,13 +183,10 @@ TEST(ObserverField, RegionAboveAThresholdIsEveryLatticePointReachingIt) {
   EXPECT_EQ(none.volume_m3, 0.0);
 }
 
-// A scene with `planes` instead of an observer box.
+// A scene with one plane instead of an observer box.
 std::string planeScene(const std::string& beam, const std::string& material,
                        const std::string& objects, const std::string& plane) {
-  return R"({"laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "power_w": 1000.0,
-             "wavelength_nm": 1064, "beam": )" +
-         beam + R"(}, "materials": {"m": )" + material + R"(}, "objects": [)" + objects +
-         R"(], "planes": [)" + plane + "]}";
+  return sceneWith(beam, material, objects, "planes", "[" + plane + "]");
 }
 
 TEST(ObserverPlane, TiltedWallFindsTheNarrowGlintAsDense) {

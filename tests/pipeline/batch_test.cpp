@@ -11,10 +11,10 @@
 
 #include "export/exr_map.h"
 #include "export/lattice_vdb.h"
-#include "pipeline/cli.h"
 #include "pipeline/scene.h"
 #include "pipeline/study.h"
 #include "pipeline/target_builder.h"
+#include "support/cli.h"
 
 namespace glint {
 namespace {
@@ -23,19 +23,8 @@ namespace fs = std::filesystem;
 
 const std::string kStudy = std::string(GLINT_TEST_DATA_DIR) + "/study.json";
 
-struct Outcome {
-  int status;
-  std::string err;
-};
-
-Outcome glint(std::vector<std::string> args) {
-  args.insert(args.begin(), "glint");
-  std::vector<const char*> argv;
-  for (const auto& a : args) argv.push_back(a.c_str());
-  std::ostringstream out, err;
-  const int status = runGlint(static_cast<int>(argv.size()), argv.data(), out, err);
-  return {status, err.str()};
-}
+using test::glint;
+using test::Outcome;
 
 std::string bytes(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);

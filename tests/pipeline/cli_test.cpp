@@ -15,24 +15,15 @@
 #include <fstream>
 #include <sstream>
 
+#include "support/cli.h"
+
 namespace glint {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Outcome {
-  int status;
-  std::string out, err;
-};
-
-Outcome glint(std::vector<std::string> args) {
-  args.insert(args.begin(), "glint");
-  std::vector<const char*> argv;
-  for (const auto& a : args) argv.push_back(a.c_str());
-  std::ostringstream out, err;
-  const int status = runGlint(static_cast<int>(argv.size()), argv.data(), out, err);
-  return {status, out.str(), err.str()};
-}
+using test::glint;
+using test::Outcome;
 
 // A fresh folder per test, removed afterwards.
 class CliTest : public ::testing::Test {
