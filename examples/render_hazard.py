@@ -1,6 +1,6 @@
 """Renders the hazard of a `glint run` as a PNG with ParaView:
 
-    xvfb-run -a pvpython examples/render_hazard.py OUT_DIR
+    HWLOC_COMPONENTS=-gl xvfb-run -a -s "-noreset" pvpython examples/render_hazard.py OUT_DIR
              [--level W_M2 | --ratio R] [--png FILE] [--size WIDTH HEIGHT]
 
 (Debian's ParaView renders through X; xvfb-run gives it a virtual display on a machine

@@ -5,6 +5,9 @@
 # Usage: batch_mpi_test.sh GLINT MPIEXEC STUDY SERIAL_RUN_DIR WORKDIR
 # (SERIAL_RUN_DIR: the study run on one process, by the ctest fixture GlintBatch.RunsTheTestStudy)
 set -euo pipefail
+# Open MPI's hwloc would otherwise open every X display it finds (looking for GPUs), which
+# can upset a virtual display another test is using at the same time.
+export HWLOC_COMPONENTS=-gl,-opencl
 glint=$1 mpiexec=$2 study=$3 serial=$4 work=$5
 rm -rf "$work" && mkdir -p "$work"
 # As root, Open MPI needs --allow-run-as-root; --oversubscribe lets 2 ranks start on any machine.
