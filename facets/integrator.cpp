@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "facets/detail/patch_models.h"
+#include "facets/occluder.h"
 #include "facets/sum.h"
 
 namespace glint {
@@ -105,6 +106,16 @@ struct Totals {
   [[nodiscard]] double error() const { return std::abs(signed_change) + magnitude; }
 };
 
+// How much of an occlusion ray from the centre of @p g toward @p d to ignore. Where some normal
+// of the facet is perpendicular to d, the facet straddles its own terminator or horizon: the
+// kernel already clips it there (cos θ modelled linearly between the corners), and a ray from
+// its centre may run into the facet's own neighbourhood at a grazing angle. Such a ray ignores
+// what lies within two facet radii, about where a convex surface's own re-entry ends.
+double localSkip(const PatchGeometry& g, const Vec3& d) {
+  const bool straddles = g.cone_rad >= 0.5 * kPi || glm::dot(d, g.normal) < std::sin(g.cone_rad);
+  return straddles ? 2.0 * g.radius_m : 0.0;
+}
+
 }  // namespace
 
 struct IntegratorWorkspace::Impl {
@@ -186,6 +197,10 @@ FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const Integrat
   for (const TargetObject& obj : target_.objects) {
     object_beams_.push_back(beam_.relativeTo(obj.origin_m));
   }
+  if (options_.occlusion && needsOcclusion(target_)) {
+    occluder_ = std::make_shared<const Occluder>(target_);
+    cull_.occlusion = true;
+  }
   cull_.coarse_facets = target_.facetCount();
   for (std::uint32_t i = 0; i < target_.facetCount(); ++i) {
     const std::uint32_t obj = target_.object[i];
@@ -201,9 +216,20 @@ FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const Integrat
       case LightVerdict::FacesAway:
         ++cull_.facing_away;
         break;
-      case LightVerdict::MayBeLit:
+      case LightVerdict::MayBeLit: {
+        // The shadow ray runs back along the beam to the laser's plane.
+        const Vec3 from = g.centre_m + target_.objects[obj].origin_m +
+                          (occluder_ ? occluder_->lift_m(i) : 0.0) * g.normal;
+        if (occluder_ &&
+            !occluder_->rayClear(from, -beam_.direction,
+                                 glm::dot(from - beam_.origin_m, beam_.direction),
+                                 localSkip(g, -beam_.direction))) {
+          ++cull_.shadowed;
+          break;
+        }
         lit_.push_back({coarseSubFacet(target_, i), obj, g, g.cone_rad, g.radius_m});
         break;
+      }
     }
   }
   cull_.lit = lit_.size();
@@ -215,6 +241,14 @@ void FacetIntegrator::prepareObserver(const Vec3& observer_m, IntegratorWorkspac
   for (std::size_t k = 0; k < target_.objects.size(); ++k) {
     ws.observer_local_m[k] = observer_m - target_.objects[k].origin_m;
   }
+}
+
+bool FacetIntegrator::visible(const Candidate& c, const Vec3& observer_m) const {
+  if (!occluder_) return true;
+  const Vec3 from = c.geometry.centre_m + target_.objects[c.object].origin_m +
+                    occluder_->lift_m(c.facet.coarse) * c.geometry.normal;
+  const auto toward = tryNormalize(observer_m - from);
+  return !toward || occluder_->segmentClear(from, observer_m, localSkip(c.geometry, *toward));
 }
 
 ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
@@ -237,7 +271,7 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
 
   for (const Candidate& lit : candidates) {
     const Vec3& x = ws.observer_local_m[lit.object];
-    if (!mayFaceObserver(lit.geometry, x)) continue;
+    if (!mayFaceObserver(lit.geometry, x) || !visible(lit, observer_m)) continue;
     const Beam& beam = object_beams_[lit.object];
     const Material& material = target_.materials[target_.objects[lit.object].material];
     Leaf leaf;
@@ -348,7 +382,7 @@ ObserverResult FacetIntegrator::uniform(const Vec3& observer_m, int level,
   CompensatedSum total;
   for (const Candidate& lit : lit_) {
     const Vec3& x = ws.observer_local_m[lit.object];
-    if (!mayFaceObserver(lit.geometry, x)) continue;
+    if (!mayFaceObserver(lit.geometry, x) || !visible(lit, observer_m)) continue;
     const Beam& beam = object_beams_[lit.object];
     const Material& material = target_.materials[target_.objects[lit.object].material];
     detail::withPatchModel(target_, lit.facet.coarse, [&](const auto& model) {

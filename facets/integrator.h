@@ -29,6 +29,9 @@ struct IntegratorOptions {
   std::int64_t max_evaluations = 4'000'000;    ///< per observer; beyond it: flagged unconverged
   NormalModel normals = NormalModel::Surface;  ///< normal the BRDF sees
   ResolutionLimits resolution;                 ///< when a centre sample stands for its facet
+  /// Trace occlusion rays (Occluder) where the target can shadow itself: a facet counts only
+  /// if its centre sees the laser and the observer. Off: every facet sees everything.
+  bool occlusion = true;
 };
 
 /// @brief The irradiance at one observer and how it was obtained.
@@ -46,7 +49,9 @@ struct CullStats {
   std::size_t degenerate = 0;    ///< zero area: nothing to reflect
   std::size_t facing_away = 0;   ///< no normal of the facet can see the laser
   std::size_t outside_beam = 0;  ///< no point of the facet is inside the beam
+  std::size_t shadowed = 0;      ///< its centre's ray to the laser hits the target
   std::size_t lit = 0;           ///< kept for the observers
+  bool occlusion = false;        ///< occlusion rays are traced (see IntegratorOptions)
 };
 
 /// @brief A (sub)facet that observers may receive light from, with its bound geometry in its
@@ -102,10 +107,12 @@ class IntegratorWorkspace {
 
 /// @brief The lit coarse facets of a target under a beam, ready to be integrated at any
 /// number of observers (from any number of threads, each with its own workspace).
+class Occluder;
+
 class FacetIntegrator {
  public:
   /// @brief Culls the facets that no observer can receive light from (facing away from the
-  /// laser, outside the beam, zero area), once.
+  /// laser, outside the beam, zero area, in the target's own shadow), once.
   FacetIntegrator(Target target, const Beam& beam, const IntegratorOptions& options);
 
   /// @brief Adaptive integration at @p observer_m (world coordinates).
@@ -140,6 +147,8 @@ class FacetIntegrator {
 
  private:
   void prepareObserver(const Vec3& observer_m, IntegratorWorkspace::Impl& ws) const;
+  // Whether the observer sees the candidate's centre past the rest of the target.
+  bool visible(const Candidate& c, const Vec3& observer_m) const;
 
   Target target_;
   Beam beam_;
@@ -147,6 +156,7 @@ class FacetIntegrator {
   std::vector<Beam> object_beams_;  // the beam in each object's frame
   std::vector<Candidate> lit_;
   CullStats cull_;
+  std::shared_ptr<const Occluder> occluder_;  // null where the target cannot shadow itself
 };
 
 }  // namespace glint

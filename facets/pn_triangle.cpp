@@ -20,24 +20,34 @@ int controlIndex(int i, int j, int k) {
   return 9;  // (1, 1, 1)
 }
 
+// Edge control point near vertex p_i toward p_j: a third of the way along the edge,
+// projected into the tangent plane of the normal n_i.
+Vec3 edgeControl(const Vec3& p_i, const Vec3& p_j, const Vec3& n_i) {
+  const double w = glm::dot(p_j - p_i, n_i);
+  return (2.0 * p_i + p_j - w * n_i) / 3.0;
+}
+
 }  // namespace
 
-PNTriangle::PNTriangle(const std::array<Vec3, 3>& p, const std::array<Vec3, 3>& n) {
-  // Edge control point near vertex i toward vertex j: a third of the way along the edge,
-  // projected into the tangent plane of vertex i.
-  auto edgeControl = [&](int i, int j) {
-    const double w = glm::dot(p[j] - p[i], n[i]);
-    return (2.0 * p[i] + p[j] - w * n[i]) / 3.0;
+PNTriangle::PNTriangle(const std::array<Vec3, 3>& p, const std::array<Vec3, 3>& n)
+    : PNTriangle(p, n, {{{n[0], n[1]}, {n[1], n[2]}, {n[2], n[0]}}}) {}
+
+PNTriangle::PNTriangle(const std::array<Vec3, 3>& p, const std::array<Vec3, 3>& n,
+                       const std::array<std::array<Vec3, 2>, 3>& across) {
+  // Near vertex i on edge e, toward j; `other` is the neighbour's normal at vertex i. The sum
+  // is symmetric, so the neighbour computes the very same double.
+  auto shared = [&](int i, int j, const Vec3& other) {
+    return 0.5 * (edgeControl(p[i], p[j], n[i]) + edgeControl(p[i], p[j], other));
   };
   b_[0] = p[0];
   b_[1] = p[1];
   b_[2] = p[2];
-  b_[3] = edgeControl(0, 1);  // b210
-  b_[4] = edgeControl(1, 0);  // b120
-  b_[5] = edgeControl(1, 2);  // b021
-  b_[6] = edgeControl(2, 1);  // b012
-  b_[7] = edgeControl(2, 0);  // b102
-  b_[8] = edgeControl(0, 2);  // b201
+  b_[3] = shared(0, 1, across[0][0]);  // b210
+  b_[4] = shared(1, 0, across[0][1]);  // b120
+  b_[5] = shared(1, 2, across[1][0]);  // b021
+  b_[6] = shared(2, 1, across[1][1]);  // b012
+  b_[7] = shared(2, 0, across[2][0]);  // b102
+  b_[8] = shared(0, 2, across[2][1]);  // b201
   Vec3 e(0.0);
   for (int k = 3; k < 9; ++k) e += b_[k];
   e /= 6.0;

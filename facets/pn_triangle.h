@@ -19,6 +19,16 @@ class PNTriangle {
   /// @brief From vertex positions @p p_m and unit vertex normals @p n.
   PNTriangle(const std::array<Vec3, 3>& p_m, const std::array<Vec3, 3>& n);
 
+  /// @brief A PN triangle whose edge curves are shared with its neighbours even across a
+  /// crease (PN-AEN, McDonald and Kilgard 2010). @p across[e] holds the unit normals that the
+  /// facet on the other side of edge e (vertices e, e+1 mod 3) has at those two vertices, in
+  /// that order; on a boundary or a smooth edge they equal @p n. Each edge control point is the
+  /// mean of the two sides' own, so both facets build the same edge and the surface neither
+  /// cracks nor overlaps there, while each side keeps its own normal field (the crease stays
+  /// sharp in the reflection).
+  PNTriangle(const std::array<Vec3, 3>& p_m, const std::array<Vec3, 3>& n,
+             const std::array<std::array<Vec3, 2>, 3>& across);
+
   /// @brief Surface point at barycentric coordinates @p bary (components sum to 1).
   [[nodiscard]] Vec3 position(const Vec3& bary) const;
 

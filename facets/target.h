@@ -28,6 +28,9 @@ struct TargetObject {
   Vec3 origin_m{0.0};            ///< world position of the object's local origin
   std::uint32_t material = 0;    ///< index into Target::materials
   std::optional<RimCircle> rim;  ///< object-local boundary circle (a disk's rim)
+  /// No part of the surface can hide another part from the laser or from an observer (the
+  /// outside of a sphere or a cylinder, a disk): alone, it needs no occlusion rays.
+  bool convex = false;
 };
 
 /// @brief The coarse facets of a whole target. Corners are counter-clockwise seen from the

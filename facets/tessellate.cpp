@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <map>
+#include <unordered_map>
 
 #include "facets/quadric_fit.h"
 
@@ -19,11 +22,38 @@ Vec3 perpendicularToward(const Vec3& n, const Vec3& reference) {
 
 double twoPiOver(int n) { return 2.0 * kPi / n; }
 
+// Vertices welded by exact position: an id per distinct position, the same for every copy of
+// a vertex split at a crease. Keyed on the bits, with -0 folded into +0.
+std::vector<std::uint32_t> weldByPosition(const std::vector<Vec3>& positions) {
+  struct Key {
+    std::array<std::uint64_t, 3> bits;
+    bool operator==(const Key&) const = default;
+  };
+  struct Hash {
+    std::size_t operator()(const Key& k) const {
+      std::uint64_t h = 1469598103934665603ull;
+      for (std::uint64_t b : k.bits) h = (h ^ b) * 1099511628211ull;
+      return static_cast<std::size_t>(h);
+    }
+  };
+  std::unordered_map<Key, std::uint32_t, Hash> ids;
+  std::vector<std::uint32_t> weld(positions.size());
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    Key key{};
+    for (int c = 0; c < 3; ++c) {
+      const double x = positions[i][c] + 0.0;  // -0 + 0 = +0
+      std::memcpy(&key.bits[c], &x, sizeof x);
+    }
+    weld[i] = ids.emplace(key, static_cast<std::uint32_t>(ids.size())).first->second;
+  }
+  return weld;
+}
+
 }  // namespace
 
 std::uint32_t addCylinder(Target& target, const CylinderShape& s, std::uint32_t material,
                           int segments, const Vec3& reference) {
-  const std::uint32_t obj = target.addObject({s.center_m, material, std::nullopt});
+  const std::uint32_t obj = target.addObject({s.center_m, material, std::nullopt, true});
   const std::uint32_t q = target.addQuadric(Quadric::cylinder(Vec3(0.0), s.axis, s.radius_m));
   const Vec3 u = perpendicularToward(s.axis, reference);
   const Vec3 v = glm::cross(s.axis, u);
@@ -47,7 +77,7 @@ std::uint32_t addCylinder(Target& target, const CylinderShape& s, std::uint32_t 
 
 std::uint32_t addSphere(Target& target, const SphereShape& s, std::uint32_t material, int segments,
                         const Vec3& reference) {
-  const std::uint32_t obj = target.addObject({s.center_m, material, std::nullopt});
+  const std::uint32_t obj = target.addObject({s.center_m, material, std::nullopt, true});
   const std::uint32_t q = target.addQuadric(Quadric::sphere(Vec3(0.0), s.radius_m));
   const Vec3 pole = reference;
   const Vec3 e1 = anyPerpendicular(pole);
@@ -76,7 +106,7 @@ std::uint32_t addSphere(Target& target, const SphereShape& s, std::uint32_t mate
 std::uint32_t addDisk(Target& target, const DiskShape& s, std::uint32_t material, int segments,
                       const Vec3& reference) {
   const RimCircle rim{Vec3(0.0), s.normal, s.radius_m};
-  const std::uint32_t obj = target.addObject({s.center_m, material, rim});
+  const std::uint32_t obj = target.addObject({s.center_m, material, rim, true});
   const std::uint32_t q = target.addQuadric(Quadric::plane(Vec3(0.0), s.normal));
   const Vec3 u = perpendicularToward(s.normal, reference);
   const Vec3 v = glm::cross(s.normal, u);
@@ -101,27 +131,71 @@ std::uint32_t addDisk(Target& target, const DiskShape& s, std::uint32_t material
   return obj;
 }
 
+std::size_t fillNormals(TriangleMesh& mesh, double crease_angle_rad) {
+  const std::vector<std::uint32_t> weld = weldByPosition(mesh.positions_m);
+  std::vector<std::vector<std::uint32_t>> faces_at(mesh.positions_m.size());
+  std::vector<Vec3> area_normal(mesh.triangles.size());  // |cross| = twice the area
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    const Vec3& a = mesh.positions_m[tri[0]];
+    area_normal[t] = glm::cross(mesh.positions_m[tri[1]] - a, mesh.positions_m[tri[2]] - a);
+    for (std::uint32_t v : tri) faces_at[weld[v]].push_back(t);
+  }
+  const double cos_crease = std::cos(crease_angle_rad);
+  std::size_t filled = 0;
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto own = tryNormalize(area_normal[t]);
+    for (std::uint32_t& v : mesh.triangles[t]) {
+      if (mesh.normals[v] != Vec3(0.0) || !own) continue;
+      Vec3 sum(0.0);
+      for (std::uint32_t f : faces_at[weld[v]]) {
+        const auto n = tryNormalize(area_normal[f]);
+        if (n && glm::dot(*n, *own) >= cos_crease) sum += area_normal[f];
+      }
+      mesh.positions_m.push_back(mesh.positions_m[v]);
+      mesh.normals.push_back(tryNormalize(sum).value_or(*own));
+      v = static_cast<std::uint32_t>(mesh.positions_m.size() - 1);
+      ++filled;
+    }
+  }
+  return filled;
+}
+
 MeshStats addMesh(Target& target, const Vec3& origin_m, std::uint32_t material,
                   const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
                   const std::vector<std::array<std::uint32_t, 3>>& triangles, MeshSurface surface) {
+  return addMesh(target, origin_m, material, TriangleMesh{positions, normals, triangles}, surface);
+}
+
+MeshStats addMesh(Target& target, const Vec3& origin_m, std::uint32_t material,
+                  const TriangleMesh& mesh, MeshSurface surface) {
   MeshStats stats;
-  stats.triangles = triangles.size();
+  stats.triangles = mesh.triangles.size();
   const std::uint32_t obj = target.addObject({origin_m, material, std::nullopt});
-  for (const auto& tri : triangles) {
-    std::array<Vec3, 3> p;
-    std::array<Vec3, 3> n;
+
+  // The usable triangles with their checked unit normals.
+  struct Face {
+    std::array<std::uint32_t, 3> vertex;
+    std::array<Vec3, 3> p, n;
+  };
+  std::vector<Face> faces;
+  faces.reserve(mesh.triangles.size());
+  for (const auto& tri : mesh.triangles) {
+    Face f{tri, {}, {}};
     bool finite = true;
     for (int i = 0; i < 3; ++i) {
-      p[i] = positions.at(tri[i]);
-      n[i] = normals.at(tri[i]);
-      finite = finite && std::isfinite(p[i].x) && std::isfinite(p[i].y) && std::isfinite(p[i].z);
+      f.p[i] = mesh.positions_m.at(tri[i]);
+      f.n[i] = mesh.normals.at(tri[i]);
+      finite = finite && std::isfinite(f.p[i].x) && std::isfinite(f.p[i].y) &&
+               std::isfinite(f.p[i].z);
     }
-    const auto face = finite ? tryNormalize(glm::cross(p[1] - p[0], p[2] - p[0])) : std::nullopt;
+    const auto face =
+        finite ? tryNormalize(glm::cross(f.p[1] - f.p[0], f.p[2] - f.p[0])) : std::nullopt;
     if (!face) {
       ++stats.degenerate_dropped;
       continue;
     }
-    for (Vec3& ni : n) {
+    for (Vec3& ni : f.n) {
       const auto unit = tryNormalize(ni);
       if (!unit || glm::dot(*unit, *face) <= 0.0) {
         ni = *face;
@@ -130,22 +204,60 @@ MeshStats addMesh(Target& target, const Vec3& origin_m, std::uint32_t material,
         ni = *unit;
       }
     }
+    faces.push_back(f);
+  }
+
+  // Each directed edge (welded a → b) of a face meets its neighbour as b → a.
+  const std::vector<std::uint32_t> weld = weldByPosition(mesh.positions_m);
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> edges;
+  auto edgeKey = [&](const Face& f, int e) {
+    return std::pair(weld[f.vertex[e]], weld[f.vertex[(e + 1) % 3]]);
+  };
+  for (std::uint32_t k = 0; k < faces.size(); ++k) {
+    for (int e = 0; e < 3; ++e) edges[edgeKey(faces[k], e)].push_back(k);
+  }
+  // The neighbour's normals at edge e's vertices, or this face's own where there is no single
+  // neighbour.
+  auto across = [&](const Face& f, int e) -> std::array<Vec3, 2> {
+    const std::array<Vec3, 2> own = {f.n[e], f.n[(e + 1) % 3]};
+    const auto [a, b] = edgeKey(f, e);
+    const auto back = edges.find({b, a});
+    if (back == edges.end() || back->second.size() != 1 || edges.at({a, b}).size() != 1) {
+      ++stats.open_edges;
+      return own;
+    }
+    const Face& g = faces[back->second.front()];
+    std::array<Vec3, 2> other = own;
+    for (int i = 0; i < 3; ++i) {
+      if (weld[g.vertex[i]] == a) other[0] = g.n[i];
+      if (weld[g.vertex[i]] == b) other[1] = g.n[i];
+    }
+    if (other != own) ++stats.crease_edges;
+    return other;
+  };
+
+  for (const Face& f : faces) {
     ++stats.facets;
+    const std::array<std::array<Vec3, 2>, 3> neighbours = {across(f, 0), across(f, 1),
+                                                           across(f, 2)};
     if (surface == MeshSurface::Flat) {
-      target.addFacet(obj, p, SurfaceModel::Flat, 0);
+      target.addFacet(obj, f.p, SurfaceModel::Flat, 0);
       continue;
     }
     if (surface == MeshSurface::QuadricFit) {
-      const QuadricFit fit = fitQuadric(p, n);
+      const QuadricFit fit = fitQuadric(f.p, f.n);
       if (fit.status == QuadricFitStatus::Ok) {
-        target.addFacet(obj, p, SurfaceModel::Quadric, target.addQuadric(*fit.quadric));
+        target.addFacet(obj, f.p, SurfaceModel::Quadric, target.addQuadric(*fit.quadric));
         ++stats.quadric_fits;
         continue;
       }
       ++stats.fit_fallbacks;
     }
-    target.addFacet(obj, p, SurfaceModel::PN, target.addPNTriangle(PNTriangle(p, n)));
+    target.addFacet(obj, f.p, SurfaceModel::PN,
+                    target.addPNTriangle(PNTriangle(f.p, f.n, neighbours)));
   }
+  // Each interior edge was seen from both sides.
+  stats.crease_edges /= 2;
   return stats;
 }
 

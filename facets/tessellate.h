@@ -55,6 +55,21 @@ std::uint32_t addDisk(Target& target, const DiskShape& shape, std::uint32_t mate
 /// @brief The surface a mesh's facets are given.
 enum class MeshSurface { Flat, PN, QuadricFit };
 
+/// @brief An indexed triangle mesh in one object's frame (metres), as a file gives it.
+/// Vertices at one position may repeat with different normals (a crease); the mesh is stitched
+/// by exact position, not by index.
+struct TriangleMesh {
+  std::vector<Vec3> positions_m;
+  std::vector<Vec3> normals;  ///< per vertex; zero where the file gave none (see fillNormals)
+  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< counter-clockwise from outside
+};
+
+/// @brief Gives every triangle corner whose vertex has a zero normal the area-weighted mean of
+/// the face normals around its position, over the faces within @p crease_angle_rad of the
+/// corner's own face: smooth across gentle bends, sharp across creases. Such corners get
+/// vertices of their own. @return the number of corners given a normal.
+std::size_t fillNormals(TriangleMesh& mesh, double crease_angle_rad);
+
 /// @brief What happened to a mesh's triangles: counts for the run summary.
 struct MeshStats {
   std::size_t triangles = 0;           ///< triangles offered
@@ -64,11 +79,17 @@ struct MeshStats {
                                        ///< facing away from the face, replaced by the face normal
   std::size_t quadric_fits = 0;        ///< facets on a fitted quadric
   std::size_t fit_fallbacks = 0;       ///< fits refused (singular, ill-conditioned, ...) → PN
+  std::size_t crease_edges = 0;        ///< PN edges whose two sides disagree on the normals
+  std::size_t open_edges = 0;          ///< edges with no (or more than one) neighbour
 };
 
-/// @brief Adds a triangle mesh as one object. Positions are relative to @p origin_m; triangles
-/// index into @p positions_m and @p normals (per vertex) and are counter-clockwise seen from the
-/// reflecting side.
+/// @brief Adds a triangle mesh as one object, its positions relative to @p origin_m.
+/// PN facets share every edge curve with their neighbour, creases included (PNTriangle's
+/// PN-AEN constructor), so the curved surface is as closed as the mesh.
+MeshStats addMesh(Target& target, const Vec3& origin_m, std::uint32_t material,
+                  const TriangleMesh& mesh, MeshSurface surface);
+
+/// @brief As above, from separate arrays (per-vertex @p normals).
 MeshStats addMesh(Target& target, const Vec3& origin_m, std::uint32_t material,
                   const std::vector<Vec3>& positions_m, const std::vector<Vec3>& normals,
                   const std::vector<std::array<std::uint32_t, 3>>& triangles, MeshSurface surface);

@@ -43,7 +43,10 @@ void printSummary(std::ostream& err, const PointsArgs& args, const FacetIntegrat
       << (threads == 1 ? " thread\n" : " threads\n");
   err << "  target: " << cull.coarse_facets << " coarse facets; " << cull.lit << " lit, "
       << cull.facing_away << " facing away from the laser, " << cull.outside_beam
-      << " outside the beam, " << cull.degenerate << " degenerate\n";
+      << " outside the beam, " << cull.degenerate << " degenerate";
+  if (cull.occlusion) err << ", " << cull.shadowed << " in the target's shadow";
+  err << "\n";
+  if (cull.occlusion) err << "  occlusion: rays to the laser and to each observer (Embree)\n";
   err << "  evaluations: " << formatNumber("%.4g", static_cast<double>(total))
       << " in all; per observer "
       << formatNumber("%.4g", static_cast<double>(total) / static_cast<double>(results.size()))

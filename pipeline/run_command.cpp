@@ -85,6 +85,31 @@ nlohmann::json hazardJson(const Scene& scene, const HazardZone* zone) {
   return j;
 }
 
+// What became of each mesh's triangles (tessellated again: cheap beside the run).
+nlohmann::json meshesJson(const Scene& scene) {
+  std::vector<MeshStats> stats;
+  buildTarget(scene, &stats);
+  nlohmann::json meshes = nlohmann::json::array();
+  std::size_t k = 0;
+  for (const ObjectSpec& o : scene.objects) {
+    if (!o.mesh) continue;
+    const MeshStats& s = stats[k++];
+    meshes.push_back({{"file", o.mesh->file.string()},
+                      {"triangles", s.triangles},
+                      {"facets", s.facets},
+                      {"degenerate_dropped", s.degenerate_dropped},
+                      {"normals_computed", o.mesh->normals_computed},
+                      {"normals_repaired", s.normals_repaired},
+                      {"quadric_fits", s.quadric_fits},
+                      {"quadric_fit_fallbacks_to_pn", s.fit_fallbacks},
+                      {"crease_edges", s.crease_edges},
+                      {"open_edges", s.open_edges},
+                      {"primitives_skipped", o.mesh->primitives_skipped},
+                      {"mirrored_instances", o.mesh->mirrored_instances}});
+  }
+  return meshes;
+}
+
 nlohmann::json summaryJson(const ObserverField& field, const RunInfo& info, const CullStats& cull) {
   const FieldSpec& spec = field.spec();
   const FieldStats& s = field.stats();
@@ -106,7 +131,9 @@ nlohmann::json summaryJson(const ObserverField& field, const RunInfo& info, cons
                  {"lit", cull.lit},
                  {"facing_away", cull.facing_away},
                  {"outside_beam", cull.outside_beam},
-                 {"degenerate", cull.degenerate}};
+                 {"shadowed", cull.shadowed},
+                 {"degenerate", cull.degenerate},
+                 {"occlusion_rays", cull.occlusion}};
   j["points"] = {{"in_box", s.lattice_points},
                  {"evaluated", s.evaluated_points},
                  {"interpolated", s.interpolated_points},
@@ -361,6 +388,10 @@ void runField(const RunArgs& args, std::ostream& err) {
          {"scene_fnv1a64", info.scene_fnv1a64},
          {"scheme", info.scheme}};
     j["hazard"] = hazardJson(scene, nullptr);
+  }
+  if (std::any_of(scene.objects.begin(), scene.objects.end(),
+                  [](const ObjectSpec& o) { return o.mesh.has_value(); })) {
+    j["meshes"] = meshesJson(scene);
   }
 
   if (!scene.planes.empty()) {

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "export/fnv1a.h"
+#include "pipeline/gltf_loader.h"
 #include "pipeline/input_error.h"
 #include "pipeline/json_reader.h"
 
@@ -71,16 +72,93 @@ MaterialSpec readMaterial(ObjectReader r, const std::string& name) {
   return m;
 }
 
-ObjectSpec readObject(ObjectReader r, const std::vector<MaterialSpec>& materials) {
+MeshTransform readTransform(ObjectReader r) {
+  MeshTransform t;
+  if (r.has("translation")) t.translation_m = r.vec3("translation");
+  if (r.has("rotation") && r.has("yaw_pitch_roll_deg")) {
+    r.failHere("give either rotation (a quaternion) or yaw_pitch_roll_deg, not both");
+  }
+  if (r.has("rotation")) {
+    const json& q = r.require("rotation");
+    if (!q.is_array() || q.size() != 4 || !std::all_of(q.begin(), q.end(), [](const json& x) {
+          return x.is_number() && std::isfinite(x.get<double>());
+        })) {
+      r.fail("rotation", "must be a quaternion [x, y, z, w] of 4 finite numbers (glTF's order)");
+    }
+    const glm::dquat rotation(q[3].get<double>(), q[0].get<double>(), q[1].get<double>(),
+                              q[2].get<double>());
+    const double length = glm::length(rotation);
+    if (!(std::abs(length - 1.0) < 1e-3)) r.fail("rotation", "must be a unit quaternion");
+    t.rotation = rotation / length;
+  }
+  if (r.has("yaw_pitch_roll_deg")) {
+    const Vec3 a = r.vec3("yaw_pitch_roll_deg");
+    t.rotation = yawPitchRoll(a[0], a[1], a[2]);
+  }
+  if (r.has("scale")) {
+    const json& v = r.require("scale");
+    t.scale = v.is_number() ? Vec3(r.number("scale")) : r.vec3("scale");
+    for (int i = 0; i < 3; ++i) {
+      if (!(std::abs(t.scale[i]) > 0.0)) r.fail("scale", "must be non-zero (negative mirrors)");
+    }
+  }
+  r.finish();
+  return t;
+}
+
+MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder) {
+  MeshSpec m;
+  const std::string file = r.string("file");
+  m.file = folder / file;
+  const std::size_t surface = r.choice("surface", {"pn", "quadric_fit", "flat"}, 0);
+  m.surface = surface == 0 ? MeshSurface::PN
+              : surface == 1 ? MeshSurface::QuadricFit
+                             : MeshSurface::Flat;
+  m.crease_angle_deg = r.number("crease_angle_deg", m.crease_angle_deg);
+  if (!(m.crease_angle_deg >= 0.0 && m.crease_angle_deg <= 180.0)) {
+    r.fail("crease_angle_deg", "must be in [0, 180]");
+  }
+  if (r.has("transform")) m.transform = readTransform(r.object("transform"));
+
+  GltfModel model;
+  try {
+    model = loadGltf(m.file);
+  } catch (const InputError& e) {
+    r.fail("file", e.what());
+  }
+  // Into the object's frame: scaled, rotated, relative to the translation. A mirroring scale
+  // turns the faces inside out, so their winding is flipped back.
+  const MeshTransform& t = m.transform;
+  for (Vec3& p : model.mesh.positions_m) p = t.rotation * (t.scale * p);
+  for (Vec3& n : model.mesh.normals) {
+    n = tryNormalize(t.rotation * (n / t.scale)).value_or(Vec3(0.0));
+  }
+  if (t.scale.x * t.scale.y * t.scale.z < 0.0) {
+    for (auto& tri : model.mesh.triangles) std::swap(tri[1], tri[2]);
+  }
+  m.normals_computed = fillNormals(model.mesh, m.crease_angle_deg * kPi / 180.0);
+  m.primitives_skipped = model.primitives_skipped;
+  m.mirrored_instances = model.mirrored_instances;
+  m.mesh = std::make_shared<const TriangleMesh>(std::move(model.mesh));
+  return m;
+}
+
+ObjectSpec readObject(ObjectReader r, const std::vector<MaterialSpec>& materials,
+                      const std::filesystem::path& folder) {
   ObjectSpec o;
   const std::vector<std::string> shapes = {"cylinder", "sphere", "disk", "mesh"};
   const std::size_t shape = r.choice("shape", shapes);
-  if (shapes[shape] == "mesh") {
-    r.fail("shape", "\"mesh\" objects (glTF) are not supported in this version yet");
+  o.shape = shape == 0   ? ShapeKind::Cylinder
+            : shape == 1 ? ShapeKind::Sphere
+            : shape == 2 ? ShapeKind::Disk
+                         : ShapeKind::Mesh;
+  if (o.shape == ShapeKind::Mesh) {
+    o.mesh = readMesh(r, folder);
+    o.center_m = o.mesh->transform.translation_m;
+  } else {
+    o.center_m = r.vec3("center");
+    o.radius_m = positive(r, "radius", r.number("radius"));
   }
-  o.shape = shape == 0 ? ShapeKind::Cylinder : shape == 1 ? ShapeKind::Sphere : ShapeKind::Disk;
-  o.center_m = r.vec3("center");
-  o.radius_m = positive(r, "radius", r.number("radius"));
   if (o.shape == ShapeKind::Cylinder) {
     o.axis = r.direction("axis");
     o.length_m = positive(r, "length", r.number("length"));
@@ -96,9 +174,11 @@ ObjectSpec readObject(ObjectReader r, const std::vector<MaterialSpec>& materials
     r.fail("material", "no material named \"" + material + "\" (defined: " + joinKeys(names) + ")");
   }
   o.material = static_cast<std::uint32_t>(it - materials.begin());
-  const std::int64_t segments = r.integer("segments", 16);
-  if (segments < 3 || segments > 4096) r.fail("segments", "must be an integer in [3, 4096]");
-  o.segments = static_cast<int>(segments);
+  if (o.shape != ShapeKind::Mesh) {
+    const std::int64_t segments = r.integer("segments", 16);
+    if (segments < 3 || segments > 4096) r.fail("segments", "must be an integer in [3, 4096]");
+    o.segments = static_cast<int>(segments);
+  }
   r.finish();
   return o;
 }
@@ -118,6 +198,11 @@ AccuracySpec readAccuracy(ObjectReader r) {
   if (a.max_evaluations < 1) r.fail("max_evaluations", "must be an integer ≥ 1");
   a.normals =
       r.choice("normals", {"surface", "flat"}, 0) == 0 ? NormalModel::Surface : NormalModel::Flat;
+  if (r.has("occlusion")) {
+    const json& v = r.require("occlusion");
+    if (!v.is_boolean()) r.fail("occlusion", "must be true or false");
+    a.occlusion = v.get<bool>();
+  }
   r.finish();
   return a;
 }
@@ -205,7 +290,9 @@ PlaneSpec readPlane(ObjectReader r, const std::vector<PlaneSpec>& earlier) {
 
 }  // namespace
 
-Scene parseScene(std::string_view text, const std::string& source) {
+Scene parseScene(std::string_view text, const std::string& source,
+                 const std::optional<std::filesystem::path>& folder) {
+  const std::filesystem::path base = folder ? *folder : std::filesystem::path(source).parent_path();
   const json root = parseJson(text, source);
   Scene scene;
   scene.source = source;
@@ -227,7 +314,7 @@ Scene parseScene(std::string_view text, const std::string& source) {
   }
   for (std::size_t i = 0; i < objects.size(); ++i) {
     scene.objects.push_back(readObject(
-        ObjectReader(objects[i], "/objects/" + std::to_string(i), source), scene.materials));
+        ObjectReader(objects[i], "/objects/" + std::to_string(i), source), scene.materials, base));
   }
 
   if (r.has("accuracy")) scene.accuracy = readAccuracy(r.object("accuracy"));
@@ -264,7 +351,14 @@ std::string fnv1a64Hex(std::string_view bytes) {
 }
 
 Scene loadScene(const std::filesystem::path& path) {
-  return parseScene(readUserFile(path, "scene file"), path.string());
+  return parseScene(readUserFile(path, "scene file"), path.string(), path.parent_path());
+}
+
+glm::dquat yawPitchRoll(double yaw_deg, double pitch_deg, double roll_deg) {
+  const double deg = kPi / 180.0;
+  return glm::angleAxis(yaw_deg * deg, Vec3(0.0, 0.0, 1.0)) *
+         glm::angleAxis(pitch_deg * deg, Vec3(0.0, 1.0, 0.0)) *
+         glm::angleAxis(roll_deg * deg, Vec3(1.0, 0.0, 0.0));
 }
 
 }  // namespace glint

@@ -5,6 +5,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <glm/gtc/quaternion.hpp>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -12,6 +14,7 @@
 
 #include "facets/beam.h"
 #include "facets/patch.h"
+#include "facets/tessellate.h"
 #include "facets/vec3.h"
 #include "pipeline/mpe.h"
 
@@ -37,8 +40,30 @@ struct MaterialSpec {
   double sigma = 0.0;
 };
 
-/// @brief The analytic shapes (`mesh` comes with glTF support).
-enum class ShapeKind { Cylinder, Sphere, Disk };
+/// @brief The analytic shapes and triangle meshes from glTF files.
+enum class ShapeKind { Cylinder, Sphere, Disk, Mesh };
+
+/// @brief Where a mesh's model frame sits in the scene (key `transform`): a point p of the
+/// model is at translation_m + rotation (scale ∘ p).
+struct MeshTransform {
+  Vec3 translation_m{0.0};
+  glm::dquat rotation{1.0, 0.0, 0.0, 0.0};  ///< unit
+  Vec3 scale{1.0};                          ///< per axis, non-zero; negative mirrors
+};
+
+/// @brief A mesh object's triangles and how they were read (key `objects/<i>` with shape
+/// `mesh`).
+struct MeshSpec {
+  std::filesystem::path file;  ///< as resolved against the scene's folder
+  MeshTransform transform;
+  MeshSurface surface = MeshSurface::PN;
+  double crease_angle_deg = 30.0;  ///< for normals the file does not give
+  /// Rotated and scaled, relative to transform.translation_m (the object's centre_m).
+  std::shared_ptr<const TriangleMesh> mesh;
+  std::size_t normals_computed = 0;     ///< triangle corners given crease-angle normals
+  std::size_t primitives_skipped = 0;   ///< points and lines in the file
+  std::size_t mirrored_instances = 0;   ///< node instances with a negative determinant
+};
 
 /// @brief One object (key `objects/<i>`).
 struct ObjectSpec {
@@ -49,6 +74,7 @@ struct ObjectSpec {
   double length_m = 0.0;       ///< cylinder only
   std::uint32_t material = 0;  ///< index into Scene::materials
   int segments = 16;           ///< coarse facets around the circumference
+  std::optional<MeshSpec> mesh;  ///< mesh only; centre_m is its translation
 };
 
 /// @brief Accuracy settings (key `accuracy`, all optional).
@@ -58,6 +84,7 @@ struct AccuracySpec {
   int max_depth = 16;                        ///< deepest 1→4 subdivision level
   std::int64_t max_evaluations = 4'000'000;  ///< per observer
   NormalModel normals = NormalModel::Surface;
+  bool occlusion = true;  ///< occlusion rays where the target can shadow itself
 };
 
 /// @brief The observer box of `glint run` (key `observers`; see FieldSpec for the meaning).
@@ -107,13 +134,19 @@ struct Scene {
   std::vector<PlaneSpec> planes;
 };
 
-/// @brief Reads and validates a scene file.
+/// @brief Reads and validates a scene file, and the mesh files it names.
 /// @throw InputError naming the file and the JSON pointer of the first problem, e.g.
 /// `scene.json: /materials/polished/sigma: must be > 0`.
 Scene loadScene(const std::filesystem::path& path);
 
-/// @brief Validates scene JSON text; @p source names it in messages.
+/// @brief Validates scene JSON text; @p source names it in messages, and mesh `file`s are
+/// relative to @p folder (default: the folder of @p source).
 /// @throw InputError as loadScene.
-Scene parseScene(std::string_view json_text, const std::string& source);
+Scene parseScene(std::string_view json_text, const std::string& source,
+                 const std::optional<std::filesystem::path>& folder = std::nullopt);
+
+/// @brief The rotation R = Rz(yaw) Ry(pitch) Rx(roll), angles in degrees (the convention of
+/// studies and of a mesh's `yaw_pitch_roll_deg`).
+glm::dquat yawPitchRoll(double yaw_deg, double pitch_deg, double roll_deg);
 
 }  // namespace glint

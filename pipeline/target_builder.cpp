@@ -19,7 +19,7 @@ Beam beamOf(const Scene& scene) {
   return beam;
 }
 
-Target buildTarget(const Scene& scene) {
+Target buildTarget(const Scene& scene, std::vector<MeshStats>* mesh_stats) {
   Target target;
   for (const MaterialSpec& m : scene.materials) {
     target.addMaterial({m.specular_reflectance, m.diffuse_reflectance, Beckmann{m.sigma}});
@@ -37,6 +37,12 @@ Target buildTarget(const Scene& scene) {
       case ShapeKind::Disk:
         addDisk(target, {o.center_m, o.axis, o.radius_m}, o.material, o.segments, toward_laser);
         break;
+      case ShapeKind::Mesh: {
+        const MeshStats stats =
+            addMesh(target, o.center_m, o.material, *o.mesh->mesh, o.mesh->surface);
+        if (mesh_stats) mesh_stats->push_back(stats);
+        break;
+      }
     }
   }
   return target;
@@ -50,6 +56,7 @@ IntegratorOptions integratorOptions(const Scene& scene) {
   o.max_depth = a.max_depth;
   o.max_evaluations = a.max_evaluations;
   o.normals = a.normals;
+  o.occlusion = a.occlusion;
   return o;
 }
 
@@ -116,6 +123,9 @@ ExcludedFn excludedRegion(const Scene& scene, double margin_m) {
           if (std::abs(along) < margin_m && across < o.radius_m + margin_m) return true;
           break;
         }
+        case ShapeKind::Mesh:
+          // Observers near a mesh are computed: its inside is not known in closed form.
+          break;
       }
     }
     return false;

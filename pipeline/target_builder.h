@@ -3,6 +3,7 @@
 /// @brief From a validated Scene to what the facet integrator works on.
 
 #include "facets/integrator.h"
+#include "facets/tessellate.h"
 #include "observers/field.h"
 #include "pipeline/scene.h"
 
@@ -12,8 +13,9 @@ namespace glint {
 Beam beamOf(const Scene& scene);
 
 /// @brief The scene's objects tessellated into coarse facets. Tessellations are oriented by the
-/// direction toward the laser, so rotating a whole scene rotates its facets with it.
-Target buildTarget(const Scene& scene);
+/// direction toward the laser, so rotating a whole scene rotates its facets with it. What
+/// became of each mesh's triangles is appended to @p mesh_stats, in object order.
+Target buildTarget(const Scene& scene, std::vector<MeshStats>* mesh_stats = nullptr);
 
 /// @brief The scene's accuracy settings; the floor defaults to 1e-9 × the beam's peak
 /// irradiance, far below any exposure limit yet scaled to the scene.

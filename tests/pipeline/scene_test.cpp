@@ -105,7 +105,7 @@ TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
       {[](json& j) { j["objects"][0]["shape"] = "cone"; },
        "scene.json: /objects/0/shape: must be one of: cylinder, sphere, disk, mesh"},
       {[](json& j) { j["objects"][0]["shape"] = "mesh"; },
-       "scene.json: /objects/0/shape: \"mesh\" objects (glTF) are not supported in this version"},
+       "scene.json: /objects/0/file: missing (required)"},
       {[](json& j) { j["objects"][0]["segments"] = 2; },
        "scene.json: /objects/0/segments: must be an integer in [3, 4096]"},
       {[](json& j) { j["objects"][0]["segments"] = 16.5; },
