@@ -85,6 +85,16 @@ nlohmann::json hazardJson(const Scene& scene, const HazardZone* zone) {
   return j;
 }
 
+nlohmann::json targetJson(const CullStats& cull) {
+  return {{"coarse_facets", cull.coarse_facets},
+          {"lit", cull.lit},
+          {"facing_away", cull.facing_away},
+          {"outside_beam", cull.outside_beam},
+          {"shadowed", cull.shadowed},
+          {"degenerate", cull.degenerate},
+          {"occlusion_rays", cull.occlusion}};
+}
+
 // What became of each mesh's triangles (tessellated again: cheap beside the run).
 nlohmann::json meshesJson(const Scene& scene) {
   std::vector<MeshStats> stats;
@@ -127,13 +137,7 @@ nlohmann::json summaryJson(const ObserverField& field, const RunInfo& info, cons
               {"lattice_points", {s.nodes[0], s.nodes[1], s.nodes[2]}}};
   j["tolerance"] = spec.tolerance;
   j["floor_w_m2"] = spec.floor_w_m2;
-  j["target"] = {{"coarse_facets", cull.coarse_facets},
-                 {"lit", cull.lit},
-                 {"facing_away", cull.facing_away},
-                 {"outside_beam", cull.outside_beam},
-                 {"shadowed", cull.shadowed},
-                 {"degenerate", cull.degenerate},
-                 {"occlusion_rays", cull.occlusion}};
+  j["target"] = targetJson(cull);
   j["points"] = {{"in_box", s.lattice_points},
                  {"evaluated", s.evaluated_points},
                  {"interpolated", s.interpolated_points},
@@ -406,6 +410,7 @@ void runField(const RunArgs& args, std::ostream& err) {
       const HazardZone zone =
           hazardZone(field, scene, targetCentre(r.problem.integrator.target()));
       planes.push_back(planeJson(plane, field, zone));
+      if (!j.contains("target")) j["target"] = targetJson(r.problem.integrator.cullStats());
       if (!args.quiet) {
         const FieldStats& s = field.stats();
         err << "plane " << plane.name << ": " << s.nodes[0] << "×" << s.nodes[1] << " pixels at "

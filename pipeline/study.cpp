@@ -265,9 +265,24 @@ std::string scenarioSceneJson(const Study& study, const Scenario& s) {
                               s.pose.yaw_deg, s.pose.pitch_deg, s.pose.roll_deg);
   };
   auto vec = [](const json& j) { return Vec3(j[0].get<double>(), j[1].get<double>(), j[2].get<double>()); };
-  for (json& o : scene["objects"]) {
-    const Vec3 c = vec(o["center"]);
-    o["center"] = vecJson(study.pivot_m + s.pose.offset_m + turn(c - study.pivot_m));
+  const glm::dquat turn_q = yawPitchRoll(s.pose.yaw_deg, s.pose.pitch_deg, s.pose.roll_deg) *
+                            yawPitchRoll(s.yaw_deg, s.pitch_deg, s.roll_deg);
+  for (std::size_t i = 0; i < scene["objects"].size(); ++i) {
+    json& o = scene["objects"][i];
+    const ObjectSpec& base = study.base.objects[i];
+    const Vec3 c = study.pivot_m + s.pose.offset_m + turn(base.center_m - study.pivot_m);
+    if (base.mesh) {
+      // The mesh's frame turns with the scenario; its file is named absolutely, so that the
+      // scenario's scene.json stands on its own.
+      const glm::dquat q = turn_q * base.mesh->transform.rotation;
+      json& t = o["transform"];
+      t["translation"] = vecJson(c);
+      t.erase("yaw_pitch_roll_deg");
+      t["rotation"] = json::array({q.x, q.y, q.z, q.w});
+      o["file"] = std::filesystem::absolute(base.mesh->file).lexically_normal().string();
+      continue;
+    }
+    o["center"] = vecJson(c);
     for (const char* key : {"axis", "normal"}) {
       if (o.contains(key)) o[key] = vecJson(turn(vec(o[key])));
     }

@@ -2,11 +2,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "observers/point_set.h"
 #include "pipeline/points_file.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
+#include "support/cli.h"
 
 namespace glint {
 namespace {
@@ -53,6 +57,52 @@ TEST(Examples, CylinderChangesLessThanATenthOfAPercentWhenTheToleranceIsHalved) 
     }
     EXPECT_LT(worst, 1e-3) << scene;
   }
+}
+
+TEST(Examples, FinnedMissileOcclusionOnlyEverRemovesLight) {
+  // The finned missile with and without occlusion rays, over the eye-level plane: the rays can
+  // only take light away (within the integration tolerance), and here they do take some.
+  const Scene scene = loadScene(example("finned_missile.json"));
+  IntegratorOptions with = integratorOptions(scene);
+  IntegratorOptions without = with;
+  without.occlusion = false;
+  const FacetIntegrator occluded(buildTarget(scene), beamOf(scene), with);
+  const FacetIntegrator open(buildTarget(scene), beamOf(scene), without);
+  EXPECT_TRUE(occluded.cullStats().occlusion);
+  EXPECT_GT(occluded.cullStats().shadowed, 0u) << "the fins shadow the body";
+  EXPECT_EQ(occluded.cullStats().lit + occluded.cullStats().shadowed, open.cullStats().lit);
+  std::vector<Vec3> points;
+  for (int i = 0; i < 16; ++i)
+    for (int j = 0; j < 16; ++j) points.push_back({-15.0 + 2.0 * i, -15.0 + 2.0 * j, 1.7});
+  const auto a = evaluatePoints(occluded, points, PointScheme{});
+  const auto b = evaluatePoints(open, points, PointScheme{});
+  std::size_t dimmed = 0;
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const double slack = 2.0 * with.tolerance * b[k].irradiance_w_m2 + 2.0 * with.floor_w_m2;
+    EXPECT_LE(a[k].irradiance_w_m2, b[k].irradiance_w_m2 + slack)
+        << "observer (" << points[k].x << ", " << points[k].y << ")";
+    dimmed += a[k].irradiance_w_m2 < 0.99 * b[k].irradiance_w_m2 ? 1 : 0;
+  }
+  EXPECT_GT(dimmed, 0u) << "somewhere on the plane the fins must hide part of the body";
+}
+
+TEST(Examples, FinnedMissileRunsThroughGlintRun) {
+  const std::filesystem::path out =
+      std::filesystem::temp_directory_path() / "glint_finned_missile_run";
+  std::filesystem::remove_all(out);
+  const auto r = test::glint({"run", std::string(GLINT_TEST_DATA_DIR) + "/finned_missile_coarse.json",
+                              "-o", out.string(), "--quiet"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_TRUE(summary["target"]["occlusion_rays"].get<bool>());
+  EXPECT_GT(summary["target"]["shadowed"].get<int>(), 0);
+  const auto& mesh = summary["meshes"][0];
+  EXPECT_EQ(mesh["triangles"].get<int>(), 2064) << mesh.dump();
+  EXPECT_EQ(mesh["open_edges"].get<int>(), 0) << "the body and each fin are closed";
+  EXPECT_GT(mesh["crease_edges"].get<int>(), 0) << "the tail disc, the nose joint and the fins";
+  EXPECT_GT(summary["planes"][0]["peak_hazard_ratio"].get<double>(), 1.0);
+  EXPECT_TRUE(std::filesystem::exists(out / "eye_level.exr"));
+  std::filesystem::remove_all(out);
 }
 
 }  // namespace

@@ -77,6 +77,33 @@ TEST(Study, TurnsTheTargetAboutThePivotYawThenPitch) {
   expectNear(scene.objects[0].axis, Vec3(1, 0, 0), 1e-12, "axis");
 }
 
+TEST(Study, TurnsAMeshAboutThePivotWithItsOwnRotation) {
+  // The finned missile (axis along the model's +x, turned 90° about x to stand its fins up) in
+  // a study that yaws it 90°: its nose, 1.5 m along the model's +x, must point along +y.
+  const std::string dir = ::testing::TempDir();
+  std::ofstream(dir + "/mesh_scene.json") << R"({
+    "laser": {"position": [0, -100, 3], "direction": [0, 1, 0], "power_w": 1, "wavelength_nm": 532,
+              "beam": {"profile": "flat_top", "radius_m": 1}},
+    "materials": {"m": {"specular_reflectance": 0.5, "sigma": 0.1}},
+    "objects": [{"shape": "mesh", "file": ")" GLINT_EXAMPLES_DIR R"(/targets/finned_missile.glb",
+                 "transform": {"translation": [2, 0, 3], "yaw_pitch_roll_deg": [0, 0, 90]},
+                 "material": "m"}],
+    "planes": [{"name": "p", "origin": [-5, -1, 0], "u_axis": [1, 0, 0], "v_axis": [0, 1, 0],
+                "size_m": [1, 1], "pixel_m": 0.5}]})";
+  const Study s = parseStudy(
+      R"({"scene": "mesh_scene.json", "pivot": [0, 0, 3], "sweep": {"yaw_deg": [90]}})",
+      "study.json", dir);
+  const Scene scene = scenarioScene(s, s.scenarios[0]);
+  ASSERT_TRUE(scene.objects[0].mesh);
+  expectNear(scene.objects[0].center_m, Vec3(0, 2, 3), 1e-12, "the translation about the pivot");
+  double nose_x = 0.0, nose_y = -1e9;
+  for (const Vec3& p : scene.objects[0].mesh->mesh->positions_m) {
+    if (p.y > nose_y) nose_y = p.y, nose_x = p.x;
+  }
+  EXPECT_NEAR(nose_y, 1.5, 1e-6) << "the nose tip, turned from +x to +y";
+  EXPECT_NEAR(nose_x, 0.0, 1e-6);
+}
+
 TEST(Study, TrajectoryIsSampledEveryStepBetweenItsPoses) {
   const Study s = study(R"("trajectory": {"step_s": 0.5, "poses": [
       {"time_s": 0, "offset_m": [0, 0, 0], "yaw_deg": 0},
