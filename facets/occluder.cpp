@@ -89,7 +89,8 @@ Occluder::Occluder(const Target& target, int level) : impl_(std::make_unique<Imp
   impl_->frame_origin_m = 0.5 * (lo + hi);
   // Float rounding of the stored triangles: a few ulps of the largest coordinate.
   const double half_extent = 0.5 * glm::length(hi - lo);
-  const double rounding_m = 16.0 * static_cast<double>(std::numeric_limits<float>::epsilon()) * half_extent;
+  const double rounding_m =
+      16.0 * static_cast<double>(std::numeric_limits<float>::epsilon()) * half_extent;
   for (double& lift : lift_m_) lift += rounding_m;
 
   impl_->device = rtcNewDevice(nullptr);
@@ -98,9 +99,9 @@ Occluder::Occluder(const Target& target, int level) : impl_(std::make_unique<Imp
   rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
   RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
-      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-      3 * pieces.size()));
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                               RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                               3 * pieces.size()));
   auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
       geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), pieces.size()));
   for (std::size_t t = 0; t < pieces.size(); ++t) {

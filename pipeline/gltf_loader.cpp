@@ -7,13 +7,13 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <limits>
-#include <optional>
-#include <vector>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
+#include <limits>
+#include <optional>
+#include <vector>
 
 #include "pipeline/input_error.h"
 
@@ -94,11 +94,13 @@ std::optional<fs::path> confined(const std::string& path, Confinement& c) {
   std::error_code ec;
   const fs::path real = fs::canonical(fs::path(path), ec);
   if (ec) return refuse("does not exist");
-  const auto [end, rest] = std::mismatch(c.folder.begin(), c.folder.end(), real.begin(), real.end());
+  const auto [end, rest] =
+      std::mismatch(c.folder.begin(), c.folder.end(), real.begin(), real.end());
   if (end != c.folder.end()) return refuse("lies outside the model's folder " + c.folder.string());
   if (!fs::is_regular_file(real, ec)) return refuse("is not a regular file");
   const std::uintmax_t size = fs::file_size(real, ec);
-  if (ec || size > c.max_bytes) return refuse("is larger than " + std::to_string(c.max_bytes) + " bytes");
+  if (ec || size > c.max_bytes)
+    return refuse("is larger than " + std::to_string(c.max_bytes) + " bytes");
   return real;
 }
 
@@ -148,7 +150,8 @@ class Reader {
     std::vector<int> roots;
     if (!model_.scenes.empty()) {
       const int scene = model_.defaultScene >= 0 ? model_.defaultScene : 0;
-      if (scene >= static_cast<int>(model_.scenes.size())) fail("scene " + std::to_string(scene) + " does not exist");
+      if (scene >= static_cast<int>(model_.scenes.size()))
+        fail("scene " + std::to_string(scene) + " does not exist");
       roots = model_.scenes[scene].nodes;
     } else {
       // No scene: every node that is nobody's child.
@@ -186,8 +189,8 @@ class Reader {
     glm::dmat4 t(1.0), r(1.0), s(1.0);
     if (!node.translation.empty()) {
       if (node.translation.size() != 3) fail(where + ": translation must have 3 numbers");
-      t = glm::translate(glm::dmat4(1.0), Vec3(node.translation[0], node.translation[1],
-                                               node.translation[2]));
+      t = glm::translate(glm::dmat4(1.0),
+                         Vec3(node.translation[0], node.translation[1], node.translation[2]));
     }
     if (!node.rotation.empty()) {
       if (node.rotation.size() != 4) fail(where + ": rotation must have 4 numbers");
@@ -210,7 +213,8 @@ class Reader {
     if (index < 0 || index >= static_cast<int>(model_.nodes.size()))
       fail(where + " does not exist");
     if (on_path_[index]) fail(where + " is its own ancestor (a cycle in the node tree)");
-    if (depth > limits_.max_json_depth) fail(where + ": node tree deeper than " + std::to_string(limits_.max_json_depth));
+    if (depth > limits_.max_json_depth)
+      fail(where + ": node tree deeper than " + std::to_string(limits_.max_json_depth));
     const tinygltf::Node& node = model_.nodes[index];
     const glm::dmat4 m = parent * localTransform(node, where);
     if (node.mesh >= 0) addMesh(node.mesh, m, where);
@@ -231,7 +235,8 @@ class Reader {
   View accessor(int index, int type, std::initializer_list<int> component_types,
                 const std::string& where) const {
     const std::string at = where + " (/accessors/" + std::to_string(index) + ")";
-    if (index < 0 || index >= static_cast<int>(model_.accessors.size())) fail(at + " does not exist");
+    if (index < 0 || index >= static_cast<int>(model_.accessors.size()))
+      fail(at + " does not exist");
     const tinygltf::Accessor& a = model_.accessors[index];
     if (a.sparse.isSparse) fail(at + ": sparse accessors are not supported");
     if (a.type != type) fail(at + ": wrong type for this attribute");
@@ -247,8 +252,10 @@ class Reader {
     const std::vector<unsigned char>& data = model_.buffers[v.buffer].data;
     if (v.byteOffset > data.size() || v.byteLength > data.size() - v.byteOffset)
       fail(at + ": its bufferView runs past the end of its buffer");
-    const std::size_t component = static_cast<std::size_t>(tinygltf::GetComponentSizeInBytes(a.componentType));
-    const std::size_t element = component * static_cast<std::size_t>(tinygltf::GetNumComponentsInType(a.type));
+    const std::size_t component =
+        static_cast<std::size_t>(tinygltf::GetComponentSizeInBytes(a.componentType));
+    const std::size_t element =
+        component * static_cast<std::size_t>(tinygltf::GetNumComponentsInType(a.type));
     const std::size_t stride = v.byteStride ? v.byteStride : element;
     if (stride < element || stride % component != 0) fail(at + ": bad byteStride");
     // The last element must end inside the view: offset + (count − 1)·stride + element.
@@ -265,7 +272,8 @@ class Reader {
       float xyz[3];
       std::memcpy(xyz, view.data + i * view.stride, sizeof xyz);
       for (int c = 0; c < 3; ++c) {
-        if (!std::isfinite(xyz[c])) fail(what + ": element " + std::to_string(i) + " is not finite");
+        if (!std::isfinite(xyz[c]))
+          fail(what + ": element " + std::to_string(i) + " is not finite");
         out[i][c] = xyz[c];
       }
     }
@@ -277,14 +285,18 @@ class Reader {
     for (std::size_t i = 0; i < view.count; ++i) {
       const unsigned char* p = view.data + i * view.stride;
       switch (view.component_type) {
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: out[i] = *p; break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+          out[i] = *p;
+          break;
         case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
           std::uint16_t v;
           std::memcpy(&v, p, sizeof v);
           out[i] = v;
           break;
         }
-        default: std::memcpy(&out[i], p, sizeof out[i]); break;
+        default:
+          std::memcpy(&out[i], p, sizeof out[i]);
+          break;
       }
     }
     return out;
@@ -302,7 +314,8 @@ class Reader {
     const auto& primitives = model_.meshes[mesh_index].primitives;
     for (std::size_t k = 0; k < primitives.size(); ++k) {
       const tinygltf::Primitive& prim = primitives[k];
-      const std::string at = "/meshes/" + std::to_string(mesh_index) + "/primitives/" + std::to_string(k);
+      const std::string at =
+          "/meshes/" + std::to_string(mesh_index) + "/primitives/" + std::to_string(k);
       const int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
       if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
           mode != TINYGLTF_MODE_TRIANGLE_FAN) {
@@ -311,13 +324,15 @@ class Reader {
       }
       const auto pos = prim.attributes.find("POSITION");
       if (pos == prim.attributes.end()) fail(at + ": no POSITION");
-      const std::vector<Vec3> p = vectors(
-          accessor(pos->second, TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT}, at + " POSITION"),
-          at + " POSITION");
+      const std::vector<Vec3> p =
+          vectors(accessor(pos->second, TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT},
+                           at + " POSITION"),
+                  at + " POSITION");
       std::vector<Vec3> n(p.size(), Vec3(0.0));
       const auto nrm = prim.attributes.find("NORMAL");
       if (nrm != prim.attributes.end()) {
-        n = vectors(accessor(nrm->second, TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT}, at + " NORMAL"),
+        n = vectors(accessor(nrm->second, TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT},
+                             at + " NORMAL"),
                     at + " NORMAL");
         if (n.size() != p.size()) fail(at + ": NORMAL and POSITION counts differ");
       } else {
@@ -325,10 +340,11 @@ class Reader {
       }
       std::vector<std::uint32_t> idx;
       if (prim.indices >= 0) {
-        idx = indices(accessor(prim.indices, TINYGLTF_TYPE_SCALAR,
-                               {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
-                                TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT},
-                               at + " indices"));
+        idx = indices(
+            accessor(prim.indices, TINYGLTF_TYPE_SCALAR,
+                     {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                      TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT},
+                     at + " indices"));
         for (std::size_t i = 0; i < idx.size(); ++i)
           if (idx[i] >= p.size())
             fail(at + ": index " + std::to_string(i) + " is " + std::to_string(idx[i]) +
@@ -340,7 +356,8 @@ class Reader {
       if (mode == TINYGLTF_MODE_TRIANGLES && idx.size() % 3 != 0)
         fail(at + ": " + std::to_string(idx.size()) + " indices do not make whole triangles");
       if (idx.size() < 3) fail(at + ": fewer than 3 vertices");
-      const std::size_t triangles = mode == TINYGLTF_MODE_TRIANGLES ? idx.size() / 3 : idx.size() - 2;
+      const std::size_t triangles =
+          mode == TINYGLTF_MODE_TRIANGLES ? idx.size() / 3 : idx.size() - 2;
       if (triangles > limits_.max_triangles - out_.mesh.triangles.size())
         fail("more than " + std::to_string(limits_.max_triangles) + " triangles");
 
@@ -384,8 +401,8 @@ GltfModel parseGltf(std::span<const unsigned char> bytes, const std::string& nam
   checkJsonDepth(binary ? glbJson(bytes, name) : bytes, limits.max_json_depth, name);
 
   std::error_code ec;
-  Confinement confinement{fs::canonical(folder.empty() ? fs::path(".") : folder, ec),
-                          limits.max_file_bytes, {}};
+  Confinement confinement{
+      fs::canonical(folder.empty() ? fs::path(".") : folder, ec), limits.max_file_bytes, {}};
   if (ec) throw InputError(name + ": cannot resolve its folder " + folder.string());
   tinygltf::TinyGLTF loader;
   loader.SetFsCallbacks({&fileExists, &expandFilePath, &readWholeFile, &refuseWrite, &confinement});
@@ -406,7 +423,8 @@ GltfModel parseGltf(std::span<const unsigned char> bytes, const std::string& nam
   if (!ok) {
     while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
     if (!confinement.refusal.empty()) throw InputError(name + ": refused: " + confinement.refusal);
-    throw InputError(name + ": not a readable glTF model: " + (err.empty() ? "unknown error" : err));
+    throw InputError(name +
+                     ": not a readable glTF model: " + (err.empty() ? "unknown error" : err));
   }
   return Reader(model, name, limits).read();
 }
@@ -419,7 +437,8 @@ GltfModel loadGltf(const fs::path& file, const GltfLimits& limits) {
   if (ec || size > limits.max_file_bytes)
     throw InputError(name + ": larger than " + std::to_string(limits.max_file_bytes) + " bytes");
   std::ifstream in(file, std::ios::binary);
-  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
+                                   std::istreambuf_iterator<char>());
   if (!in.eof() && in.fail()) throw InputError(name + ": cannot read the model");
   return parseGltf(bytes, name, file.parent_path(), limits);
 }

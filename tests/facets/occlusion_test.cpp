@@ -78,7 +78,8 @@ TEST(Occlusion, LitFacetsEqualTheTargetWithoutItsShadowedPart) {
   const FacetIntegrator with_rays(targetOf(lShape(false)), laser(), options(true));
   const FacetIntegrator by_hand(targetOf(lShape(true)), laser(), options(false));
   IntegratorWorkspace ws;
-  for (const Vec3& observer : {Vec3(-10.0, 0.0, 10.0), Vec3(-6.0, 4.0, 3.0), Vec3(-3.0, -5.0, 8.0)}) {
+  for (const Vec3& observer :
+       {Vec3(-10.0, 0.0, 10.0), Vec3(-6.0, 4.0, 3.0), Vec3(-3.0, -5.0, 8.0)}) {
     const double e = with_rays.uniform(observer, 2, ws).irradiance_w_m2;
     const double expected = by_hand.uniform(observer, 2, ws).irradiance_w_m2;
     ASSERT_GT(expected, 0.0);
@@ -120,7 +121,8 @@ TEST(Occlusion, CurvedFacetsNeverShadowThemselves) {
   EXPECT_EQ(with_rays.cullStats().shadowed, 0u);
   EXPECT_EQ(with_rays.cullStats().lit, without.cullStats().lit);
   IntegratorWorkspace ws;
-  for (const Vec3& observer : {Vec3(-20.0, -30.0, 2.0), Vec3(20.0, -30.0, -3.0), Vec3(0.0, -40.0, 0.0)}) {
+  for (const Vec3& observer :
+       {Vec3(-20.0, -30.0, 2.0), Vec3(20.0, -30.0, -3.0), Vec3(0.0, -40.0, 0.0)}) {
     EXPECT_EQ(with_rays.adaptive(observer, ws).irradiance_w_m2,
               without.adaptive(observer, ws).irradiance_w_m2)
         << "observer " << observer.x << ", " << observer.y << ", " << observer.z;

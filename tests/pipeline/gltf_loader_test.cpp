@@ -1,5 +1,7 @@
 // The glTF loader: node transforms, and the hostile files it must refuse with a clear message
 // (README "Meshes": traversal, a folder as uri, deep nesting, bad accessors, NaN vertices).
+#include "pipeline/gltf_loader.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,7 +13,6 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/gltf_loader.h"
 #include "pipeline/input_error.h"
 #include "pipeline/scene.h"
 
@@ -34,27 +35,34 @@ class GltfLoader : public ::testing::Test {
 
   // One triangle (or what `positions` and `indices` say) in model/<name>.gltf with its
   // buffer in model/<name>.bin; `edit` may change the JSON before it is written.
-  fs::path write(const std::string& name, std::vector<float> positions,
-                 std::vector<std::uint16_t> indices,
-                 const std::function<void(json&)>& edit = [](json&) {}) const {
+  fs::path write(
+      const std::string& name, std::vector<float> positions, std::vector<std::uint16_t> indices,
+      const std::function<void(json&)>& edit = [](json&) {}) const {
     std::vector<unsigned char> bin(positions.size() * 4 + indices.size() * 2);
     std::memcpy(bin.data(), positions.data(), positions.size() * 4);
     std::memcpy(bin.data() + positions.size() * 4, indices.data(), indices.size() * 2);
     std::ofstream(dir_ / "model" / (name + ".bin"), std::ios::binary)
         .write(reinterpret_cast<const char*>(bin.data()), static_cast<std::streamsize>(bin.size()));
-    json j = {
-        {"asset", {{"version", "2.0"}}},
-        {"scene", 0},
-        {"scenes", {{{"nodes", {0}}}}},
-        {"nodes", {{{"mesh", 0}}}},
-        {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}}},
-        {"buffers", {{{"uri", name + ".bin"}, {"byteLength", bin.size()}}}},
-        {"bufferViews",
-         {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", positions.size() * 4}},
-          {{"buffer", 0}, {"byteOffset", positions.size() * 4}, {"byteLength", indices.size() * 2}}}},
-        {"accessors",
-         {{{"bufferView", 0}, {"componentType", 5126}, {"count", positions.size() / 3}, {"type", "VEC3"}},
-          {{"bufferView", 1}, {"componentType", 5123}, {"count", indices.size()}, {"type", "SCALAR"}}}}};
+    json j = {{"asset", {{"version", "2.0"}}},
+              {"scene", 0},
+              {"scenes", {{{"nodes", {0}}}}},
+              {"nodes", {{{"mesh", 0}}}},
+              {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}}},
+              {"buffers", {{{"uri", name + ".bin"}, {"byteLength", bin.size()}}}},
+              {"bufferViews",
+               {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", positions.size() * 4}},
+                {{"buffer", 0},
+                 {"byteOffset", positions.size() * 4},
+                 {"byteLength", indices.size() * 2}}}},
+              {"accessors",
+               {{{"bufferView", 0},
+                 {"componentType", 5126},
+                 {"count", positions.size() / 3},
+                 {"type", "VEC3"}},
+                {{"bufferView", 1},
+                 {"componentType", 5123},
+                 {"count", indices.size()},
+                 {"type", "SCALAR"}}}}};
     edit(j);
     const fs::path file = dir_ / "model" / (name + ".gltf");
     std::ofstream(file) << j.dump();
@@ -78,9 +86,10 @@ std::string refusal(const fs::path& file) {
 
 TEST_F(GltfLoader, AppliesNodeTransformsAndFlipsMirroredWinding) {
   const fs::path file = write("t", kTriangle, {0, 1, 2}, [](json& j) {
-    j["nodes"] = {{{"children", {1}}, {"translation", {10, 0, 0}}},
-                  {{"mesh", 0}, {"rotation", {0, 0, std::sqrt(0.5), std::sqrt(0.5)}}},  // 90° about z
-                  {{"mesh", 0}, {"scale", {-1, 1, 1}}}};
+    j["nodes"] = {
+        {{"children", {1}}, {"translation", {10, 0, 0}}},
+        {{"mesh", 0}, {"rotation", {0, 0, std::sqrt(0.5), std::sqrt(0.5)}}},  // 90° about z
+        {{"mesh", 0}, {"scale", {-1, 1, 1}}}};
     j["scenes"] = {{{"nodes", {0, 2}}}};
   });
   const GltfModel m = loadGltf(file);
@@ -100,21 +109,18 @@ TEST_F(GltfLoader, AppliesNodeTransformsAndFlipsMirroredWinding) {
 
 TEST_F(GltfLoader, RefusesAUriOutsideTheModelsFolder) {
   std::ofstream(dir_ / "secret.bin") << std::string(64, 'x');
-  const fs::path file = write("t", kTriangle, {0, 1, 2}, [](json& j) {
-    j["buffers"][0]["uri"] = "../secret.bin";
-  });
+  const fs::path file =
+      write("t", kTriangle, {0, 1, 2}, [](json& j) { j["buffers"][0]["uri"] = "../secret.bin"; });
   EXPECT_NE(refusal(file).find("outside the model's folder"), std::string::npos) << refusal(file);
-  const fs::path absolute = write("a", kTriangle, {0, 1, 2}, [](json& j) {
-    j["buffers"][0]["uri"] = "/etc/passwd";
-  });
+  const fs::path absolute =
+      write("a", kTriangle, {0, 1, 2}, [](json& j) { j["buffers"][0]["uri"] = "/etc/passwd"; });
   EXPECT_NE(refusal(absolute).find("refused"), std::string::npos) << refusal(absolute);
 }
 
 TEST_F(GltfLoader, RefusesAUriNamingAFolder) {
   fs::create_directories(dir_ / "model" / "sub");
-  const fs::path file = write("t", kTriangle, {0, 1, 2}, [](json& j) {
-    j["buffers"][0]["uri"] = "sub";
-  });
+  const fs::path file =
+      write("t", kTriangle, {0, 1, 2}, [](json& j) { j["buffers"][0]["uri"] = "sub"; });
   EXPECT_NE(refusal(file).find("not a regular file"), std::string::npos) << refusal(file);
 }
 
@@ -126,30 +132,35 @@ TEST_F(GltfLoader, RefusesDeepNestingBeforeParsing) {
 }
 
 TEST_F(GltfLoader, RefusesAnAccessorLongerThanItsBufferView) {
-  const fs::path file = write("t", kTriangle, {0, 1, 2}, [](json& j) { j["accessors"][0]["count"] = 4; });
+  const fs::path file =
+      write("t", kTriangle, {0, 1, 2}, [](json& j) { j["accessors"][0]["count"] = 4; });
   EXPECT_NE(refusal(file).find("do not fit in its bufferView"), std::string::npos) << refusal(file);
-  const fs::path view = write("v", kTriangle, {0, 1, 2}, [](json& j) {
-    j["bufferViews"][0]["byteLength"] = 1000;
-  });
-  EXPECT_NE(refusal(view).find("runs past the end of its buffer"), std::string::npos) << refusal(view);
-  const fs::path missing = write("m", kTriangle, {0, 1, 2}, [](json& j) { j["accessors"][0]["bufferView"] = 7; });
+  const fs::path view =
+      write("v", kTriangle, {0, 1, 2}, [](json& j) { j["bufferViews"][0]["byteLength"] = 1000; });
+  EXPECT_NE(refusal(view).find("runs past the end of its buffer"), std::string::npos)
+      << refusal(view);
+  const fs::path missing =
+      write("m", kTriangle, {0, 1, 2}, [](json& j) { j["accessors"][0]["bufferView"] = 7; });
   EXPECT_NE(refusal(missing).find("no valid bufferView"), std::string::npos) << refusal(missing);
 }
 
 TEST_F(GltfLoader, RefusesACountOfZero) {
-  const fs::path file = write("t", kTriangle, {0, 1, 2}, [](json& j) { j["accessors"][1]["count"] = 0; });
+  const fs::path file =
+      write("t", kTriangle, {0, 1, 2}, [](json& j) { j["accessors"][1]["count"] = 0; });
   EXPECT_NE(refusal(file).find("count is 0"), std::string::npos) << refusal(file);
 }
 
 TEST_F(GltfLoader, RefusesIndicesBeyondTheVertices) {
   const fs::path file = write("t", kTriangle, {0, 1, 7});
-  EXPECT_NE(refusal(file).find("is 7, not below the vertex count 3"), std::string::npos) << refusal(file);
+  EXPECT_NE(refusal(file).find("is 7, not below the vertex count 3"), std::string::npos)
+      << refusal(file);
 }
 
 TEST_F(GltfLoader, RefusesNonFiniteVertices) {
   std::vector<float> p = kTriangle;
   p[4] = std::numeric_limits<float>::quiet_NaN();
-  EXPECT_NE(refusal(write("nan", p, {0, 1, 2})).find("POSITION: element 1 is not finite"), std::string::npos)
+  EXPECT_NE(refusal(write("nan", p, {0, 1, 2})).find("POSITION: element 1 is not finite"),
+            std::string::npos)
       << refusal(write("nan", p, {0, 1, 2}));
   p[4] = std::numeric_limits<float>::infinity();
   EXPECT_NE(refusal(write("inf", p, {0, 1, 2})).find("not finite"), std::string::npos);
@@ -184,13 +195,20 @@ TEST(GltfExamples, TheExampleTargetsLoadWhole) {
 TEST_F(GltfLoader, MeshObjectsAreReadRelativeToTheSceneAndPlaced) {
   write("t", kTriangle, {0, 1, 2});
   const json scene = {
-      {"laser", {{"position", {0, 0, 10}}, {"direction", {0, 0, -1}}, {"power_w", 1.0},
-                 {"wavelength_nm", 532}, {"beam", {{"profile", "flat_top"}, {"radius_m", 1.0}}}}},
+      {"laser",
+       {{"position", {0, 0, 10}},
+        {"direction", {0, 0, -1}},
+        {"power_w", 1.0},
+        {"wavelength_nm", 532},
+        {"beam", {{"profile", "flat_top"}, {"radius_m", 1.0}}}}},
       {"materials", {{"m", {{"specular_reflectance", 0.5}, {"sigma", 0.1}}}}},
-      {"objects", {{{"shape", "mesh"}, {"file", "model/t.gltf"}, {"material", "m"},
-                    {"surface", "flat"},
-                    {"transform", {{"translation", {5, 0, 0}}, {"scale", 2.0},
-                                   {"yaw_pitch_roll_deg", {90, 0, 0}}}}}}}};
+      {"objects",
+       {{{"shape", "mesh"},
+         {"file", "model/t.gltf"},
+         {"material", "m"},
+         {"surface", "flat"},
+         {"transform",
+          {{"translation", {5, 0, 0}}, {"scale", 2.0}, {"yaw_pitch_roll_deg", {90, 0, 0}}}}}}}};
   const Scene s = parseScene(scene.dump(), "scene.json", dir_);
   ASSERT_TRUE(s.objects[0].mesh);
   const MeshSpec& m = *s.objects[0].mesh;
@@ -206,7 +224,8 @@ TEST_F(GltfLoader, MeshObjectsAreReadRelativeToTheSceneAndPlaced) {
     parseScene(bad.dump(), "scene.json", dir_);
     ADD_FAILURE() << "a missing mesh file was accepted";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("scene.json: /objects/0/file:"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("scene.json: /objects/0/file:"), std::string::npos)
+        << e.what();
   }
 }
 
