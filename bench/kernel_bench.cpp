@@ -79,6 +79,29 @@ void AdaptiveObserver(benchmark::State& state) {
 }
 BENCHMARK(AdaptiveObserver)->Unit(benchmark::kMillisecond);
 
+// The finned missile (examples/finned_missile.json) over a row of its eye-level observers, one
+// thread, with occlusion rays (argument 1) and without (0): the cost of the rays, net of the
+// facets they hide.
+void FinnedMissileObservers(benchmark::State& state) {
+  static const Scene scene = loadScene(GLINT_EXAMPLES_DIR "/finned_missile.json");
+  IntegratorOptions options = integratorOptions(scene);
+  options.occlusion = state.range(0) != 0;
+  const FacetIntegrator fi(buildTarget(scene), beamOf(scene), options);
+  IntegratorWorkspace ws;
+  std::int64_t evaluations = 0;
+  for (auto _ : state) {
+    double sum = 0.0;
+    for (int i = 0; i < 16; ++i) {
+      const ObserverResult r = fi.adaptive(Vec3(-8.0 + i, -6.0, 1.7), ws);
+      evaluations += r.evaluations;
+      sum += r.irradiance_w_m2;
+    }
+    benchmark::DoNotOptimize(sum);
+  }
+  reportRate(state, static_cast<double>(evaluations), 1);
+}
+BENCHMARK(FinnedMissileObservers)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
 // The paper's 186 observers on `threads` threads: reflections per second in all and per core.
 void ObserversOnThreads(benchmark::State& state) {
   const auto threads = static_cast<std::size_t>(state.range(0));
