@@ -105,10 +105,10 @@ class IntegratorWorkspace {
   std::unique_ptr<Impl> impl_;
 };
 
-/// @brief The lit coarse facets of a target under a beam, ready to be integrated at any
-/// number of observers (from any number of threads, each with its own workspace).
 class Occluder;
 
+/// @brief The lit coarse facets of a target under a beam, ready to be integrated at any
+/// number of observers (from any number of threads, each with its own workspace).
 class FacetIntegrator {
  public:
   /// @brief Culls the facets that no observer can receive light from (facing away from the

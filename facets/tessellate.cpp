@@ -152,7 +152,8 @@ std::size_t fillNormals(TriangleMesh& mesh, double crease_angle_rad) {
         const auto n = tryNormalize(area_normal[f]);
         if (n && glm::dot(*n, *own) >= cos_crease) sum += area_normal[f];
       }
-      mesh.positions_m.push_back(mesh.positions_m[v]);
+      const Vec3 position = mesh.positions_m[v];
+      mesh.positions_m.push_back(position);
       mesh.normals.push_back(tryNormalize(sum).value_or(*own));
       v = static_cast<std::uint32_t>(mesh.positions_m.size() - 1);
       ++filled;
