@@ -215,6 +215,11 @@ class Reader {
     if (on_path_[index]) fail(where + " is its own ancestor (a cycle in the node tree)");
     if (depth > limits_.max_json_depth)
       fail(where + ": node tree deeper than " + std::to_string(limits_.max_json_depth));
+    // A node may be the child of many: a graph that shares nodes level by level names 2^depth
+    // instances with a handful of nodes, so the instances are counted, not the nodes.
+    if (++instances_ > limits_.max_node_instances)
+      fail("more than " + std::to_string(limits_.max_node_instances) +
+           " node instances (nodes shared as children over and over)");
     const tinygltf::Node& node = model_.nodes[index];
     const glm::dmat4 m = parent * localTransform(node, where);
     if (node.mesh >= 0) addMesh(node.mesh, m, where);
@@ -388,6 +393,7 @@ class Reader {
   const std::string& name_;
   const GltfLimits& limits_;
   std::vector<bool> on_path_;
+  std::size_t instances_ = 0;
   GltfModel out_;
 };
 

@@ -19,6 +19,7 @@ struct GltfLimits {
   std::uintmax_t max_file_bytes = std::uintmax_t{512} << 20;  ///< the model and each buffer
   int max_json_depth = 64;             ///< glTF needs about 8; a deep file is an attack
   std::size_t max_triangles = 20'000'000;  ///< after node instancing
+  std::size_t max_node_instances = 1'000'000;  ///< nodes visited, each time it is a child
 };
 
 /// @brief A model's triangles with the node transforms of its scene applied, in the model's

@@ -173,6 +173,17 @@ TEST_F(GltfLoader, RefusesACycleInTheNodeTree) {
   EXPECT_NE(refusal(file).find("its own ancestor"), std::string::npos) << refusal(file);
 }
 
+TEST_F(GltfLoader, RefusesANodeGraphThatInstancesItselfExponentially) {
+  // 60 nodes, each the child of the one before twice over: 2^60 instances of the last.
+  const fs::path file = write("t", kTriangle, {0, 1, 2}, [](json& j) {
+    json nodes = json::array();
+    for (int i = 0; i < 60; ++i) nodes.push_back({{"children", {i + 1, i + 1}}});
+    nodes.push_back({{"mesh", 0}});
+    j["nodes"] = nodes;
+  });
+  EXPECT_NE(refusal(file).find("node instances"), std::string::npos) << refusal(file);
+}
+
 TEST_F(GltfLoader, RefusesWhatIsNotGltf) {
   const fs::path file = dir_ / "model" / "junk.glb";
   std::ofstream(file) << "glTF\x02\0\0\0 not really";
