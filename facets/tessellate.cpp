@@ -139,18 +139,25 @@ std::size_t fillNormals(TriangleMesh& mesh, double crease_angle_rad) {
     const auto& tri = mesh.triangles[t];
     const Vec3& a = mesh.positions_m[tri[0]];
     area_normal[t] = glm::cross(mesh.positions_m[tri[1]] - a, mesh.positions_m[tri[2]] - a);
+    if (!tryNormalize(area_normal[t])) continue;  // no direction to lend its neighbours
     for (std::uint32_t v : tri) faces_at[weld[v]].push_back(t);
   }
+  // Comparing every face at a vertex with every other is quadratic in the vertex's valence; a
+  // real model's poles and fans stay far below this, a hostile one need not.
+  constexpr std::size_t kMaxValence = 1024;
   const double cos_crease = std::cos(crease_angle_rad);
   std::size_t filled = 0;
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
     const auto own = tryNormalize(area_normal[t]);
     for (std::uint32_t& v : mesh.triangles[t]) {
       if (mesh.normals[v] != Vec3(0.0) || !own) continue;
-      Vec3 sum(0.0);
-      for (std::uint32_t f : faces_at[weld[v]]) {
-        const auto n = tryNormalize(area_normal[f]);
-        if (n && glm::dot(*n, *own) >= cos_crease) sum += area_normal[f];
+      const std::vector<std::uint32_t>& around = faces_at[weld[v]];
+      Vec3 sum = *own;  // beyond the valence limit, the face's own normal
+      if (around.size() <= kMaxValence) {
+        sum = Vec3(0.0);
+        for (std::uint32_t f : around) {
+          if (glm::dot(*tryNormalize(area_normal[f]), *own) >= cos_crease) sum += area_normal[f];
+        }
       }
       const Vec3 position = mesh.positions_m[v];
       mesh.positions_m.push_back(position);
