@@ -329,10 +329,12 @@ class Reader {
       }
       const auto pos = prim.attributes.find("POSITION");
       if (pos == prim.attributes.end()) fail(at + ": no POSITION");
-      const std::vector<Vec3> p =
-          vectors(accessor(pos->second, TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT},
-                           at + " POSITION"),
-                  at + " POSITION");
+      const View positions = accessor(pos->second, TINYGLTF_TYPE_VEC3,
+                                      {TINYGLTF_COMPONENT_TYPE_FLOAT}, at + " POSITION");
+      // Every instance copies its primitive's vertices, used or not: counted before reading.
+      if (positions.count > 3 * limits_.max_triangles - out_.mesh.positions_m.size())
+        fail("more than " + std::to_string(3 * limits_.max_triangles) + " vertices");
+      const std::vector<Vec3> p = vectors(positions, at + " POSITION");
       std::vector<Vec3> n(p.size(), Vec3(0.0));
       const auto nrm = prim.attributes.find("NORMAL");
       if (nrm != prim.attributes.end()) {

@@ -18,7 +18,9 @@ namespace glint {
 struct GltfLimits {
   std::uintmax_t max_file_bytes = std::uintmax_t{512} << 20;  ///< the model and each buffer
   int max_json_depth = 64;             ///< glTF needs about 8; a deep file is an attack
-  std::size_t max_triangles = 20'000'000;  ///< after node instancing
+  /// After node instancing; vertices may be three times as many. A target of this size is
+  /// already far beyond what a run over observers can afford.
+  std::size_t max_triangles = 2'000'000;
   std::size_t max_node_instances = 1'000'000;  ///< nodes visited, each time it is a child
 };
 
