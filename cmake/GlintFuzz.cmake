@@ -8,7 +8,7 @@
 # Prebuilt libraries (tinygltf, OpenVDB, TBB, Embree) are not instrumented. Included by the
 # top-level CMakeLists.txt before any target is defined, so the options reach every target.
 
-option(GLINT_FUZZ "Build the libFuzzer targets, every glint target with ASan and UBSan (Clang only)" OFF)
+option(GLINT_FUZZ "libFuzzer targets; every glint target with ASan and UBSan (Clang only)" OFF)
 
 if(GLINT_FUZZ)
   if(NOT CMAKE_CXX_COMPILER_ID MATCHES "Clang")

@@ -135,16 +135,20 @@ std::size_t fillNormals(TriangleMesh& mesh, double crease_angle_rad) {
   const std::vector<std::uint32_t> weld = weldByPosition(mesh.positions_m);
   std::vector<std::vector<std::uint32_t>> faces_at(mesh.positions_m.size());
   std::vector<Vec3> area_normal(mesh.triangles.size());  // |cross| = twice the area
+  std::vector<Vec3> unit_normal(mesh.triangles.size());
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
     const auto& tri = mesh.triangles[t];
     const Vec3& a = mesh.positions_m[tri[0]];
     area_normal[t] = glm::cross(mesh.positions_m[tri[1]] - a, mesh.positions_m[tri[2]] - a);
-    if (!tryNormalize(area_normal[t])) continue;  // no direction to lend its neighbours
+    const auto unit = tryNormalize(area_normal[t]);
+    if (!unit) continue;  // no direction to lend its neighbours
+    unit_normal[t] = *unit;
     for (std::uint32_t v : tri) faces_at[weld[v]].push_back(t);
   }
-  // Comparing every face at a vertex with every other is quadratic in the vertex's valence; a
-  // real model's poles and fans stay far below this, a hostile one need not.
-  constexpr std::size_t kMaxValence = 1024;
+  // Each corner compares its face with every face around its vertex: corners × valence in all.
+  // A 128-segment pole or fan is within the cap; a hostile file that puts a thousand faces at
+  // every vertex of two million triangles would otherwise take minutes.
+  constexpr std::size_t kMaxValence = 128;
   const double cos_crease = std::cos(crease_angle_rad);
   std::size_t filled = 0;
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
@@ -156,7 +160,7 @@ std::size_t fillNormals(TriangleMesh& mesh, double crease_angle_rad) {
       if (around.size() <= kMaxValence) {
         sum = Vec3(0.0);
         for (std::uint32_t f : around) {
-          if (glm::dot(*tryNormalize(area_normal[f]), *own) >= cos_crease) sum += area_normal[f];
+          if (glm::dot(unit_normal[f], *own) >= cos_crease) sum += area_normal[f];
         }
       }
       const Vec3 position = mesh.positions_m[v];
