@@ -217,17 +217,11 @@ void writeTargetVtp(std::ostream& out, const FacetIntegrator& integrator, int le
   std::vector<std::int64_t> connectivity, offsets;
   std::vector<double> power;
   std::vector<std::int32_t> coarse;
-  std::vector<SubFacet> stack;
+  std::vector<SubFacet> pieces;
   for (std::uint32_t f = 0; f < target.facetCount(); ++f) {
     const Vec3 origin = target.objects[target.object[f]].origin_m;
-    stack.assign(1, coarseSubFacet(target, f));
-    while (!stack.empty()) {
-      const SubFacet s = stack.back();
-      stack.pop_back();
-      if (s.depth < level) {
-        for (const SubFacet& c : split(target, s)) stack.push_back(c);
-        continue;
-      }
+    subFacetsAtDepth(target, f, level, pieces);
+    for (const SubFacet& s : pieces) {
       const PatchGeometry g = patchGeometry(target, s, normals);
       const Vec3 centre = g.centre_m + origin;
       const Beam::Sample at = beam.at(centre);

@@ -216,20 +216,19 @@ FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const Integrat
       case LightVerdict::FacesAway:
         ++cull_.facing_away;
         break;
-      case LightVerdict::MayBeLit: {
-        // The shadow ray runs back along the beam to the laser's plane.
-        const Vec3 from = g.centre_m + target_.objects[obj].origin_m +
-                          (occluder_ ? occluder_->lift_m(i) : 0.0) * g.normal;
-        if (occluder_ &&
-            !occluder_->rayClear(from, -beam_.direction,
-                                 glm::dot(from - beam_.origin_m, beam_.direction),
-                                 localSkip(g, -beam_.direction))) {
-          ++cull_.shadowed;
-          break;
+      case LightVerdict::MayBeLit:
+        if (occluder_) {
+          // The shadow ray runs back along the beam to the laser's plane.
+          const Vec3 from = rayOrigin(g, obj, i);
+          if (!occluder_->rayClear(from, -beam_.direction,
+                                   glm::dot(from - beam_.origin_m, beam_.direction),
+                                   localSkip(g, -beam_.direction))) {
+            ++cull_.shadowed;
+            break;
+          }
         }
         lit_.push_back({coarseSubFacet(target_, i), obj, g, g.cone_rad, g.radius_m});
         break;
-      }
     }
   }
   cull_.lit = lit_.size();
@@ -243,10 +242,14 @@ void FacetIntegrator::prepareObserver(const Vec3& observer_m, IntegratorWorkspac
   }
 }
 
+Vec3 FacetIntegrator::rayOrigin(const PatchGeometry& g, std::uint32_t object,
+                                std::uint32_t coarse) const {
+  return g.centre_m + target_.objects[object].origin_m + occluder_->lift_m(coarse) * g.normal;
+}
+
 bool FacetIntegrator::visible(const Candidate& c, const Vec3& observer_m) const {
   if (!occluder_) return true;
-  const Vec3 from = c.geometry.centre_m + target_.objects[c.object].origin_m +
-                    occluder_->lift_m(c.facet.coarse) * c.geometry.normal;
+  const Vec3 from = rayOrigin(c.geometry, c.object, c.facet.coarse);
   const auto toward = tryNormalize(observer_m - from);
   return !toward || occluder_->segmentClear(from, observer_m, localSkip(c.geometry, *toward));
 }

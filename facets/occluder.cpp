@@ -50,24 +50,14 @@ Occluder::Occluder(const Target& target, int level) : impl_(std::make_unique<Imp
   std::vector<std::array<Vec3, 3>> pieces;
   lift_m_.resize(target.facetCount());
   Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-  std::vector<SubFacet> stack, leaves;
+  std::vector<SubFacet> leaves;
   for (std::uint32_t i = 0; i < target.facetCount(); ++i) {
     const Vec3 origin = target.objects[target.object[i]].origin_m;
     const auto& c = target.corners_m[i];
     const Vec3 chord_centre = (c[0] + c[1] + c[2]) / 3.0;
     const Vec3 chord_normal =
         tryNormalize(glm::cross(c[1] - c[0], c[2] - c[0])).value_or(Vec3(0.0));
-    leaves.clear();
-    stack.assign(1, coarseSubFacet(target, i));
-    while (!stack.empty()) {
-      const SubFacet f = stack.back();
-      stack.pop_back();
-      if (f.depth >= level) {
-        leaves.push_back(f);
-      } else {
-        for (const SubFacet& child : split(target, f)) stack.push_back(child);
-      }
-    }
+    subFacetsAtDepth(target, i, level, leaves);
     // How far the surface bulges off the chord, sampled at the pieces' corners: the lift
     // clears it with half again to spare.
     double bulge = 0.0;

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <vector>
 
 #include "facets/target.h"
 #include "facets/vec3.h"
@@ -59,6 +60,11 @@ SubFacet coarseSubFacet(const Target& target, std::uint32_t facet);
 /// @brief The four children of @p f (corner children 0–2, then the middle one), with their
 /// new corners placed on the facet's surface model.
 std::array<SubFacet, 4> split(const Target& target, const SubFacet& f);
+
+/// @brief Replaces @p out by the sub-facets of coarse facet @p facet at depth @p level (4^level
+/// of them, depth first), on the facet's surface model.
+void subFacetsAtDepth(const Target& target, std::uint32_t facet, int level,
+                      std::vector<SubFacet>& out);
 
 /// @brief Geometry of @p f including its bounds.
 PatchGeometry patchGeometry(const Target& target, const SubFacet& f, NormalModel normals);

@@ -170,6 +170,10 @@ class Reader {
 
  private:
   [[noreturn]] void fail(const std::string& what) const { throw InputError(name_ + ": " + what); }
+  // Named only on failure: a node is visited once per instance, up to a million times.
+  [[noreturn]] void failNode(int index, const std::string& what) const {
+    fail("/nodes/" + std::to_string(index) + what);
+  }
 
   static bool finite(const glm::dmat4& m) {
     for (int c = 0; c < 4; ++c)
@@ -178,51 +182,50 @@ class Reader {
     return true;
   }
 
-  glm::dmat4 localTransform(const tinygltf::Node& node, const std::string& where) const {
+  glm::dmat4 localTransform(const tinygltf::Node& node, int index) const {
     if (!node.matrix.empty()) {
-      if (node.matrix.size() != 16) fail(where + ": matrix must have 16 numbers");
+      if (node.matrix.size() != 16) failNode(index, ": matrix must have 16 numbers");
       glm::dmat4 m;
       for (int i = 0; i < 16; ++i) m[i / 4][i % 4] = node.matrix[i];  // column-major, as glTF
-      if (!finite(m)) fail(where + ": matrix is not finite");
+      if (!finite(m)) failNode(index, ": matrix is not finite");
       return m;
     }
     glm::dmat4 t(1.0), r(1.0), s(1.0);
     if (!node.translation.empty()) {
-      if (node.translation.size() != 3) fail(where + ": translation must have 3 numbers");
+      if (node.translation.size() != 3) failNode(index, ": translation must have 3 numbers");
       t = glm::translate(glm::dmat4(1.0),
                          Vec3(node.translation[0], node.translation[1], node.translation[2]));
     }
     if (!node.rotation.empty()) {
-      if (node.rotation.size() != 4) fail(where + ": rotation must have 4 numbers");
+      if (node.rotation.size() != 4) failNode(index, ": rotation must have 4 numbers");
       const glm::dquat q(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]);
       const double len = glm::length(q);
-      if (!(len > 0.5 && len < 2.0)) fail(where + ": rotation is not a unit quaternion");
+      if (!(len > 0.5 && len < 2.0)) failNode(index, ": rotation is not a unit quaternion");
       r = glm::mat4_cast(q / len);
     }
     if (!node.scale.empty()) {
-      if (node.scale.size() != 3) fail(where + ": scale must have 3 numbers");
+      if (node.scale.size() != 3) failNode(index, ": scale must have 3 numbers");
       s = glm::scale(glm::dmat4(1.0), Vec3(node.scale[0], node.scale[1], node.scale[2]));
     }
     const glm::dmat4 m = t * r * s;
-    if (!finite(m)) fail(where + ": translation, rotation or scale is not finite");
+    if (!finite(m)) failNode(index, ": translation, rotation or scale is not finite");
     return m;
   }
 
   void visit(int index, const glm::dmat4& parent, int depth) {
-    const std::string where = "/nodes/" + std::to_string(index);
     if (index < 0 || index >= static_cast<int>(model_.nodes.size()))
-      fail(where + " does not exist");
-    if (on_path_[index]) fail(where + " is its own ancestor (a cycle in the node tree)");
+      failNode(index, " does not exist");
+    if (on_path_[index]) failNode(index, " is its own ancestor (a cycle in the node tree)");
     if (depth > limits_.max_json_depth)
-      fail(where + ": node tree deeper than " + std::to_string(limits_.max_json_depth));
+      failNode(index, ": node tree deeper than " + std::to_string(limits_.max_json_depth));
     // A node may be the child of many: a graph that shares nodes level by level names 2^depth
     // instances with a handful of nodes, so the instances are counted, not the nodes.
     if (++instances_ > limits_.max_node_instances)
       fail("more than " + std::to_string(limits_.max_node_instances) +
            " node instances (nodes shared as children over and over)");
     const tinygltf::Node& node = model_.nodes[index];
-    const glm::dmat4 m = parent * localTransform(node, where);
-    if (node.mesh >= 0) addMesh(node.mesh, m, where);
+    const glm::dmat4 m = parent * localTransform(node, index);
+    if (node.mesh >= 0) addMesh(node.mesh, m, index);
     on_path_[index] = true;
     for (int child : node.children) visit(child, m, depth + 1);
     on_path_[index] = false;
@@ -307,12 +310,12 @@ class Reader {
     return out;
   }
 
-  void addMesh(int mesh_index, const glm::dmat4& m, const std::string& node) {
-    const std::string where = node + " mesh " + std::to_string(mesh_index);
-    if (mesh_index >= static_cast<int>(model_.meshes.size())) fail(where + " does not exist");
+  void addMesh(int mesh_index, const glm::dmat4& m, int node) {
+    if (mesh_index >= static_cast<int>(model_.meshes.size()))
+      failNode(node, " mesh " + std::to_string(mesh_index) + " does not exist");
     const glm::dmat3 linear(m);
     const double det = glm::determinant(linear);
-    if (!(std::abs(det) > 0.0) || !std::isfinite(det)) fail(node + ": singular transform");
+    if (!(std::abs(det) > 0.0) || !std::isfinite(det)) failNode(node, ": singular transform");
     const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(linear));
     const bool mirrored = det < 0.0;
     out_.mirrored_instances += mirrored;

@@ -95,10 +95,8 @@ nlohmann::json targetJson(const CullStats& cull) {
           {"occlusion_rays", cull.occlusion}};
 }
 
-// What became of each mesh's triangles (tessellated again: cheap beside the run).
-nlohmann::json meshesJson(const Scene& scene) {
-  std::vector<MeshStats> stats;
-  buildTarget(scene, &stats);
+// What became of each mesh's triangles (@p stats in the order of the scene's meshes).
+nlohmann::json meshesJson(const Scene& scene, const std::vector<MeshStats>& stats) {
   nlohmann::json meshes = nlohmann::json::array();
   std::size_t k = 0;
   for (const ObjectSpec& o : scene.objects) {
@@ -373,6 +371,13 @@ void runField(const RunArgs& args, std::ostream& err) {
                                args.uniform ? "uniform" : "adaptive");
 
   nlohmann::json j;
+  // The target as the first region's problem made it (every region builds the same one).
+  const bool has_meshes = std::any_of(scene.objects.begin(), scene.objects.end(),
+                                      [](const ObjectSpec& o) { return o.mesh.has_value(); });
+  auto describeTarget = [&](const FieldProblem& problem) {
+    if (!j.contains("target")) j["target"] = targetJson(problem.integrator.cullStats());
+    if (has_meshes && !j.contains("meshes")) j["meshes"] = meshesJson(scene, problem.mesh_stats);
+  };
   if (scene.observers) {
     const FieldSpec spec = fieldSpec(scene);
     const RegionResult box = computeRegion(scene, spec, args, "points", err);
@@ -384,6 +389,7 @@ void runField(const RunArgs& args, std::ostream& err) {
     writeTargetVtp(vtp->stream(), integrator, 2);
     const HazardZone zone = hazardZone(field, scene, targetCentre(integrator.target()));
     j = summaryJson(field, info, integrator.cullStats());
+    describeTarget(box.problem);
     j["hazard"] = hazardJson(scene, &zone);
     if (!args.quiet) printVolume(err, field, scene, zone, info, args.uniform);
   } else {
@@ -392,10 +398,6 @@ void runField(const RunArgs& args, std::ostream& err) {
          {"scene_fnv1a64", info.scene_fnv1a64},
          {"scheme", info.scheme}};
     j["hazard"] = hazardJson(scene, nullptr);
-  }
-  if (std::any_of(scene.objects.begin(), scene.objects.end(),
-                  [](const ObjectSpec& o) { return o.mesh.has_value(); })) {
-    j["meshes"] = meshesJson(scene);
   }
 
   if (!scene.planes.empty()) {
@@ -410,7 +412,7 @@ void runField(const RunArgs& args, std::ostream& err) {
       const HazardZone zone =
           hazardZone(field, scene, targetCentre(r.problem.integrator.target()));
       planes.push_back(planeJson(plane, field, zone));
-      if (!j.contains("target")) j["target"] = targetJson(r.problem.integrator.cullStats());
+      describeTarget(r.problem);
       if (!args.quiet) {
         const FieldStats& s = field.stats();
         err << "plane " << plane.name << ": " << s.nodes[0] << "×" << s.nodes[1] << " pixels at "

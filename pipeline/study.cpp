@@ -1,7 +1,6 @@
 #include "pipeline/study.h"
 
 #include <cmath>
-#include <glm/mat3x3.hpp>
 
 #include "pipeline/json_reader.h"
 #include "pipeline/progress.h"
@@ -131,15 +130,7 @@ json vecJson(const Vec3& v) { return json::array({v.x, v.y, v.z}); }
 }  // namespace
 
 Vec3 rotateYawPitchRoll(const Vec3& v, double yaw_deg, double pitch_deg, double roll_deg) {
-  const double deg = kPi / 180.0;
-  const double cy = std::cos(yaw_deg * deg), sy = std::sin(yaw_deg * deg);
-  const double cp = std::cos(pitch_deg * deg), sp = std::sin(pitch_deg * deg);
-  const double cr = std::cos(roll_deg * deg), sr = std::sin(roll_deg * deg);
-  // glm matrices are column-major: each Vec3 below is a column of Rz Ry Rx.
-  const glm::dmat3 rz(Vec3(cy, sy, 0.0), Vec3(-sy, cy, 0.0), Vec3(0.0, 0.0, 1.0));
-  const glm::dmat3 ry(Vec3(cp, 0.0, -sp), Vec3(0.0, 1.0, 0.0), Vec3(sp, 0.0, cp));
-  const glm::dmat3 rx(Vec3(1.0, 0.0, 0.0), Vec3(0.0, cr, sr), Vec3(0.0, -sr, cr));
-  return rz * (ry * (rx * v));
+  return yawPitchRoll(yaw_deg, pitch_deg, roll_deg) * v;
 }
 
 Study parseStudy(std::string_view text, const std::string& source,
@@ -260,21 +251,18 @@ Study loadStudy(const std::filesystem::path& path) {
 
 std::string scenarioSceneJson(const Study& study, const Scenario& s) {
   json scene = json::parse(study.scene_text);
-  auto turn = [&](const Vec3& v) {
-    return rotateYawPitchRoll(rotateYawPitchRoll(v, s.yaw_deg, s.pitch_deg, s.roll_deg),
-                              s.pose.yaw_deg, s.pose.pitch_deg, s.pose.roll_deg);
-  };
+  // The scenario's own angles first, then its pose's.
+  const glm::dquat turn = yawPitchRoll(s.pose.yaw_deg, s.pose.pitch_deg, s.pose.roll_deg) *
+                          yawPitchRoll(s.yaw_deg, s.pitch_deg, s.roll_deg);
   auto vec = [](const json& j) { return Vec3(j[0].get<double>(), j[1].get<double>(), j[2].get<double>()); };
-  const glm::dquat turn_q = yawPitchRoll(s.pose.yaw_deg, s.pose.pitch_deg, s.pose.roll_deg) *
-                            yawPitchRoll(s.yaw_deg, s.pitch_deg, s.roll_deg);
   for (std::size_t i = 0; i < scene["objects"].size(); ++i) {
     json& o = scene["objects"][i];
     const ObjectSpec& base = study.base.objects[i];
-    const Vec3 c = study.pivot_m + s.pose.offset_m + turn(base.center_m - study.pivot_m);
+    const Vec3 c = study.pivot_m + s.pose.offset_m + turn * (base.center_m - study.pivot_m);
     if (base.mesh) {
       // The mesh's frame turns with the scenario; its file is named absolutely, so that the
       // scenario's scene.json stands on its own.
-      const glm::dquat q = turn_q * base.mesh->transform.rotation;
+      const glm::dquat q = turn * base.mesh->transform.rotation;
       json& t = o["transform"];
       t["translation"] = vecJson(c);
       t.erase("yaw_pitch_roll_deg");
@@ -284,7 +272,7 @@ std::string scenarioSceneJson(const Study& study, const Scenario& s) {
     }
     o["center"] = vecJson(c);
     for (const char* key : {"axis", "normal"}) {
-      if (o.contains(key)) o[key] = vecJson(turn(vec(o[key])));
+      if (o.contains(key)) o[key] = vecJson(turn * vec(o[key]));
     }
   }
   for (auto& [name, m] : scene["materials"].items()) {

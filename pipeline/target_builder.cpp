@@ -98,8 +98,11 @@ IntegratorOptions fieldIntegratorOptions(const Scene& scene, const FieldSpec& fi
 }
 
 FieldProblem fieldProblem(const Scene& scene, const FieldSpec& field) {
-  return {FacetIntegrator(buildTarget(scene), beamOf(scene), fieldIntegratorOptions(scene, field)),
-          excludedRegion(scene, 0.5 * field.voxel_m)};
+  std::vector<MeshStats> mesh_stats;
+  FacetIntegrator integrator(buildTarget(scene, &mesh_stats), beamOf(scene),
+                             fieldIntegratorOptions(scene, field));
+  return {std::move(integrator), excludedRegion(scene, 0.5 * field.voxel_m),
+          std::move(mesh_stats)};
 }
 
 ExcludedFn excludedRegion(const Scene& scene, double margin_m) {

@@ -46,6 +46,7 @@ ExcludedFn excludedRegion(const Scene& scene, double margin_m);
 struct FieldProblem {
   FacetIntegrator integrator;
   ExcludedFn excluded;
+  std::vector<MeshStats> mesh_stats;  ///< what buildTarget() made of each mesh
 };
 FieldProblem fieldProblem(const Scene& scene, const FieldSpec& field);
 

@@ -15,6 +15,7 @@
 
 #include "pipeline/input_error.h"
 #include "pipeline/scene.h"
+#include "support/refusal.h"
 
 namespace glint {
 namespace {
@@ -76,12 +77,7 @@ const std::vector<float> kTriangle = {0, 0, 0, 1, 0, 0, 0, 1, 0};
 
 // The message loadGltf refuses `file` with.
 std::string refusal(const fs::path& file) {
-  try {
-    loadGltf(file);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(accepted)";
+  return test::refusalOf([&] { loadGltf(file); });
 }
 
 TEST_F(GltfLoader, AppliesNodeTransformsAndFlipsMirroredWinding) {

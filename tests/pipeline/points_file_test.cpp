@@ -3,17 +3,13 @@
 #include <gtest/gtest.h>
 
 #include "pipeline/input_error.h"
+#include "support/refusal.h"
 
 namespace glint {
 namespace {
 
 std::string refusal(const std::string& text) {
-  try {
-    parsePoints(text, "P.csv");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(accepted)";
+  return test::refusalOf([&] { parsePoints(text, "P.csv"); });
 }
 
 TEST(PointsFile, ReadsRowsInOrderWithTolerantFormatting) {

@@ -8,6 +8,7 @@
 
 #include "pipeline/input_error.h"
 #include "pipeline/target_builder.h"
+#include "support/refusal.h"
 
 namespace glint {
 namespace {
@@ -29,12 +30,7 @@ json minimal() {
 
 // The message parseScene refuses `scene` with.
 std::string refusal(const std::string& text) {
-  try {
-    parseScene(text, "scene.json");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(accepted)";
+  return test::refusalOf([&] { parseScene(text, "scene.json"); });
 }
 std::string refusal(const json& scene) { return refusal(scene.dump()); }
 

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "pipeline/input_error.h"
+#include "support/refusal.h"
 
 namespace glint {
 namespace {
@@ -22,12 +23,7 @@ Study study(const std::string& body) {
 }
 
 std::string refusal(const std::string& body) {
-  try {
-    study(body);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(accepted)";
+  return test::refusalOf([&] { study(body); });
 }
 
 void expectNear(const Vec3& a, const Vec3& b, double tol, const std::string& what) {
