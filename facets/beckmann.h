@@ -47,9 +47,12 @@ struct Beckmann {
   /// @brief The largest Ξ over all θN with tan²θN ≥ @p tan2_min, for conservative bounds.
   /// ln Ξ = −s/2σ² + 2 ln(1 + s) + const is concave in s with its peak at s* = 4σ² − 1, so
   /// for σ < 1/2 Ξ falls monotonically and for wider lobes it first rises to s*.
+  /// A NaN @p tan2_min (an angle that could not be computed) gives the lobe's overall maximum,
+  /// never 0: a bound must not prove "nothing" from a failed computation.
   [[nodiscard]] double maxXiBeyond(double tan2_min) const {
     const double s_peak = 4.0 * sigma * sigma - 1.0;
-    return xiFromTan2(s_peak > tan2_min ? s_peak : tan2_min);
+    const double s = tan2_min >= 0.0 ? tan2_min : 0.0;
+    return xiFromTan2(s_peak > s ? s_peak : s);
   }
 };
 

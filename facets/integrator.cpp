@@ -97,7 +97,7 @@ struct Totals {
     value += sign * leaf.value();
     if (leaf.signedError()) {
       signed_change += sign * (leaf.refined - leaf.estimate);
-    } else if (leaf.error == kInf) {
+    } else if (!(leaf.error < kInf)) {  // +∞, or a NaN that must count as +∞
       unbounded += sign;
     } else {
       magnitude += sign * leaf.error;
@@ -148,7 +148,9 @@ struct IntegratorWorkspace::Impl {
   }
 
   void push(std::uint32_t slot) {
-    const Leaf& leaf = leaves[slot];
+    Leaf& leaf = leaves[slot];
+    // A NaN error would break the heap's order and hide the leaf: it counts as unbounded.
+    if (std::isnan(leaf.error)) leaf.error = kInf;
     if (leaf.signedError()) {
       resolved.push(-static_cast<int>(leaf.facet.depth), leaf.error, slot);
     } else {
@@ -165,7 +167,7 @@ struct IntegratorWorkspace::Impl {
       value.add(leaf.value());
       if (leaf.signedError()) {
         change.add(leaf.refined - leaf.estimate);
-      } else if (leaf.error == kInf) {
+      } else if (!(leaf.error < kInf)) {
         ++t.unbounded;
       } else {
         magnitude.add(leaf.error);
@@ -476,7 +478,9 @@ RegionBound FacetIntegrator::boundRegion(const Vec3& centre_m, double radius_m,
   thread_local std::vector<char> drop;
   drop.assign(kept.size(), 0);
   for (std::uint32_t k : order) {
-    if (dropped.value() + bounds[k] > options.drop_allowance_w_m2) break;
+    // Only a finite bound proven within the allowance is dropped: an unbounded candidate never
+    // is, whatever the allowance (sorted last, it ends the loop).
+    if (!(bounds[k] < kInf) || !(dropped.value() + bounds[k] <= options.drop_allowance_w_m2)) break;
     dropped.add(bounds[k]);
     drop[k] = 1;
   }

@@ -4,6 +4,7 @@
 /// refinement (Bailey et al. 2010, §2), made safe by bounds, and its uniform twin.
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <vector>
@@ -81,6 +82,10 @@ struct RegionOptions {
 };
 
 /// @brief The bound of what any observer in a ball can receive (see boundRegion()).
+///
+/// The bounds are never NaN. +∞ means unbounded: the ball reaches a lit facet (an observer on
+/// the target sees unbounded irradiance in the point-source model), so nothing about the
+/// ball may be decided from the bound or from samples: callers refine it.
 struct RegionBound {
   double upper_w_m2 = 0.0;    ///< no observer in the ball receives more (kept + dropped)
   double dropped_w_m2 = 0.0;  ///< bound of all dropped candidates, inherited ones included
@@ -88,6 +93,11 @@ struct RegionBound {
   /// spacing: a glint that samples alone could miss.
   double narrow_w_m2 = 0.0;
   std::int64_t bound_evaluations = 0;  ///< contribution bounds computed
+
+  /// @brief False when the ball reaches a lit facet (upper_w_m2 is +∞).
+  [[nodiscard]] bool bounded() const {
+    return upper_w_m2 < std::numeric_limits<double>::infinity();
+  }
 };
 
 /// @brief Per-thread scratch space of FacetIntegrator: reused between observers, so the hot

@@ -50,7 +50,9 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
   if (material.specular_reflectance > 0.0) {
     specular = scale * 0.25 * material.specular_reflectance * material.lobe.maxXiBeyond(tan2_min);
   }
-  const double diffuse = scale * material.diffuse_reflectance / kPi;
+  // A reflectance of 0 contributes 0 even where the scale overflowed (∞ · 0 would be NaN).
+  const double diffuse =
+      material.diffuse_reflectance > 0.0 ? scale * material.diffuse_reflectance / kPi : 0.0;
 
   // Both terms are smooth in a patch that is small against the distance and free of beam
   // edges; the specular term also varies on the scale σ of the lobe. Where cos θi or cos θr
@@ -67,6 +69,13 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
   ContributionBound b;
   b.upper_w_m2 = specular + diffuse;
   b.unresolved_w_m2 = (specular_smooth ? 0.0 : specular) + (smooth ? 0.0 : diffuse);
+  // A bound is only useful if it fails safe: a NaN (from a NaN in the geometry, or an
+  // overflowing beam power meeting a zero) would compare false against every threshold and
+  // could be read as "nothing here". It becomes +∞, which every caller refines.
+  if (!(b.upper_w_m2 >= 0.0) || !(b.unresolved_w_m2 >= 0.0)) {
+    const double inf = std::numeric_limits<double>::infinity();
+    return {inf, inf};
+  }
   return b;
 }
 
@@ -119,8 +128,9 @@ bool mayFaceObserver(const PatchGeometry& g, const Vec3& observer_m, double obse
   const double reach = g.radius_m + observer_radius_m;
   if (!(d > reach)) return true;
   const double excess = angleBetween(g.normal, v) - g.cone_rad;
-  if (excess < 0.5 * kPi) return true;
-  return d * std::cos(excess) + reach > 0.0;
+  // Written so that a NaN anywhere answers "may face": culling must be proven.
+  if (!(excess >= 0.5 * kPi)) return true;
+  return !(d * std::cos(excess) + reach <= 0.0);
 }
 
 LightVerdict lightVerdict(const PatchGeometry& g, const Beam& beam) {
@@ -128,7 +138,7 @@ LightVerdict lightVerdict(const PatchGeometry& g, const Beam& beam) {
   const Vec3 wi = beam.at(g.centre_m).toward_laser;
   const double excess =
       angleBetween(g.normal, wi) - g.cone_rad - beam.directionSpreadInBall(g.radius_m);
-  return excess < 0.5 * kPi ? LightVerdict::MayBeLit : LightVerdict::FacesAway;
+  return excess >= 0.5 * kPi ? LightVerdict::FacesAway : LightVerdict::MayBeLit;  // NaN: lit
 }
 
 }  // namespace glint

@@ -349,6 +349,8 @@ class FieldBuilder {
     return out;
   }
 
+  // Only a bound proven at most the floor skips a block; NaN never does (and cannot occur:
+  // RegionBound is never NaN).
   [[nodiscard]] bool skipped(const RegionBound& bound) const {
     return bound.upper_w_m2 <= spec_.floor_w_m2;
   }
@@ -427,6 +429,10 @@ class FieldBuilder {
   [[nodiscard]] Decision decideBlock(const Block& b, const RegionBound& bound) const {
     if (skipped(bound)) return {Verdict::Skip};
     if (b.size <= 2) return {Verdict::Finest};  // every lattice point of it is a sample
+    // The block's ball reaches a lit facet: a glint may leave the target anywhere between the
+    // samples (a small mirror inside the block sends a pencil no sample meets), and no bound
+    // says how bright it is. Only finer blocks can tell, down to integrating every point.
+    if (!bound.bounded()) return {Verdict::Refine};
     // The 3×3×3 lattice (v[9a + 3c + e]) and the octant centres, in forEachSample's order.
     std::array<double, 35> v{};
     std::array<Index3, 35> where{};
@@ -441,11 +447,17 @@ class FieldBuilder {
     // The target is in the block: resolve it finely.
     if (excluded) return {Verdict::Refine};
     double largest = 0.0;
-    for (std::size_t s = 0; s < n; ++s) largest = std::max(largest, std::abs(v[s]));
+    bool finite = true;
+    for (std::size_t s = 0; s < n; ++s) {
+      finite = finite && std::isfinite(v[s]);
+      largest = std::max(largest, std::abs(v[s]));
+    }
+    // A sample that is not a finite number gives no budget to check against: look closer.
+    if (!finite) return {Verdict::Refine};
     const double allowed = kCheckShare * (spec_.tolerance * largest + spec_.floor_w_m2);
     // A coarse facet whose light could pass between the samples leaves no trace in them:
     // only the bound can say whether such a glint is too weak to matter.
-    if (bound.narrow_w_m2 > allowed) return {Verdict::Refine};
+    if (!(bound.narrow_w_m2 <= allowed)) return {Verdict::Refine};
     const bool far = farFromTarget(b);
     for (const int power : kInterpolationPowers) {
       if (power > 0 && !far) break;
@@ -597,7 +609,8 @@ class FieldBuilder {
 void validate(const FieldSpec& spec) {
   const int b = spec.block_voxels;
   if (!(spec.voxel_m > 0.0) || !std::isfinite(spec.voxel_m) || b < 1 || (b & (b - 1)) != 0 ||
-      !(spec.tolerance >= 0.0) || !(spec.floor_w_m2 >= 0.0)) {
+      !(spec.tolerance >= 0.0) || !std::isfinite(spec.tolerance) || !(spec.floor_w_m2 >= 0.0) ||
+      !std::isfinite(spec.floor_w_m2)) {
     throw std::invalid_argument("FieldSpec out of range");
   }
   for (std::size_t a = 0; a < 3; ++a) {

@@ -107,6 +107,108 @@ TEST(ObserverField, NarrowGlintBetweenCoarseSamplesIsFoundAsInDense) {
   EXPECT_LT(c.adaptive.evaluated_points, c.dense.evaluated_points / 4) << "and not computed";
 }
 
+// A one-sided mirror of R 0.125 m and σ = 0.001 under a 2.5 W Gaussian beam (w 0.1 m) at
+// 532 nm sends a pencil about 0.25 m wide up and across a box of 0.1 m voxels. The mirror sits
+// inside the first coarse block of 1.6 m, between its samples; the pencil crosses the block
+// for about 1.1 m before it meets any. The block's ball reaches the mirror, so its bound is
+// +∞: once summed with compensation as ∞ − ∞ = NaN, which neither the skip test nor the
+// narrow-glint guard could see, and the block was interpolated from samples that all read 0.
+std::string mirrorInBlockScene(const std::string& observers_key, const std::string& observers) {
+  return R"({"laser": {"position": [-100, 0.6, 0.6], "direction": [1, 0, 0], "power_w": 2.5,
+             "wavelength_nm": 532, "exposure_s": 0.25,
+             "beam": {"profile": "gaussian", "w_m": 0.1}},
+    "materials": {"mirror": {"specular_reflectance": 0.9, "sigma": 0.001}},
+    "objects": [{"shape": "disk", "center": [0.6, 0.6, 0.6], "normal": [-1, 1, 0.5],
+                 "radius": 0.125, "material": "mirror"}], ")" +
+         observers_key + R"(": )" + observers + "}";
+}
+
+// Hazard points of the dense field (ratio ≥ 1.05) that the adaptive field reads below the MPE,
+// and the counts of points at ratio ≥ 1 in each.
+struct HazardAgreement {
+  std::int64_t missed = 0, adaptive_hazardous = 0, dense_hazardous = 0;
+};
+HazardAgreement hazardAgreement(const ObserverField& adaptive, const ObserverField& dense,
+                                double mpe_w_m2) {
+  HazardAgreement h;
+  const auto n = dense.spec().nodes();
+  for (int i = 0; i < n[0]; ++i)
+    for (int j = 0; j < n[1]; ++j)
+      for (int k = 0; k < n[2]; ++k) {
+        const double d = dense.irradiance(i, j, k) / mpe_w_m2;
+        const double a = adaptive.irradiance(i, j, k) / mpe_w_m2;
+        h.dense_hazardous += d >= 1.0 ? 1 : 0;
+        h.adaptive_hazardous += a >= 1.0 ? 1 : 0;
+        h.missed += d >= 1.05 && !(a >= 1.0) ? 1 : 0;
+      }
+  return h;
+}
+
+TEST(ObserverField, MirrorInsideACoarseBlockIsRefinedNotInterpolatedAway) {
+  const std::string json = mirrorInBlockScene(
+      "observers", R"({"min": [0, 0, 0], "max": [3.2, 3.2, 3.2], "voxel_m": 0.1, "block_m": 1.6})");
+  const Scene scene = parseScene(json, "test.json");
+  const FieldSpec spec = fieldSpec(scene);
+  ASSERT_EQ(spec.block_voxels, 16);
+  const FieldProblem p = fieldProblem(scene, spec);
+  const ObserverField a = computeField(p.integrator, spec, p.excluded);
+  const ObserverField d = computeDenseField(p.integrator, spec, p.excluded);
+  const double mpe = scene.hazard.mpe.irradiance_w_m2;
+  ASSERT_NEAR(mpe, 25.46, 0.01) << "532 nm for 0.25 s";
+  const HazardAgreement h = hazardAgreement(a, d, mpe);
+  // The premise: a hazardous pencil, and the block that holds the mirror sees none of it at
+  // its samples (lattice points 0, 8, 16 per axis and the octant centres 4, 12).
+  ASSERT_GT(d.stats().peak_w_m2, 5.0 * mpe) << "peak hazard ratio about 5.6";
+  ASSERT_GT(h.dense_hazardous, 50);
+  double block_samples_max = 0.0;
+  for (int i = 0; i <= 16; i += 4)
+    for (int j = 0; j <= 16; j += 4)
+      for (int k = 0; k <= 16; k += 4) {
+        const bool octant_centre = i % 8 == 4 && j % 8 == 4 && k % 8 == 4;
+        const bool lattice = i % 8 == 0 && j % 8 == 0 && k % 8 == 0;
+        if (octant_centre || lattice) {
+          block_samples_max = std::max(block_samples_max, d.irradiance(i, j, k));
+        }
+      }
+  EXPECT_LT(block_samples_max, spec.floor_w_m2) << "the pencil passes between the samples";
+
+  EXPECT_EQ(h.missed, 0) << "dense points at hazard ratio ≥ 1.05 read below 1: dense "
+                         << h.dense_hazardous << " hazardous points, adaptive "
+                         << h.adaptive_hazardous;
+  EXPECT_EQ(h.adaptive_hazardous, h.dense_hazardous);
+  EXPECT_NEAR(a.stats().peak_w_m2, d.stats().peak_w_m2, 1e-9 * d.stats().peak_w_m2)
+      << "the true peak, near the mirror, is in the adaptive grid";
+  Comparison c;
+  c.fields = compareFields(a, d);
+  c.adaptive = a.stats();
+  c.dense = d.stats();
+  expectMatchesDense(c, spec, "mirror inside a coarse block");
+  EXPECT_LT(c.adaptive.evaluated_points, c.dense.evaluated_points / 4) << "still adaptive";
+}
+
+TEST(ObserverPlane, PlaneThroughASmallMirrorIsRefinedAroundIt) {
+  // The same mirror, a ground plane at the mirror's height: the coarse square that holds the
+  // mirror has a ball that reaches it, so it must be refined, never interpolated.
+  const std::string json = mirrorInBlockScene(
+      "planes", R"([{"name": "slice", "origin": [0, 0, 0.65], "u_axis": [1, 0, 0],
+                     "v_axis": [0, 1, 0], "size_m": [3.2, 3.2], "pixel_m": 0.05,
+                     "block_m": 1.6}])");
+  const Scene scene = parseScene(json, "test.json");
+  const FieldSpec spec = planeFieldSpec(scene, scene.planes.at(0));
+  const FieldProblem p = fieldProblem(scene, spec);
+  const ObserverField a = computeField(p.integrator, spec, p.excluded);
+  const ObserverField d = computeDenseField(p.integrator, spec, p.excluded);
+  const HazardAgreement h = hazardAgreement(a, d, scene.hazard.mpe.irradiance_w_m2);
+  ASSERT_GT(h.dense_hazardous, 10) << "the premise: the pencil crosses the slice";
+  EXPECT_EQ(h.missed, 0) << "dense " << h.dense_hazardous << ", adaptive "
+                         << h.adaptive_hazardous;
+  Comparison c;
+  c.fields = compareFields(a, d);
+  c.adaptive = a.stats();
+  c.dense = d.stats();
+  expectMatchesDense(c, spec, "slice through the mirror");
+}
+
 // A 1 m cylinder lit across its axis, in a box around it, at lobe width σ.
 std::string cylinderScene(double sigma) {
   return sceneJson(
