@@ -1,20 +1,80 @@
-"""Opens glint's VTK files in ParaView (pvpython, headless) and contours the irradiance at 10 %
-of the peak and the hazard ratio at 1 (the nominal hazard zone's surface): each volume file
-must give non-empty surfaces, the target its incident power."""
+"""Opens glint's VTK files in ParaView (pvpython, headless) and checks them against the scene
+and the other outputs of the same run:
+- irradiance.vti lies on the scene's lattice: origin at observers.min, spacing voxel_m, one
+  point per lattice point of the summary;
+- its irradiance equals the VDB's voxel for voxel at the peak and at sampled points (active
+  and inactive), read with OpenVDB's Python module;
+- contours of the irradiance at 10 % of the peak and of the hazard ratio at 1 (the nominal
+  hazard zone's surface) are non-empty in irradiance.vti and blocks.vtu;
+- target.vtp's incident power sums to the beam power the target intercepts, computed here
+  from the scene for a flat-top beam that covers each analytic object.
+"""
 import json
+import math
+import random
 import sys
 
+import pyopenvdb as vdb
 from paraview import servermanager
 from paraview.simple import Contour, OpenDataFile
 
 out = sys.argv[1]
 summary = json.load(open(f"{out}/summary.json"))
+scene = json.load(open(summary["scene_file"]))
+box = summary["box"]
 level = 0.1 * summary["peak_irradiance_w_m2"]
 assert level > 0.0
 
 # The example must be hazardous for the hazard contour to have a surface.
 assert summary["hazard"]["peak_hazard_ratio"] > 1.0, summary["hazard"]
 
+# --- The VTI's lattice is the scene's.
+image_reader = OpenDataFile(f"{out}/irradiance.vti")
+image_reader.UpdatePipeline()
+image = servermanager.Fetch(image_reader)
+voxel = scene["observers"]["voxel_m"]
+assert abs(box["voxel_m"] - voxel) <= 1e-15 * voxel, (box["voxel_m"], voxel)
+for a in range(3):
+    assert abs(image.GetSpacing()[a] - voxel) <= 1e-12 * voxel, (image.GetSpacing(), voxel)
+    want = scene["observers"]["min"][a]
+    assert abs(image.GetOrigin()[a] - want) <= 1e-12 * max(1.0, abs(want)), (
+        image.GetOrigin(), scene["observers"]["min"])
+dims = image.GetDimensions()
+assert list(dims) == box["lattice_points"], (dims, box["lattice_points"])
+print(f"irradiance.vti: origin {image.GetOrigin()}, spacing {voxel} m, {dims} points")
+
+# --- The VTI's irradiance is the VDB's, voxel for voxel (both float32).
+grids, _ = vdb.readAll(f"{out}/irradiance.vdb")
+irradiance_grid = {g.name: g for g in grids}["irradiance_w_m2"]
+vdb_irradiance = irradiance_grid.getConstAccessor()
+vti_irradiance = image.GetPointData().GetArray("irradiance_w_m2")
+
+
+def vti_at(i, j, k):
+    return vti_irradiance.GetValue(i + dims[0] * (j + dims[1] * k))
+
+
+def index_of(position_m):
+    return tuple(round((position_m[a] - box["min_m"][a]) / voxel) for a in range(3))
+
+
+peak_ijk = index_of(summary["peak_at_m"])
+rng = random.Random(7)
+active_voxels = [v["min"] for v in irradiance_grid.citerOnValues() if v["min"] == v["max"]]
+samples = [peak_ijk] + rng.sample(active_voxels, min(100, len(active_voxels)))
+samples += [tuple(rng.randrange(dims[a]) for a in range(3)) for _ in range(100)]
+active = 0
+for ijk in samples:
+    value, on = vdb_irradiance.probeValue(ijk)
+    active += on
+    expected = value if on else 0.0  # the VTI holds 0 where the VDB has no value
+    assert vti_at(*ijk) == expected, (ijk, vti_at(*ijk), expected)
+peak = summary["peak_irradiance_w_m2"]
+assert abs(vti_at(*peak_ijk) - peak) <= 1e-6 * peak, (vti_at(*peak_ijk), peak)
+print(f"irradiance.vti: {len(samples)} points equal the VDB's ({active} active), peak "
+      f"{vti_at(*peak_ijk):.6g} W/m^2 at {peak_ijk}")
+
+# --- Contours: the hazard zone's surface and the bright region.
 for name in ("irradiance.vti", "blocks.vtu"):
     reader = OpenDataFile(f"{out}/{name}")
     for array, value, unit in (("irradiance_w_m2", level, "W/m^2"), ("hazard_ratio", 1.0, "")):
@@ -24,11 +84,51 @@ for name in ("irradiance.vti", "blocks.vtu"):
         assert points > 0, f"{name}: empty contour of {array} at {value} {unit}"
         print(f"{name}: contour of {array} at {value:.4g} {unit} has {points} points")
 
+
+# --- The target receives the beam power it intercepts.
+def unit(v):
+    n = math.sqrt(sum(x * x for x in v))
+    return [x / n for x in v]
+
+
+def intercepted_power_w(scene):
+    laser = scene["laser"]
+    beam = laser["beam"]
+    assert beam["profile"] == "flat_top" and not beam.get("divergence_rad"), (
+        "this check knows the intercepted power of a collimated flat-top beam only")
+    e0 = laser["power_w"] / (math.pi * beam["radius_m"] ** 2)
+    d = unit(laser["direction"])
+    total = 0.0
+    for obj in scene["objects"]:
+        centre = obj["center"]
+        rel = [centre[a] - laser["position"][a] for a in range(3)]
+        along = sum(rel[a] * d[a] for a in range(3))
+        off_axis = math.sqrt(max(0.0, sum(x * x for x in rel) - along * along))
+        if obj["shape"] == "disk":
+            cos_t = abs(sum(x * y for x, y in zip(unit(obj["normal"]), d)))
+            area, reach = math.pi * obj["radius"] ** 2 * cos_t, obj["radius"]
+        elif obj["shape"] == "sphere":
+            area, reach = math.pi * obj["radius"] ** 2, obj["radius"]
+        elif obj["shape"] == "cylinder":
+            cos_a = sum(x * y for x, y in zip(unit(obj["axis"]), d))
+            area = 2.0 * obj["radius"] * obj["length"] * math.sqrt(max(0.0, 1.0 - cos_a * cos_a))
+            reach = math.hypot(obj["radius"], 0.5 * obj["length"])
+        else:
+            raise AssertionError(f"no closed form for a {obj['shape']}")
+        assert off_axis + reach <= beam["radius_m"], "the beam must cover the object"
+        total += e0 * area
+    return total
+
+
 target = OpenDataFile(f"{out}/target.vtp")
 target.UpdatePipeline()
 data = servermanager.Fetch(target)
 power = data.GetCellData().GetArray("incident_power_w")
 assert data.GetNumberOfCells() > 0 and power is not None
-total = sum(power.GetValue(i) for i in range(power.GetNumberOfTuples()))
-assert total > 0.0, total
-print(f"target.vtp: {data.GetNumberOfCells()} cells, {total:.4g} W incident")
+total = math.fsum(power.GetValue(i) for i in range(power.GetNumberOfTuples()))
+expected = intercepted_power_w(scene)
+# The facets carry the exact quadric: their areas converge to the surface's, and a flat disk's
+# are exact; 1e-9 leaves room for rounding over the cells.
+assert abs(total - expected) <= 1e-9 * expected, (total, expected)
+print(f"target.vtp: {data.GetNumberOfCells()} cells, {total:.10g} W incident, "
+      f"{expected:.10g} W intercepted by the scene's objects")

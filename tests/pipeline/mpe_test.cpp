@@ -105,6 +105,7 @@ TEST(Mpe, OutsideTheTableIsRefusedNotExtrapolated) {
   EXPECT_THROW(ocularMpe(std::nan(""), 0.25), std::out_of_range) << "NaN";
   try {
     ocularMpe(350.0, 0.25);
+    ADD_FAILURE() << "350 nm was accepted";
   } catch (const std::out_of_range& e) {
     EXPECT_NE(std::string(e.what()).find("400 nm to 1 mm"), std::string::npos) << e.what();
   }
