@@ -26,6 +26,7 @@ PROGRAMS = {
     "Xvfb": "xvfb",  # tests/export/with_display.sh
     "xvfb-run": "xvfb",  # examples/README.md, render_hazard.py
     "xauth": "xauth",  # xvfb-run
+    "vdb_print": "libopenvdb-tools",  # examples/README.md, GlintRun.VdbPrintListsTheGrids
     "cmake": "cmake",  # the build, `cmake -E env` in tests
     "ctest": "cmake",
     "ninja": "ninja-build",
