@@ -79,14 +79,17 @@ struct Decision {
 
 struct PointValue {
   double irradiance_w_m2 = 0.0;
+  double error_w_m2 = 0.0;  // the integrator's error estimate
   bool excluded = false;
   bool converged = true;
 };
 
 float code(VoxelStatus s) { return static_cast<float>(static_cast<int>(s)); }
 
-void noteUnconverged(FieldStats& stats, const Vec3& x) {
+void noteUnconverged(FieldStats& stats, const Vec3& x, double irradiance_w_m2, double error_w_m2) {
   ++stats.unconverged_points;
+  stats.unconverged_max_upper_w_m2 =
+      std::max(stats.unconverged_max_upper_w_m2, irradiance_w_m2 + error_w_m2);
   stats.unconverged_min_m = glm::min(stats.unconverged_min_m, x);
   stats.unconverged_max_m = glm::max(stats.unconverged_max_m, x);
 }
@@ -399,6 +402,7 @@ class FieldBuilder {
       const ObserverResult r =
           integrator_.adaptive(x, point_lists[wanted[w].second], workspaces.local());
       results[w].irradiance_w_m2 = r.irradiance_w_m2;
+      results[w].error_w_m2 = r.error_estimate_w_m2;
       results[w].converged = r.converged;
       evaluations[w] = r.evaluations;
       if (counter_ != nullptr) {
@@ -575,7 +579,10 @@ class FieldBuilder {
         continue;
       }
       status.setValue(p, code(value.converged ? VoxelStatus::Evaluated : VoxelStatus::Unconverged));
-      if (!value.converged) noteUnconverged(stats_, spec_.position(p[0], p[1], p[2]));
+      if (!value.converged) {
+        noteUnconverged(stats_, spec_.position(p[0], p[1], p[2]), value.irradiance_w_m2,
+                        value.error_w_m2);
+      }
       irradiance.setValue(p, static_cast<float>(value.irradiance_w_m2));
       if (value.irradiance_w_m2 > stats_.peak_w_m2) {
         stats_.peak_w_m2 = value.irradiance_w_m2;
@@ -809,7 +816,7 @@ ObserverField computeDenseField(const FacetIntegrator& integrator, const FieldSp
           p, code(r.converged ? VoxelStatus::Evaluated : VoxelStatus::Unconverged));
       ++local.stats.evaluated_points;
       local.stats.evaluations += r.evaluations;
-      if (!r.converged) noteUnconverged(local.stats, x);
+      if (!r.converged) noteUnconverged(local.stats, x, r.irradiance_w_m2, r.error_estimate_w_m2);
       if (r.irradiance_w_m2 > local.stats.peak_w_m2) {
         local.stats.peak_w_m2 = r.irradiance_w_m2;
         local.stats.peak_at_m = x;
@@ -829,6 +836,8 @@ ObserverField computeDenseField(const FacetIntegrator& integrator, const FieldSp
     stats.unconverged_points += local.stats.unconverged_points;
     stats.unconverged_min_m = glm::min(stats.unconverged_min_m, local.stats.unconverged_min_m);
     stats.unconverged_max_m = glm::max(stats.unconverged_max_m, local.stats.unconverged_max_m);
+    stats.unconverged_max_upper_w_m2 =
+        std::max(stats.unconverged_max_upper_w_m2, local.stats.unconverged_max_upper_w_m2);
     if (local.stats.peak_w_m2 > stats.peak_w_m2) {
       stats.peak_w_m2 = local.stats.peak_w_m2;
       stats.peak_at_m = local.stats.peak_at_m;

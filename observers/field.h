@@ -75,6 +75,9 @@ struct FieldStats {
   /// The box around the unconverged points (meaningful when there are any).
   Vec3 unconverged_min_m{INFINITY};
   Vec3 unconverged_max_m{-INFINITY};
+  /// The largest irradiance + error estimate of an unconverged point (W/m²): below the MPE,
+  /// none of them can be hazardous however the integration would have ended.
+  double unconverged_max_upper_w_m2 = 0.0;
   std::int64_t blocks_skipped = 0;   ///< proven below the floor
   std::int64_t blocks_accepted = 0;  ///< interpolated
   /// Of those, the blocks that interpolated E·r or E·r² (r from the lit facets' centre)

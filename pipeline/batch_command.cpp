@@ -150,7 +150,10 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Regio
                        {r.plane ? "hazardous_area_m2" : "hazard_volume_m3",
                         static_cast<double>(hazardous) * r.cell()},
                        {"evaluations", st.evaluations},
-                       {"unconverged_points", st.unconverged_points}});
+                       {"unconverged_points", st.unconverged_points},
+                       // Below 1, no unconverged point of the scenario can be hazardous.
+                       {"unconverged_max_hazard_ratio_plus_error",
+                        st.unconverged_max_upper_w_m2 / mpe}});
     evaluations += st.evaluations;
     unconverged += st.unconverged_points;
   }

@@ -51,11 +51,48 @@ struct HazardZone {
   double peak_ratio = 0.0;
   ObserverField::Region region;  ///< measured from the target's centre
   Vec3 target_centre_m{0.0};
+  /// The largest hazard ratio an unconverged point could have, its error estimate added
+  /// (0 when every point converged): below 1, none of them can be hazardous.
+  double unconverged_ratio_upper = 0.0;
+
+  [[nodiscard]] bool unconvergedMayBeHazardous() const { return !(unconverged_ratio_upper < 1.0); }
 };
 
 HazardZone hazardZone(const ObserverField& field, const Scene& scene, const Vec3& target_centre_m) {
   const double mpe = scene.hazard.mpe.irradiance_w_m2;
-  return {field.stats().peak_w_m2 / mpe, field.regionAbove(mpe, target_centre_m), target_centre_m};
+  const FieldStats& s = field.stats();
+  return {s.peak_w_m2 / mpe, field.regionAbove(mpe, target_centre_m), target_centre_m,
+          s.unconverged_max_upper_w_m2 / mpe};
+}
+
+// What the summary says of the points whose integration stopped short of its tolerance: where
+// they are (status 5 marks each) and whether any could be hazardous.
+nlohmann::json unconvergedJson(const FieldStats& s, const HazardZone& zone) {
+  return {{"points", s.unconverged_points},
+          {"box",
+           {{"min_m", {s.unconverged_min_m.x, s.unconverged_min_m.y, s.unconverged_min_m.z}},
+            {"max_m", {s.unconverged_max_m.x, s.unconverged_max_m.y, s.unconverged_max_m.z}}}},
+          {"max_irradiance_plus_error_w_m2", s.unconverged_max_upper_w_m2},
+          {"max_hazard_ratio_plus_error", zone.unconverged_ratio_upper},
+          {"may_be_hazardous", zone.unconvergedMayBeHazardous()}};
+}
+
+// One line on the points that did not converge: a note where none of them can reach the MPE,
+// else a warning.
+void printUnconverged(std::ostream& err, const FieldStats& s, const HazardZone& zone,
+                      const char* indent) {
+  if (s.unconverged_points == 0) return;
+  const bool may = zone.unconvergedMayBeHazardous();
+  err << indent << (may ? "warning: " : "note: ") << s.unconverged_points
+      << " points did not reach the integration tolerance (status 5), within ("
+      << s.unconverged_min_m.x << ", " << s.unconverged_min_m.y << ", " << s.unconverged_min_m.z
+      << ") .. (" << s.unconverged_max_m.x << ", " << s.unconverged_max_m.y << ", "
+      << s.unconverged_max_m.z << "); at each, irradiance plus its error estimate is at most "
+      << formatNumber("%.3g", s.unconverged_max_upper_w_m2) << " W/m² ("
+      << formatNumber("%.3g", zone.unconverged_ratio_upper) << " × the MPE)"
+      << (may ? ": some may be hazardous; raise accuracy.max_depth or accuracy.max_evaluations"
+              : ", so none of them can be hazardous")
+      << "\n";
 }
 
 // The hazard section of summary.json; the nominal hazard zone where there is a volume (`z`).
@@ -70,6 +107,7 @@ nlohmann::json hazardJson(const Scene& scene, const HazardZone* zone) {
   if (zone == nullptr) return j;
   const HazardZone& z = *zone;
   j["peak_hazard_ratio"] = z.peak_ratio;
+  j["unconverged_may_be_hazardous"] = z.unconvergedMayBeHazardous();
   const ObserverField::Region& r = z.region;
   nlohmann::json nhz = {{"points", r.points},
                        {"volume_m3", r.volume_m3},
@@ -118,7 +156,8 @@ nlohmann::json meshesJson(const Scene& scene, const std::vector<MeshStats>& stat
   return meshes;
 }
 
-nlohmann::json summaryJson(const ObserverField& field, const RunInfo& info, const CullStats& cull) {
+nlohmann::json summaryJson(const ObserverField& field, const HazardZone& zone, const RunInfo& info,
+                           const CullStats& cull) {
   const FieldSpec& spec = field.spec();
   const FieldStats& s = field.stats();
   nlohmann::json j;
@@ -142,12 +181,7 @@ nlohmann::json summaryJson(const ObserverField& field, const RunInfo& info, cons
                  {"proven_below_floor", s.below_floor_points},
                  {"inside_target", s.excluded_points},
                  {"unconverged", s.unconverged_points}};
-  if (s.unconverged_points > 0) {
-    // Where: each such voxel has status 5 in the grids; this is the box around them.
-    j["unconverged_box"] = {
-        {"min_m", {s.unconverged_min_m.x, s.unconverged_min_m.y, s.unconverged_min_m.z}},
-        {"max_m", {s.unconverged_max_m.x, s.unconverged_max_m.y, s.unconverged_max_m.z}}};
-  }
+  if (s.unconverged_points > 0) j["unconverged"] = unconvergedJson(s, zone);
   j["blocks"] = {{"skipped", s.blocks_skipped},
                  {"accepted", s.blocks_accepted},
                  {"accepted_interpolating_e_r_or_e_r2", s.blocks_accepted_spread},
@@ -216,13 +250,7 @@ void printVolume(std::ostream& err, const ObserverField& field, const Scene& sce
   } else {
     err << "  nominal hazard zone: none in the box (no point reaches the MPE)\n";
   }
-  if (s.unconverged_points > 0) {
-    err << "  warning: " << s.unconverged_points
-        << " points did not reach the integration tolerance, within (" << s.unconverged_min_m.x
-        << ", " << s.unconverged_min_m.y << ", " << s.unconverged_min_m.z << ") .. ("
-        << s.unconverged_max_m.x << ", " << s.unconverged_max_m.y << ", " << s.unconverged_max_m.z
-        << "); status 5 in the grids marks each\n";
-  }
+  printUnconverged(err, s, zone, "  ");
   err << "  memory: " << formatNumber("%.3g", static_cast<double>(s.grid_bytes) / 1e6)
       << " MB of grids, "
       << formatNumber("%.3g", s.active_voxels > 0 ? static_cast<double>(s.grid_bytes) /
@@ -277,6 +305,7 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
                       {"peak_at_m", {s.peak_at_m.x, s.peak_at_m.y, s.peak_at_m.z}},
                       {"peak_hazard_ratio", zone.peak_ratio},
                       {"hazardous_area_m2", hazardousArea(field, zone)}};
+  if (s.unconverged_points > 0) j["unconverged"] = unconvergedJson(s, zone);
   if (r.points > 0) {
     j["hazard_farthest_from_target_m"] = r.farthest_m;
     j["hazard_farthest_at_m"] = {r.farthest_at_m.x, r.farthest_at_m.y, r.farthest_at_m.z};
@@ -388,7 +417,7 @@ void runField(const RunArgs& args, std::ostream& err) {
     writeBlocksVtu(vtu->stream(), field, info.mpe_w_m2);
     writeTargetVtp(vtp->stream(), integrator, 2);
     const HazardZone zone = hazardZone(field, scene, targetCentre(integrator.target()));
-    j = summaryJson(field, info, integrator.cullStats());
+    j = summaryJson(field, zone, info, integrator.cullStats());
     describeTarget(box.problem);
     j["hazard"] = hazardJson(scene, &zone);
     if (!args.quiet) printVolume(err, field, scene, zone, info, args.uniform);
@@ -421,6 +450,7 @@ void runField(const RunArgs& args, std::ostream& err) {
             << formatDuration(s.seconds) << "; peak hazard ratio "
             << formatNumber("%.3g", zone.peak_ratio) << ", hazardous area "
             << formatNumber("%.4g", hazardousArea(field, zone)) << " m²\n";
+        printUnconverged(err, s, zone, "  ");
       }
     }
     j["planes"] = planes;

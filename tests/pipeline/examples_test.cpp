@@ -86,6 +86,38 @@ TEST(Examples, FinnedMissileOcclusionOnlyEverRemovesLight) {
   EXPECT_GT(dimmed, 0u) << "somewhere on the plane the fins must hide part of the body";
 }
 
+TEST(Examples, DefaultExampleShowsAHazardZoneInsideItsBoxWithoutWarning) {
+  // The README's first command runs examples/cylinder.json at 0.1 m (minutes); the same scene
+  // at 0.5 m voxels shows the same things in seconds: a hazard zone that ends inside the box,
+  // and points on the shadow's edge lines (y = ±0.5 m, where the lit and the visible side meet
+  // in a line) that do not converge but provably cannot be hazardous: a note, no warning.
+  auto scene = nlohmann::json::parse(std::ifstream(example("cylinder.json")));
+  scene["observers"]["voxel_m"] = 0.5;
+  scene["observers"]["block_m"] = 2.0;
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "glint_default_example";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "cylinder.json") << scene.dump();
+  const auto r = test::glint({"run", (dir / "cylinder.json").string(), "-o", (dir / "out").string()});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto summary = nlohmann::json::parse(std::ifstream(dir / "out" / "summary.json"));
+  const auto& hazard = summary["hazard"];
+  const auto& zone = hazard["nominal_hazard_zone"];
+  EXPECT_GT(hazard["peak_hazard_ratio"].get<double>(), 2.0) << hazard.dump();
+  EXPECT_GT(zone["points"].get<int>(), 20) << zone.dump();
+  EXPECT_FALSE(zone["reaches_box_edge"].get<bool>()) << zone.dump();
+  const double reach = zone["farthest_from_target_m"].get<double>();
+  EXPECT_GT(reach, 1.5) << "the backscattered fan reaches about 2.5 m";
+  EXPECT_LT(reach, 3.0) << "and ends a metre inside the box's 4 m";
+  ASSERT_TRUE(summary.contains("unconverged")) << "the premise: points on the shadow's edges";
+  EXPECT_FALSE(summary["unconverged"]["may_be_hazardous"].get<bool>()) << summary["unconverged"];
+  EXPECT_LT(summary["unconverged"]["max_hazard_ratio_plus_error"].get<double>(), 0.1);
+  EXPECT_FALSE(hazard["unconverged_may_be_hazardous"].get<bool>());
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("so none of them can be hazardous"), std::string::npos) << r.err;
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Examples, FinnedMissileRunsThroughGlintRun) {
   const std::filesystem::path out =
       std::filesystem::temp_directory_path() / "glint_finned_missile_run";

@@ -528,16 +528,26 @@ TEST(StressDepthLimit, AFieldThatCannotConvergeSaysHowManyAndWhere) {
   const FacetIntegrator fi = broadCylinder(o);
   const ObserverField field = computeField(fi, smallBox(), insideCylinder);
   const auto n = field.spec().nodes();
-  std::int64_t marked = 0;
-  for (int i = 0; i < n[0]; ++i)
-    for (int j = 0; j < n[1]; ++j)
-      for (int k = 0; k < n[2]; ++k) marked += field.status(i, j, k) == VoxelStatus::Unconverged;
-  EXPECT_GT(field.stats().unconverged_points, 0);
-  EXPECT_EQ(marked, field.stats().unconverged_points) << "each one marked where it is";
   // And one that can: the same box at depth 16 converges everywhere.
   const ObserverField fine =
       computeField(broadCylinder(accuracy(2.5e-3, 2.5e-5)), smallBox(), insideCylinder);
   EXPECT_EQ(fine.stats().unconverged_points, 0);
+  // The summary says "none can be hazardous" when irradiance + error estimate stays below the
+  // MPE at every unconverged point: that figure must bound both what they hold and the truth.
+  const double upper = field.stats().unconverged_max_upper_w_m2;
+  std::int64_t marked = 0;
+  for (int i = 0; i < n[0]; ++i)
+    for (int j = 0; j < n[1]; ++j)
+      for (int k = 0; k < n[2]; ++k) {
+        if (field.status(i, j, k) != VoxelStatus::Unconverged) continue;
+        ++marked;
+        EXPECT_LE(field.irradiance(i, j, k), upper) << i << "," << j << "," << k;
+        EXPECT_LE(fine.irradiance(i, j, k), upper * (1.0 + 1e-2))
+            << i << "," << j << "," << k << ": the converged value, within its tolerance";
+      }
+  EXPECT_GT(field.stats().unconverged_points, 0);
+  EXPECT_EQ(marked, field.stats().unconverged_points) << "each one marked where it is";
+  EXPECT_GT(upper, 0.0);
 }
 
 }  // namespace
