@@ -88,8 +88,12 @@ float code(VoxelStatus s) { return static_cast<float>(static_cast<int>(s)); }
 
 void noteUnconverged(FieldStats& stats, const Vec3& x, double irradiance_w_m2, double error_w_m2) {
   ++stats.unconverged_points;
-  stats.unconverged_max_upper_w_m2 =
-      std::max(stats.unconverged_max_upper_w_m2, irradiance_w_m2 + error_w_m2);
+  // A NaN counts as +∞: it must never let the summary say "none of them can be hazardous".
+  const double upper = irradiance_w_m2 + error_w_m2;
+  if (!(upper <= stats.unconverged_max_upper_w_m2)) {
+    stats.unconverged_max_upper_w_m2 =
+        std::isnan(upper) ? std::numeric_limits<double>::infinity() : upper;
+  }
   stats.unconverged_min_m = glm::min(stats.unconverged_min_m, x);
   stats.unconverged_max_m = glm::max(stats.unconverged_max_m, x);
 }
