@@ -498,7 +498,8 @@ RegionBound FacetIntegrator::boundRegion(const Vec3& centre_m, double radius_m,
     const double d_min =
         std::max(0.0, glm::length(x - c.geometry.centre_m) - c.fan_radius_m - radius_m);
     const double width = 2.0 * c.fan_radius_m + 4.0 * d_min * (c.fan_rad + 2.0 * sigma);
-    if (width < std::sqrt(3.0) * options.sample_spacing_m) narrow.add(bounds[k]);
+    // A width that cannot be computed counts as narrow: the block then looks closer.
+    if (!(width >= std::sqrt(3.0) * options.sample_spacing_m)) narrow.add(bounds[k]);
     kept[out++] = c;
   }
   kept.resize(out);
