@@ -2,6 +2,7 @@
 
 #include <openvdb/io/Stream.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -12,37 +13,44 @@
 namespace glint {
 namespace {
 
-// VTK XML with every array in one raw appended block (header_type UInt64): compact, exact, and
-// read by ParaView and VTK without any decoding step.
-class VtkArrays {
- public:
-  // Declares an array and returns its <DataArray> element.
-  template <class T>
-  std::string add(const std::string& name, const char* vtk_type, int components,
-                  const std::vector<T>& values) {
-    std::ostringstream xml;
-    xml << "<DataArray type=\"" << vtk_type << "\" Name=\"" << name << "\" NumberOfComponents=\""
-        << components << "\" format=\"appended\" offset=\"" << offset_ << "\"/>\n";
-    const std::uint64_t bytes = values.size() * sizeof(T);
-    std::string block(sizeof bytes + bytes, '\0');
-    std::memcpy(block.data(), &bytes, sizeof bytes);
-    if (bytes > 0) std::memcpy(block.data() + sizeof bytes, values.data(), bytes);
-    offset_ += block.size();
-    blocks_.push_back(std::move(block));
-    return xml.str();
+// Standard base64 (RFC 4648) of @p n bytes at @p data, appended to @p out.
+void appendBase64(const char* data, std::size_t n, std::string& out) {
+  static constexpr char kDigits[] =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  const auto* b = reinterpret_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < n; i += 3) {
+    const std::size_t left = n - i;
+    const unsigned v = (static_cast<unsigned>(b[i]) << 16) |
+                       (left > 1 ? static_cast<unsigned>(b[i + 1]) << 8 : 0u) |
+                       (left > 2 ? static_cast<unsigned>(b[i + 2]) : 0u);
+    out += kDigits[(v >> 18) & 63];
+    out += kDigits[(v >> 12) & 63];
+    out += left > 1 ? kDigits[(v >> 6) & 63] : '=';
+    out += left > 2 ? kDigits[v & 63] : '=';
   }
+}
 
-  void writeAppended(std::ostream& out) const {
-    out << "<AppendedData encoding=\"raw\">\n_";
-    for (const std::string& b : blocks_)
-      out.write(b.data(), static_cast<std::streamsize>(b.size()));
-    out << "\n</AppendedData>\n</VTKFile>\n";
-  }
-
- private:
-  std::uint64_t offset_ = 0;
-  std::vector<std::string> blocks_;
-};
+// A <DataArray> of VTK XML in the inline binary format (header_type UInt64): the array's byte
+// count and bytes as one base64 stream inside the element. Appended data would be smaller, but
+// since expat 2.6 (and Debian 12's security update 2.5.0-1+deb12u5) VTK's XML reader fails on
+// any <AppendedData> section, raw or base64 ("not well-formed (invalid token)", "junk after
+// document element"; VTK issue 19258): ParaView 5.11 on an up-to-date Debian 12 could not open
+// such files. Inline base64 is plain XML character data and reads everywhere.
+template <class T>
+std::string dataArray(const std::string& name, const char* vtk_type, int components,
+                      const std::vector<T>& values) {
+  const std::uint64_t bytes = values.size() * sizeof(T);
+  std::string block(sizeof bytes + bytes, '\0');
+  std::memcpy(block.data(), &bytes, sizeof bytes);
+  if (bytes > 0) std::memcpy(block.data() + sizeof bytes, values.data(), bytes);
+  std::string xml = "<DataArray type=\"" + std::string(vtk_type) + "\" Name=\"" + name +
+                    "\" NumberOfComponents=\"" + std::to_string(components) +
+                    "\" format=\"binary\">\n";
+  xml.reserve(xml.size() + 4 * ((block.size() + 2) / 3) + 16);
+  appendBase64(block.data(), block.size(), xml);
+  xml += "\n</DataArray>\n";
+  return xml;
+}
 
 const char* kHeader =
     "<?xml version=\"1.0\"?>\n<VTKFile type=\"%s\" version=\"1.0\" byte_order=\"LittleEndian\" "
@@ -137,7 +145,6 @@ void writeVti(std::ostream& out, const ObserverField& field, int stride, double 
         level[p] = static_cast<std::int32_t>(std::lround(la.getValue(c)));
         status[p] = static_cast<std::int32_t>(std::lround(sa.getValue(c)));
       }
-  VtkArrays arrays;
   out << header("ImageData");
   const double h = spec.voxel_m * stride;
   out << "<ImageData WholeExtent=\"0 " << m[0] - 1 << " 0 " << m[1] - 1 << " 0 " << m[2] - 1
@@ -145,12 +152,12 @@ void writeVti(std::ostream& out, const ObserverField& field, int stride, double 
       << "\" Spacing=\"" << h << " " << h << " " << h << "\">\n";
   out << "<Piece Extent=\"0 " << m[0] - 1 << " 0 " << m[1] - 1 << " 0 " << m[2] - 1 << "\">\n";
   out << "<PointData Scalars=\"irradiance_w_m2\">\n";
-  out << arrays.add("irradiance_w_m2", "Float32", 1, irradiance);
-  if (mpe_w_m2 > 0.0) out << arrays.add("hazard_ratio", "Float32", 1, hazardRatio(irradiance, mpe_w_m2));
-  out << arrays.add("refinement_level", "Int32", 1, level);
-  out << arrays.add("status", "Int32", 1, status);
+  out << dataArray("irradiance_w_m2", "Float32", 1, irradiance);
+  if (mpe_w_m2 > 0.0) out << dataArray("hazard_ratio", "Float32", 1, hazardRatio(irradiance, mpe_w_m2));
+  out << dataArray("refinement_level", "Int32", 1, level);
+  out << dataArray("status", "Int32", 1, status);
   out << "</PointData>\n</Piece>\n</ImageData>\n";
-  arrays.writeAppended(out);
+  out << "</VTKFile>\n";
 }
 
 void writeBlocksVtu(std::ostream& out, const ObserverField& field, double mpe_w_m2) {
@@ -192,21 +199,20 @@ void writeBlocksVtu(std::ostream& out, const ObserverField& field, double mpe_w_
           cell({{b.origin[0] + i, b.origin[1] + j, b.origin[2] + k}, 1, b.level, b.status});
         }
   }
-  VtkArrays arrays;
   out << header("UnstructuredGrid") << "<UnstructuredGrid>\n";
   out << "<Piece NumberOfPoints=\"" << points.size() / 3 << "\" NumberOfCells=\"" << types.size()
       << "\">\n<Points>\n"
-      << arrays.add("Points", "Float64", 3, points) << "</Points>\n<Cells>\n"
-      << arrays.add("connectivity", "Int64", 1, connectivity)
-      << arrays.add("offsets", "Int64", 1, offsets) << arrays.add("types", "UInt8", 1, types)
+      << dataArray("Points", "Float64", 3, points) << "</Points>\n<Cells>\n"
+      << dataArray("connectivity", "Int64", 1, connectivity)
+      << dataArray("offsets", "Int64", 1, offsets) << dataArray("types", "UInt8", 1, types)
       << "</Cells>\n<PointData Scalars=\"irradiance_w_m2\">\n"
-      << arrays.add("irradiance_w_m2", "Float32", 1, irradiance)
-      << (mpe_w_m2 > 0.0 ? arrays.add("hazard_ratio", "Float32", 1, hazardRatio(irradiance, mpe_w_m2))
+      << dataArray("irradiance_w_m2", "Float32", 1, irradiance)
+      << (mpe_w_m2 > 0.0 ? dataArray("hazard_ratio", "Float32", 1, hazardRatio(irradiance, mpe_w_m2))
                          : std::string())
       << "</PointData>\n<CellData>\n"
-      << arrays.add("refinement_level", "Int32", 1, level)
-      << arrays.add("status", "Int32", 1, status) << "</CellData>\n</Piece>\n</UnstructuredGrid>\n";
-  arrays.writeAppended(out);
+      << dataArray("refinement_level", "Int32", 1, level)
+      << dataArray("status", "Int32", 1, status) << "</CellData>\n</Piece>\n</UnstructuredGrid>\n";
+  out << "</VTKFile>\n";
 }
 
 void writeTargetVtp(std::ostream& out, const FacetIntegrator& integrator, int level) {
@@ -236,17 +242,16 @@ void writeTargetVtp(std::ostream& out, const FacetIntegrator& integrator, int le
       offsets.push_back(static_cast<std::int64_t>(connectivity.size()));
     }
   }
-  VtkArrays arrays;
   out << header("PolyData") << "<PolyData>\n";
   out << "<Piece NumberOfPoints=\"" << points.size() / 3 << "\" NumberOfPolys=\"" << power.size()
       << "\">\n<Points>\n"
-      << arrays.add("Points", "Float64", 3, points) << "</Points>\n<Polys>\n"
-      << arrays.add("connectivity", "Int64", 1, connectivity)
-      << arrays.add("offsets", "Int64", 1, offsets)
+      << dataArray("Points", "Float64", 3, points) << "</Points>\n<Polys>\n"
+      << dataArray("connectivity", "Int64", 1, connectivity)
+      << dataArray("offsets", "Int64", 1, offsets)
       << "</Polys>\n<CellData Scalars=\"incident_power_w\">\n"
-      << arrays.add("incident_power_w", "Float64", 1, power)
-      << arrays.add("coarse_facet", "Int32", 1, coarse) << "</CellData>\n</Piece>\n</PolyData>\n";
-  arrays.writeAppended(out);
+      << dataArray("incident_power_w", "Float64", 1, power)
+      << dataArray("coarse_facet", "Int32", 1, coarse) << "</CellData>\n</Piece>\n</PolyData>\n";
+  out << "</VTKFile>\n";
 }
 
 }  // namespace glint
