@@ -1,36 +1,247 @@
 #include "export/atomic_file.h"
 
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <array>
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <mutex>
+#include <random>
+#include <regex>
+#include <set>
+#include <streambuf>
 #include <system_error>
 
 namespace glint {
+namespace {
+
+// The temporaries not yet committed, for the interrupt handler: fixed storage it can read
+// without allocating. A slot is 0 free, 1 being filled, 2 live (its path may be unlinked).
+constexpr int kSlots = 1024;
+constexpr std::size_t kPathBytes = 4096;
+struct Slot {
+  std::atomic<int> state{0};
+  char path[kPathBytes];
+};
+std::array<Slot, kSlots> g_slots;
+
+int registerTemporary(const std::string& path) {
+  if (path.size() >= kPathBytes) return -1;
+  for (int i = 0; i < kSlots; ++i) {
+    int expected = 0;
+    Slot& s = g_slots[static_cast<std::size_t>(i)];
+    if (!s.state.compare_exchange_strong(expected, 1, std::memory_order_acq_rel)) continue;
+    std::memcpy(s.path, path.c_str(), path.size() + 1);
+    s.state.store(2, std::memory_order_release);
+    return i;
+  }
+  return -1;  // more than kSlots at once: left to removeStaleTemporaries()
+}
+
+void unregisterTemporary(int slot) {
+  if (slot >= 0) g_slots[static_cast<std::size_t>(slot)].state.store(0, std::memory_order_release);
+}
+
+// write(2) of a C string and of a small number: all a signal handler may use.
+void say(const char* s) {
+  const std::size_t n = std::strlen(s);
+  ssize_t ignored = ::write(STDERR_FILENO, s, n);
+  (void)ignored;
+}
+void sayNumber(int n) {
+  char digits[16];
+  int k = 0;
+  do {
+    digits[k++] = static_cast<char>('0' + n % 10);
+    n /= 10;
+  } while (n > 0 && k < 15);
+  char out[16];
+  for (int i = 0; i < k; ++i) out[i] = digits[k - 1 - i];
+  out[k] = '\0';
+  say(out);
+}
+
+extern "C" void onInterrupt(int sig) {
+  int removed = 0;
+  for (Slot& s : g_slots) {
+    if (s.state.load(std::memory_order_acquire) == 2 && ::unlink(s.path) == 0) ++removed;
+  }
+  say("\nglint: interrupted by ");
+  say(sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP");
+  say("; removed ");
+  sayNumber(removed);
+  say(" unfinished output file(s); files already complete are kept\n");
+  ::_exit(128 + sig);
+}
+
+// `.<name>.glint-<pid>-<8 random characters>`, and the `<name>.tmp.<pid>` of glint 0.1.
+const std::regex kTemporaryName(R"(\..+\.glint-([0-9]+)-[A-Za-z0-9]{8}|.+\.tmp\.([0-9]+))");
+
+std::string randomSuffix() {
+  static constexpr char kAlphabet[] =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789";
+  thread_local std::mt19937_64 rng{std::random_device{}()};
+  std::string s(8, 'x');
+  for (char& c : s) c = kAlphabet[rng() % (sizeof kAlphabet - 1)];
+  return s;
+}
+
+// Each folder is swept of stale temporaries once per process.
+void sweepOnce(const std::filesystem::path& folder) {
+  static std::mutex mutex;
+  static std::set<std::string> swept;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!swept.insert(folder.string()).second) return;
+  }
+  removeStaleTemporaries(folder);
+}
+
+}  // namespace
+
+// A streambuf over a file descriptor that remembers whether any write failed.
+struct AtomicFile::Stream {
+  class Buf : public std::streambuf {
+   public:
+    explicit Buf(int fd) : fd_(fd) { setp(buffer_.data(), buffer_.data() + buffer_.size()); }
+    [[nodiscard]] bool failed() const { return failed_; }
+    int_type overflow(int_type c) override {
+      if (!flush()) return traits_type::eof();
+      if (!traits_type::eq_int_type(c, traits_type::eof())) {
+        *pptr() = traits_type::to_char_type(c);
+        pbump(1);
+      }
+      return traits_type::not_eof(c);
+    }
+    int sync() override { return flush() ? 0 : -1; }
+    // OpenEXR writes its line offsets last and seeks back for them (tellp, seekp).
+    pos_type seekoff(off_type off, std::ios_base::seekdir dir,
+                     std::ios_base::openmode which) override {
+      if ((which & std::ios_base::out) == 0 || !flush()) return pos_type(off_type(-1));
+      const int whence = dir == std::ios_base::beg   ? SEEK_SET
+                         : dir == std::ios_base::cur ? SEEK_CUR
+                                                     : SEEK_END;
+      const off_t at = ::lseek(fd_, static_cast<off_t>(off), whence);
+      return at < 0 ? pos_type(off_type(-1)) : pos_type(static_cast<off_type>(at));
+    }
+    pos_type seekpos(pos_type pos, std::ios_base::openmode which) override {
+      return seekoff(off_type(pos), std::ios_base::beg, which);
+    }
+
+   private:
+    bool flush() {
+      const char* p = pbase();
+      while (p < pptr()) {
+        const ssize_t n = ::write(fd_, p, static_cast<std::size_t>(pptr() - p));
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+          failed_ = true;
+          break;
+        }
+        p += n;
+      }
+      setp(buffer_.data(), buffer_.data() + buffer_.size());
+      return !failed_;
+    }
+    int fd_;
+    bool failed_ = false;
+    std::array<char, 1 << 16> buffer_{};
+  };
+
+  explicit Stream(int f) : fd(f), buf(f), out(&buf) {}
+  int fd;
+  Buf buf;
+  std::ostream out;
+};
 
 AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)) {
   // Same folder as the target, so the final rename never crosses file systems.
-  temporary_ = target_;
-  temporary_ += ".tmp." + std::to_string(::getpid());
-  out_.open(temporary_, std::ios::binary | std::ios::trunc);
-  if (!out_)
+  std::filesystem::path folder = target_.parent_path();
+  if (folder.empty()) folder = ".";
+  sweepOnce(folder);
+  std::string stem(1, '.');
+  stem.append(target_.filename().string()).append(".glint-");
+  stem.append(std::to_string(::getpid())).append(1, '-');
+  int fd = -1;
+  for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
+    temporary_ = folder / (stem + randomSuffix());
+    fd = ::open(temporary_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+    if (fd < 0 && errno != EEXIST) break;
+  }
+  if (fd < 0) {
     throw OutputError("cannot create " + target_.string() + " (is the folder there and writable?)");
+  }
+  slot_ = registerTemporary(temporary_.string());
+  out_ = std::make_unique<Stream>(fd);
 }
 
 AtomicFile::~AtomicFile() {
   if (committed_) return;
-  out_.close();
+  if (out_) ::close(out_->fd);
   std::error_code ignored;
   std::filesystem::remove(temporary_, ignored);
+  unregisterTemporary(slot_);
 }
 
+std::ostream& AtomicFile::stream() { return out_->out; }
+
 void AtomicFile::commit() {
-  out_.flush();
-  const bool written = static_cast<bool>(out_);
-  out_.close();
-  if (!written || out_.fail()) throw OutputError("cannot write " + target_.string());
+  out_->out.flush();
+  const bool written = static_cast<bool>(out_->out) && !out_->buf.failed();
+  const bool closed = ::close(out_->fd) == 0;
+  out_->fd = -1;
+  if (!written || !closed) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary_, ignored);
+    unregisterTemporary(slot_);
+    committed_ = true;  // nothing left for the destructor
+    throw OutputError("cannot write " + target_.string());
+  }
   std::error_code ec;
   std::filesystem::rename(temporary_, target_, ec);
-  if (ec) throw OutputError("cannot write " + target_.string() + ": " + ec.message());
+  if (ec) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary_, ignored);
+    unregisterTemporary(slot_);
+    committed_ = true;
+    throw OutputError("cannot write " + target_.string() + ": " + ec.message());
+  }
+  unregisterTemporary(slot_);
   committed_ = true;
+}
+
+void installInterruptCleanup() {
+  struct sigaction action {};
+  action.sa_handler = onInterrupt;
+  sigemptyset(&action.sa_mask);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    sigaddset(&action.sa_mask, sig);  // one handler at a time
+  }
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &action, nullptr);
+}
+
+int removeStaleTemporaries(const std::filesystem::path& folder) {
+  int removed = 0;
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end;
+       it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    std::smatch m;
+    if (!std::regex_match(name, m, kTemporaryName)) continue;
+    const std::string digits = m[1].matched ? m[1].str() : m[2].str();
+    if (digits.size() > 9) continue;
+    const auto pid = static_cast<pid_t>(std::stol(digits));
+    if (pid <= 0 || pid == ::getpid()) continue;
+    // Only a process that provably no longer exists: pids are reused, and a live one may be
+    // another glint writing into the same folder.
+    if (::kill(pid, 0) == 0 || errno != ESRCH) continue;
+    if (::unlink(it->path().c_str()) == 0) ++removed;  // a link itself, never its target
+  }
+  return removed;
 }
 
 }  // namespace glint

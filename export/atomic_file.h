@@ -1,9 +1,11 @@
 #pragma once
 /// @file
-/// @brief Output files that appear whole or not at all.
+/// @brief Output files that appear whole or not at all, safe in a shared folder and on
+/// interruption.
 
 #include <filesystem>
-#include <fstream>
+#include <memory>
+#include <ostream>
 #include <stdexcept>
 #include <string>
 
@@ -16,8 +18,17 @@ class OutputError : public std::runtime_error {
 };
 
 /// @brief Writes @c target through a temporary file beside it, renamed over the target by
-/// commit(). A run that fails before commit() leaves no partial file: the destructor removes
-/// the temporary.
+/// commit().
+///
+/// - Whole or nothing: a run that fails before commit() leaves no partial file (the
+///   destructor removes the temporary), and so does SIGINT, SIGTERM or SIGHUP once
+///   installInterruptCleanup() is in place.
+/// - Safe in a folder others can write to: the temporary is created with O_CREAT | O_EXCL |
+///   O_NOFOLLOW under an unpredictable name (`.<name>.glint-<pid>-<random>`), so a link planted
+///   in advance can neither redirect the write nor be followed; rename() then replaces the
+///   target itself, never a file a link at the target points to.
+/// - A process killed outright (SIGKILL) leaves its temporaries; the next AtomicFile in that
+///   folder removes those whose process is gone.
 class AtomicFile {
  public:
   /// @throw OutputError when the temporary cannot be created (missing folder, permissions).
@@ -27,17 +38,31 @@ class AtomicFile {
   AtomicFile& operator=(const AtomicFile&) = delete;
 
   /// @brief Where to write the content.
-  std::ostream& stream() { return out_; }
+  std::ostream& stream();
 
   /// @brief Flushes, checks every write succeeded, and renames the temporary to the target.
   /// @throw OutputError on any failure (disk full, ...); the temporary is then removed.
   void commit();
 
+  /// @brief The temporary's path (for tests).
+  [[nodiscard]] const std::filesystem::path& temporaryPath() const { return temporary_; }
+
  private:
+  struct Stream;
   std::filesystem::path target_;
   std::filesystem::path temporary_;
-  std::ofstream out_;
+  std::unique_ptr<Stream> out_;
+  int slot_ = -1;  // in the interrupt cleanup's registry
   bool committed_ = false;
 };
+
+/// @brief Installs handlers for SIGINT, SIGTERM and SIGHUP that remove every uncommitted
+/// AtomicFile temporary, say so on standard error and exit with 128 + the signal's number
+/// (130, 143, 129). For the program's main(); idempotent.
+void installInterruptCleanup();
+
+/// @brief Removes the temporaries of processes that no longer exist from @p folder (links and
+/// files alike are unlinked, never followed). Returns how many were removed.
+int removeStaleTemporaries(const std::filesystem::path& folder);
 
 }  // namespace glint

@@ -1,0 +1,123 @@
+// Output files in a folder others may write to: the temporary cannot be predicted or
+// redirected, a link at the target is replaced rather than followed, and temporaries of
+// processes that died are swept.
+#include "export/atomic_file.h"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace glint {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path freshFolder(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("glint_atomic_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::string contents(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A pid that existed and is gone: a child that has exited and been reaped.
+pid_t deadPid() {
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return child;
+}
+
+TEST(AtomicFile, TemporaryIsANewFileUnderAnUnpredictableName) {
+  const fs::path dir = freshFolder("names");
+  AtomicFile a(dir / "summary.json");
+  AtomicFile b(dir / "summary.json");
+  EXPECT_NE(a.temporaryPath(), b.temporaryPath()) << "two writers never share a temporary";
+  const std::string prefix = ".summary.json.glint-" + std::to_string(::getpid()) + "-";
+  for (const AtomicFile* f : {&a, &b}) {
+    const std::string name = f->temporaryPath().filename().string();
+    EXPECT_EQ(name.rfind(prefix, 0), 0u) << name;
+    EXPECT_EQ(name.size(), prefix.size() + 8) << name << ": 8 random characters";
+    struct stat st {};
+    ASSERT_EQ(::lstat(f->temporaryPath().c_str(), &st), 0);
+    EXPECT_TRUE(S_ISREG(st.st_mode)) << "created, not opened through anything planted";
+  }
+}
+
+TEST(AtomicFile, ALinkAtTheTargetIsReplacedNotFollowed) {
+  // Someone who can write to a shared output folder plants summary.json → a file of the user's
+  // elsewhere. glint must replace the link, not write through it.
+  const fs::path dir = freshFolder("link");
+  const fs::path outside = freshFolder("link_outside") / "precious.txt";
+  std::ofstream(outside) << "keep me";
+  fs::create_symlink(outside, dir / "summary.json");
+  AtomicFile f(dir / "summary.json");
+  f.stream() << "{}";
+  f.commit();
+  EXPECT_FALSE(fs::is_symlink(dir / "summary.json")) << "the link itself was replaced";
+  EXPECT_EQ(contents(dir / "summary.json"), "{}");
+  EXPECT_EQ(contents(outside), "keep me") << "the file the link pointed to is untouched";
+}
+
+TEST(AtomicFile, UncommittedTemporaryIsRemoved) {
+  const fs::path dir = freshFolder("uncommitted");
+  fs::path temporary;
+  {
+    AtomicFile f(dir / "out.csv");
+    f.stream() << "partial";
+    temporary = f.temporaryPath();
+    EXPECT_TRUE(fs::exists(temporary));
+  }
+  EXPECT_FALSE(fs::exists(temporary));
+  EXPECT_TRUE(fs::is_empty(dir)) << "nothing left, not even an empty target";
+}
+
+TEST(AtomicFile, SeeksBackLikeAFileForOpenExr) {
+  // OpenEXR writes its line offset table last and seeks back to it.
+  const fs::path dir = freshFolder("seek");
+  AtomicFile f(dir / "map.exr");
+  std::ostream& out = f.stream();
+  out << "0123456789";
+  EXPECT_EQ(out.tellp(), std::streampos(10));
+  out.seekp(2);
+  out << "ab";
+  out.seekp(0, std::ios::end);
+  out << "Z";
+  f.commit();
+  EXPECT_EQ(contents(dir / "map.exr"), "01ab456789Z");
+}
+
+TEST(AtomicFile, StaleTemporariesOfDeadProcessesAreSweptNeverFollowed) {
+  const fs::path dir = freshFolder("stale");
+  const fs::path outside = freshFolder("stale_outside") / "precious.txt";
+  std::ofstream(outside) << "keep me";
+  const std::string dead = std::to_string(deadPid());
+  const std::string alive = std::to_string(::getppid());
+  std::ofstream(dir / (".summary.json.glint-" + dead + "-AbCdEf12")) << "stale";
+  std::ofstream(dir / ("irradiance.vdb.tmp." + dead)) << "stale, glint 0.1's name";
+  fs::create_symlink(outside, dir / (".blocks.vtu.glint-" + dead + "-ZyXwVu98"));
+  std::ofstream(dir / (".target.vtp.glint-" + alive + "-AbCdEf12")) << "another glint at work";
+  std::ofstream(dir / "notes.txt") << "the user's";
+  EXPECT_EQ(removeStaleTemporaries(dir), 3);
+  EXPECT_TRUE(fs::exists(dir / (".target.vtp.glint-" + alive + "-AbCdEf12")))
+      << "a live process's temporary stays";
+  EXPECT_TRUE(fs::exists(dir / "notes.txt"));
+  EXPECT_EQ(contents(outside), "keep me") << "a link is unlinked, its target untouched";
+  EXPECT_FALSE(fs::exists(dir / ("irradiance.vdb.tmp." + dead)));
+}
+
+}  // namespace
+}  // namespace glint
