@@ -3,7 +3,9 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <iostream>
+#include <string>
 
 #include "export/atomic_file.h"
 #include "glint/version.h"
@@ -11,6 +13,7 @@
 #include "pipeline/cluster.h"
 #include "pipeline/input_error.h"
 #include "pipeline/points_command.h"
+#include "pipeline/progress.h"
 #include "pipeline/run_command.h"
 
 namespace glint {
@@ -39,6 +42,28 @@ int runBatchCommand(BatchArgs& batch, std::ostream& err) {
   }
 }
 
+// A real number in [lo, hi], checked as the scene's numbers are: CLI::Range lets NaN through
+// (every comparison with it is false) and prints its bounds as %f (1e-12 as 0.000000).
+CLI::Validator finiteIn(double lo, double hi) {
+  const std::string range = "[" + formatNumber("%g", lo) + ", " + formatNumber("%g", hi) + "]";
+  return CLI::Validator(
+      [lo, hi, range](std::string& text) -> std::string {
+        std::size_t used = 0;
+        double x = 0.0;
+        try {
+          x = std::stod(text, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used == 0 || used != text.size() || !std::isfinite(x)) {
+          return "must be a finite number in " + range + ", not '" + text + "'";
+        }
+        if (!(x >= lo && x <= hi)) return "must lie in " + range + ", not " + text;
+        return {};
+      },
+      "FLOAT in " + range);
+}
+
 }  // namespace
 
 int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
@@ -62,7 +87,7 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
       points_cmd
           ->add_option("--tolerance", tolerance,
                        "Relative accuracy of each observer's total (overrides the scene)")
-          ->check(CLI::Range(1e-12, 0.999999));
+          ->check(finiteIn(1e-12, 0.999999));
   int level = 0;
   CLI::Option* uniform_opt =
       points_cmd

@@ -8,11 +8,10 @@
 #include <sys/wait.h>
 
 #include <algorithm>
-#include <nlohmann/json.hpp>
-
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "support/cli.h"
@@ -86,6 +85,25 @@ TEST_F(CliTest, UsageErrorsExitWithStatusTwo) {
                 .status,
             2)
       << "unknown normal model";
+}
+
+TEST_F(CliTest, EveryOptionValueIsCheckedAtTheBoundaryAndNamed) {
+  // `--tolerance nan` once passed CLI11's range check (every comparison with NaN is false) and
+  // ended as an internal error (status 1) deep in the integrator.
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"--tolerance", "nan"}, {"--tolerance", "inf"},   {"--tolerance", "-1e-3"},
+      {"--tolerance", "0"},   {"--tolerance", "1e-3x"}, {"--tolerance", ""},
+      {"--threads", "0"},     {"--threads", "nan"},     {"--threads", "1.5"},
+      {"--uniform", "13"},    {"--uniform", "-1"},      {"--normals", "bent"}};
+  for (const auto& [option, value] : bad) {
+    const Outcome r = glint({"points", example("cylinder.json"), "--points",
+                             example("cylinder_186.csv"), option, value, "--quiet"});
+    EXPECT_EQ(r.status, 2) << option << " " << value << ": " << r.err;
+    EXPECT_NE(r.err.find(option), std::string::npos) << option << " " << value << ": " << r.err;
+  }
+  const Outcome run = glint({"run", example("disk_glint.json"), "--threads", "-2", "--quiet"});
+  EXPECT_EQ(run.status, 2) << run.err;
+  EXPECT_NE(run.err.find("--threads"), std::string::npos) << run.err;
 }
 
 TEST_F(CliTest, BadSceneExitsTwoWithItsPathAndWritesNothing) {
@@ -191,12 +209,12 @@ TEST_F(CliTest, RunWritesEachPlaneAsAnExrMapAndSummarisesIt) {
   std::vector<float> e(static_cast<std::size_t>(width * height)), ratio(e.size()), status(e.size());
   Imf::FrameBuffer frame;
   const std::size_t row = sizeof(float) * static_cast<std::size_t>(width);
-  frame.insert("irradiance_w_m2", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(e.data()),
-                                             sizeof(float), row));
-  frame.insert("hazard_ratio", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(ratio.data()),
-                                          sizeof(float), row));
-  frame.insert("status", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(status.data()),
-                                    sizeof(float), row));
+  frame.insert("irradiance_w_m2",
+               Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(e.data()), sizeof(float), row));
+  frame.insert("hazard_ratio",
+               Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(ratio.data()), sizeof(float), row));
+  frame.insert("status",
+               Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(status.data()), sizeof(float), row));
   file.setFrameBuffer(frame);
   file.readPixels(w.min.y, w.max.y);
   const double peak = *std::max_element(e.begin(), e.end());
