@@ -98,6 +98,10 @@ void noteUnconverged(FieldStats& stats, const Vec3& x, double irradiance_w_m2, d
   stats.unconverged_max_m = glm::max(stats.unconverged_max_m, x);
 }
 
+void noteNonFinite(FieldStats& stats, const Vec3& x) {
+  if (stats.non_finite_points++ == 0) stats.non_finite_at_m = x;
+}
+
 // Calls fn(di, dj, dk) for every sample of a block of edge `size`, as offsets from its origin:
 // the 3×3×3 lattice 0, size/2, size per axis (0, 1 for a unit block) and, for size ≥ 4, the
 // centres of its eight octants. The octant centres check the fill itself: a step centred on
@@ -582,6 +586,12 @@ class FieldBuilder {
         irradiance.setValueOff(p, 0.0f);
         continue;
       }
+      if (!std::isfinite(value.irradiance_w_m2)) {
+        noteNonFinite(stats_, spec_.position(p[0], p[1], p[2]));
+        status.setValue(p, code(VoxelStatus::Unconverged));
+        irradiance.setValueOff(p, 0.0f);
+        continue;
+      }
       status.setValue(p, code(value.converged ? VoxelStatus::Evaluated : VoxelStatus::Unconverged));
       if (!value.converged) {
         noteUnconverged(stats_, spec_.position(p[0], p[1], p[2]), value.irradiance_w_m2,
@@ -815,19 +825,24 @@ ObserverField computeDenseField(const FacetIntegrator& integrator, const FieldSp
         continue;
       }
       const ObserverResult r = integrator.adaptive(x, local.workspace);
+      ++local.stats.evaluated_points;
+      local.stats.evaluations += r.evaluations;
+      if (counter != nullptr) {
+        counter->items_done.fetch_add(1, std::memory_order_relaxed);
+        counter->evaluations.fetch_add(r.evaluations, std::memory_order_relaxed);
+      }
+      if (!std::isfinite(r.irradiance_w_m2)) {
+        noteNonFinite(local.stats, x);
+        local.grids.status.setValue(p, code(VoxelStatus::Unconverged));
+        continue;
+      }
       local.grids.irradiance.setValue(p, static_cast<float>(r.irradiance_w_m2));
       local.grids.status.setValue(
           p, code(r.converged ? VoxelStatus::Evaluated : VoxelStatus::Unconverged));
-      ++local.stats.evaluated_points;
-      local.stats.evaluations += r.evaluations;
       if (!r.converged) noteUnconverged(local.stats, x, r.irradiance_w_m2, r.error_estimate_w_m2);
       if (r.irradiance_w_m2 > local.stats.peak_w_m2) {
         local.stats.peak_w_m2 = r.irradiance_w_m2;
         local.stats.peak_at_m = x;
-      }
-      if (counter != nullptr) {
-        counter->items_done.fetch_add(1, std::memory_order_relaxed);
-        counter->evaluations.fetch_add(r.evaluations, std::memory_order_relaxed);
       }
     }
   });
@@ -838,6 +853,8 @@ ObserverField computeDenseField(const FacetIntegrator& integrator, const FieldSp
     stats.excluded_points += local.stats.excluded_points;
     stats.evaluations += local.stats.evaluations;
     stats.unconverged_points += local.stats.unconverged_points;
+    if (stats.non_finite_points == 0) stats.non_finite_at_m = local.stats.non_finite_at_m;
+    stats.non_finite_points += local.stats.non_finite_points;
     stats.unconverged_min_m = glm::min(stats.unconverged_min_m, local.stats.unconverged_min_m);
     stats.unconverged_max_m = glm::max(stats.unconverged_max_m, local.stats.unconverged_max_m);
     stats.unconverged_max_upper_w_m2 =

@@ -78,6 +78,10 @@ struct FieldStats {
   /// The largest irradiance + error estimate of an unconverged point (W/m²): below the MPE,
   /// none of them can be hazardous however the integration would have ended.
   double unconverged_max_upper_w_m2 = 0.0;
+  /// Integrated points whose irradiance is not a finite number (never written to the grids):
+  /// none for a scene within pipeline/limits.h; any is an error the caller must report.
+  std::int64_t non_finite_points = 0;
+  Vec3 non_finite_at_m{0.0};  ///< one of them
   std::int64_t blocks_skipped = 0;   ///< proven below the floor
   std::int64_t blocks_accepted = 0;  ///< interpolated
   /// Of those, the blocks that interpolated E·r or E·r² (r from the lit facets' centre)

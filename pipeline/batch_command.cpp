@@ -131,6 +131,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Regio
     // scenario's map adds point for point.
     const FieldProblem problem = fieldProblem(scene, r.spec);
     const ObserverField field = computeField(problem.integrator, r.spec, problem.excluded);
+    requireFinite(field, "scenario " + std::to_string(s.index) + ", region " + r.name);
     AtomicFile map(dir / r.scenarioFile());
     std::vector<float> e;
     if (r.plane) {

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -17,6 +18,7 @@
 
 #include "facets/vec3.h"
 #include "pipeline/input_error.h"
+#include "pipeline/limits.h"
 
 namespace glint {
 
@@ -172,6 +174,29 @@ inline double positive(ObjectReader& r, const std::string& key, double x) {
 inline double unitInterval(ObjectReader& r, const std::string& key, double x) {
   if (!(x >= 0.0 && x <= 1.0)) r.fail(key, "must be in [0, 1]");
   return x;
+}
+// x in [lo, hi] (pipeline/limits.h says why these bounds), `unit` for the message.
+inline double inRange(ObjectReader& r, const std::string& key, double x, double lo, double hi,
+                      const char* unit) {
+  if (!(x >= lo && x <= hi)) {
+    char range[96];
+    std::snprintf(range, sizeof range, "must be in [%g, %g]%s%s", lo, hi, *unit ? " " : "", unit);
+    r.fail(key, range);
+  }
+  return x;
+}
+// A position (m) within the coordinates double arithmetic carries through the chain.
+inline Vec3 position(ObjectReader& r, const std::string& key) {
+  const Vec3 p = r.vec3(key);
+  for (int a = 0; a < 3; ++a) {
+    if (!(std::abs(p[a]) <= limits::kMaxCoordinateM)) {
+      char message[96];
+      std::snprintf(message, sizeof message, "must lie within ±%g m on every axis",
+                    limits::kMaxCoordinateM);
+      r.fail(key, message);
+    }
+  }
+  return p;
 }
 
 // Follows the parser through the document so errors it meets can name their JSON path, and

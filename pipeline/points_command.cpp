@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
+#include <stdexcept>
 
 #include "export/atomic_file.h"
 #include "export/points_csv.h"
@@ -112,6 +114,16 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
+  // No infinity may reach the file or read as a harmless 0: within pipeline/limits.h none can
+  // occur, so one is an internal error, reported before anything is written.
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    if (!std::isfinite(results[i].irradiance_w_m2) ||
+        !std::isfinite(results[i].error_estimate_w_m2)) {
+      throw std::runtime_error("observer " + std::to_string(i + 1) +
+                               ": the irradiance or its error is not a finite number; nothing "
+                               "was written");
+    }
+  }
   if (file) {
     writePointsCsv(file->stream(), points, results);
     file->commit();

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "pipeline/input_error.h"
+#include "pipeline/limits.h"
 
 namespace glint {
 namespace {
@@ -74,6 +75,10 @@ std::vector<Vec3> parsePoints(std::string_view text, const std::string& source) 
       }
       if (!std::isfinite(v)) {
         throw InputError(where() + column + ": \"" + std::string(f) + "\" is not finite");
+      }
+      if (!(std::abs(v) <= limits::kMaxCoordinateM)) {
+        throw InputError(where() + column + ": " + std::string(f) +
+                         " m is beyond ±1e7 m, the coordinates glint's arithmetic carries");
       }
       p[i] = v;
     }

@@ -339,6 +339,22 @@ PlaneMap planeMap(const ObserverField& field, double mpe_w_m2) {
   return m;
 }
 
+void requireFinite(const ObserverField& field, const std::string& region) {
+  const FieldStats& s = field.stats();
+  if (s.non_finite_points > 0) {
+    const Vec3& x = s.non_finite_at_m;
+    throw std::runtime_error(region + ": " + std::to_string(s.non_finite_points) +
+                             " points have a non-finite irradiance, one at (" +
+                             formatNumber("%g", x.x) + ", " + formatNumber("%g", x.y) + ", " +
+                             formatNumber("%g", x.z) + "); nothing was written");
+  }
+  if (!std::isfinite(s.peak_w_m2) || !(s.peak_w_m2 >= 0.0) ||
+      std::isnan(s.unconverged_max_upper_w_m2)) {
+    throw std::runtime_error(region + ": the peak irradiance is not a finite number; nothing "
+                             "was written");
+  }
+}
+
 RunInfo runInfo(const Scene& scene, const std::string& scene_file, std::string_view scene_text,
                 const std::string& scheme) {
   RunInfo info;
@@ -411,6 +427,7 @@ void runField(const RunArgs& args, std::ostream& err) {
     const FieldSpec spec = fieldSpec(scene);
     const RegionResult box = computeRegion(scene, spec, args, "points", err);
     const ObserverField& field = *box.field;
+    requireFinite(field, "the observer box");
     const FacetIntegrator& integrator = box.problem.integrator;
     writeVdb(vdb->stream(), field, info);
     writeVti(vti->stream(), field, vtiStride(spec), info.mpe_w_m2);
@@ -436,6 +453,7 @@ void runField(const RunArgs& args, std::ostream& err) {
       const FieldSpec spec = planeFieldSpec(scene, plane);
       const RegionResult r = computeRegion(scene, spec, args, plane.name.c_str(), err);
       const ObserverField& field = *r.field;
+      requireFinite(field, "plane " + plane.name);
       writeExr(exrs[p]->stream(), planeMap(field, info.mpe_w_m2),
                {info.program_version, info.wavelength_nm, info.mpe_w_m2});
       const HazardZone zone =

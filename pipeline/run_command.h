@@ -35,6 +35,11 @@ void runField(const RunArgs& args, std::ostream& err);
 RunInfo runInfo(const Scene& scene, const std::string& scene_file, std::string_view scene_text,
                 const std::string& scheme);
 
+/// @brief Refuses a field with a non-finite value or statistic before anything is written:
+/// no NaN or infinity may reach an output, nor read as "no hazard".
+/// @throw std::runtime_error (an internal error: within pipeline/limits.h none can occur).
+void requireFinite(const ObserverField& field, const std::string& region);
+
 /// @brief A plane's field as the map `glint run` writes: lattice row j along v, column i along
 /// u; hazard_ratio = irradiance / @p mpe_w_m2.
 PlaneMap planeMap(const ObserverField& field, double mpe_w_m2);

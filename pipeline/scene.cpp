@@ -36,9 +36,10 @@ HazardSpec readHazard(ObjectReader& r, const LaserSpec& laser) {
 
 LaserSpec readLaser(ObjectReader r, HazardSpec& hazard) {
   LaserSpec laser;
-  laser.position_m = r.vec3("position");
+  laser.position_m = position(r, "position");
   laser.direction = r.direction("direction");
   laser.power_w = positive(r, "power_w", r.number("power_w"));
+  inRange(r, "power_w", laser.power_w, 0.0, limits::kMaxPowerW, "W");
   laser.wavelength_nm = positive(r, "wavelength_nm", r.number("wavelength_nm"));
   if (auto t = r.optionalNumber("exposure_s")) laser.exposure_s = positive(r, "exposure_s", *t);
   hazard = readHazard(r, laser);
@@ -47,7 +48,8 @@ LaserSpec readLaser(ObjectReader r, HazardSpec& hazard) {
   const std::size_t profile = beam.choice("profile", {"flat_top", "gaussian"});
   laser.profile = profile == 0 ? BeamProfile::FlatTop : BeamProfile::Gaussian;
   const std::string radius_key = profile == 0 ? "radius_m" : "w_m";
-  laser.radius_m = positive(beam, radius_key, beam.number(radius_key));
+  laser.radius_m = inRange(beam, radius_key, beam.number(radius_key), limits::kMinLengthM,
+                           limits::kMaxLengthM, "m");
   laser.divergence_rad = beam.number("divergence_rad", 0.0);
   if (!(laser.divergence_rad >= 0.0 && laser.divergence_rad < kPi)) {
     beam.fail("divergence_rad", "must be in [0, π) (a full angle in radians)");
@@ -63,6 +65,7 @@ MaterialSpec readMaterial(ObjectReader r, const std::string& name) {
   m.specular_reflectance =
       unitInterval(r, "specular_reflectance", r.number("specular_reflectance"));
   m.sigma = positive(r, "sigma", r.number("sigma"));
+  inRange(r, "sigma", m.sigma, limits::kMinSigma, 1e6, "");
   m.diffuse_reflectance =
       unitInterval(r, "diffuse_reflectance", r.number("diffuse_reflectance", 0.0));
   if (m.specular_reflectance + m.diffuse_reflectance > 1.0) {
@@ -74,7 +77,7 @@ MaterialSpec readMaterial(ObjectReader r, const std::string& name) {
 
 MeshTransform readTransform(ObjectReader r) {
   MeshTransform t;
-  if (r.has("translation")) t.translation_m = r.vec3("translation");
+  if (r.has("translation")) t.translation_m = position(r, "translation");
   if (r.has("rotation") && r.has("yaw_pitch_roll_deg")) {
     r.failHere("give either rotation (a quaternion) or yaw_pitch_roll_deg, not both");
   }
@@ -129,7 +132,20 @@ MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder) {
   // Into the object's frame: scaled, rotated, relative to the translation. A mirroring scale
   // turns the faces inside out, so their winding is flipped back.
   const MeshTransform& t = m.transform;
-  for (Vec3& p : model.mesh.positions_m) p = t.rotation * (t.scale * p);
+  double reach_m = 0.0;
+  for (Vec3& p : model.mesh.positions_m) {
+    p = t.rotation * (t.scale * p);
+    const double length = glm::length(p);
+    if (!(length <= reach_m)) reach_m = length;  // a NaN is kept, and refused below
+    if (!std::isfinite(reach_m)) break;
+  }
+  if (!(reach_m <= limits::kMaxLengthM)) {
+    char message[128];
+    std::snprintf(message, sizeof message,
+                  "the mesh, transformed, reaches %g m from its origin: at most %g m", reach_m,
+                  limits::kMaxLengthM);
+    r.fail(r.has("transform") ? "transform" : "file", message);
+  }
   for (Vec3& n : model.mesh.normals) {
     n = tryNormalize(t.rotation * (n / t.scale)).value_or(Vec3(0.0));
   }
@@ -156,12 +172,14 @@ ObjectSpec readObject(ObjectReader r, const std::vector<MaterialSpec>& materials
     o.mesh = readMesh(r, folder);
     o.center_m = o.mesh->transform.translation_m;
   } else {
-    o.center_m = r.vec3("center");
-    o.radius_m = positive(r, "radius", r.number("radius"));
+    o.center_m = position(r, "center");
+    o.radius_m =
+        inRange(r, "radius", r.number("radius"), limits::kMinLengthM, limits::kMaxLengthM, "m");
   }
   if (o.shape == ShapeKind::Cylinder) {
     o.axis = r.direction("axis");
-    o.length_m = positive(r, "length", r.number("length"));
+    o.length_m =
+        inRange(r, "length", r.number("length"), limits::kMinLengthM, limits::kMaxLengthM, "m");
   } else if (o.shape == ShapeKind::Disk) {
     o.axis = r.direction("normal");
   }
@@ -233,12 +251,13 @@ void readRefinement(ObjectReader& r, double& tolerance, std::optional<double>& f
 
 ObserversSpec readObservers(ObjectReader r) {
   ObserversSpec o;
-  o.min_m = r.vec3("min");
-  o.max_m = r.vec3("max");
+  o.min_m = position(r, "min");
+  o.max_m = position(r, "max");
   for (int a = 0; a < 3; ++a) {
     if (!(o.max_m[a] > o.min_m[a])) r.fail("max", "must exceed min on every axis");
   }
-  o.voxel_m = positive(r, "voxel_m", r.number("voxel_m"));
+  o.voxel_m = inRange(r, "voxel_m", r.number("voxel_m"), limits::kMinLengthM,
+                      limits::kMaxLengthM, "m");
   const Vec3 extent = o.max_m - o.min_m;
   const double longest = std::max({extent.x, extent.y, extent.z});
   // Bounds the lattice (and the dense twin) to what a 32-bit OpenVDB index and memory allow.
@@ -262,7 +281,7 @@ PlaneSpec readPlane(ObjectReader r, const std::vector<PlaneSpec>& earlier) {
   for (const PlaneSpec& e : earlier) {
     if (e.name == p.name) r.fail("name", "\"" + p.name + "\" names two planes");
   }
-  p.origin_m = r.vec3("origin");
+  p.origin_m = position(r, "origin");
   p.u_axis = r.direction("u_axis");
   p.v_axis = r.direction("v_axis");
   if (!(std::abs(glm::dot(p.u_axis, p.v_axis)) <= 1e-6)) {
@@ -275,11 +294,12 @@ PlaneSpec readPlane(ObjectReader r, const std::vector<PlaneSpec>& earlier) {
     r.fail("size_m", "must be an array of 2 numbers (extent along u_axis, along v_axis)");
   p.width_m = size[0].get<double>();
   p.height_m = size[1].get<double>();
-  if (!(p.width_m > 0.0 && p.height_m > 0.0 && std::isfinite(p.width_m) &&
-        std::isfinite(p.height_m))) {
-    r.fail("size_m", "must be finite and > 0");
+  if (!(p.width_m > 0.0 && p.height_m > 0.0 && p.width_m <= 2.0 * limits::kMaxCoordinateM &&
+        p.height_m <= 2.0 * limits::kMaxCoordinateM)) {
+    r.fail("size_m", "must be > 0 and at most 2e7 m");
   }
-  p.pixel_m = positive(r, "pixel_m", r.number("pixel_m"));
+  p.pixel_m = inRange(r, "pixel_m", r.number("pixel_m"), limits::kMinLengthM,
+                      limits::kMaxLengthM, "m");
   if (std::max(p.width_m, p.height_m) / p.pixel_m > 65536.0)
     r.fail("pixel_m", "gives more than 65536 pixels along an axis");
   p.block_m = blockSize(r, "block_m", "pixel_m", p.pixel_m);

@@ -31,6 +31,9 @@ TEST(PointsFile, RefusesMalformedInputWithTheLineNumber) {
   EXPECT_EQ(refusal("x,y,z\nnan,2,3\n"), "P.csv:2: column 1 (x): \"nan\" is not finite");
   EXPECT_EQ(refusal("x,y,z\n1,inf,3\n"), "P.csv:2: column 2 (y): \"inf\" is not finite");
   EXPECT_EQ(refusal("x,y,z\n1,2,1e999\n"), "P.csv:2: column 3 (z): \"1e999\" is out of range");
+  EXPECT_EQ(refusal("x,y,z\n1,-2e7,3\n"),
+            "P.csv:2: column 2 (y): -2e7 m is beyond ±1e7 m, the coordinates glint's arithmetic "
+            "carries");
   EXPECT_EQ(refusal(""), "P.csv: empty file (expected a header x,y,z)");
   EXPECT_EQ(refusal("x,y,z\n\n"), "P.csv: no observer points after the header");
 }

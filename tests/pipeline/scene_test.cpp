@@ -151,6 +151,56 @@ TEST(Scene, RefusesNonFiniteNumbers) {
   EXPECT_EQ(refusal(in_array), "scene.json: /laser/position/2: must be finite");
 }
 
+// pipeline/limits.h: values past what double arithmetic carries from beam to summed
+// irradiance are refused at the boundary; a finite but huge power once ran to a clean
+// "no hazard" (the beam irradiance overflowed to infinity and every bound to NaN).
+TEST(Scene, RefusesValuesWhosePhysicsWouldOverflow) {
+  struct Case {
+    std::function<void(json&)> edit;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {[](json& j) { j["laser"]["power_w"] = 1.7e308; },
+       "scene.json: /laser/power_w: must be in [0, 1e+15] W"},
+      {[](json& j) { j["laser"]["power_w"] = 2e15; },
+       "scene.json: /laser/power_w: must be in [0, 1e+15] W"},
+      {[](json& j) { j["laser"]["beam"]["radius_m"] = 1e-9; },
+       "scene.json: /laser/beam/radius_m: must be in [1e-06, 100000] m"},
+      {[](json& j) { j["materials"]["polished"]["sigma"] = 1e-9; },
+       "scene.json: /materials/polished/sigma: must be in [1e-06, 1e+06]"},
+      {[](json& j) { j["objects"][0]["radius"] = 1e300; },
+       "scene.json: /objects/0/radius: must be in [1e-06, 100000] m"},
+      {[](json& j) { j["objects"][0]["length"] = 1e-300; },
+       "scene.json: /objects/0/length: must be in [1e-06, 100000] m"},
+      {[](json& j) {
+         j["objects"][0]["center"] = {0, 2e7, 0};
+       },
+       "scene.json: /objects/0/center: must lie within ±1e+07 m on every axis"},
+      {[](json& j) {
+         j["laser"]["position"] = {-1e300, 0, 0};
+       },
+       "scene.json: /laser/position: must lie within ±1e+07 m on every axis"},
+      {[](json& j) {
+         j["observers"] = {{"min", {-1e8, 0, 0}}, {"max", {1, 1, 1}}, {"voxel_m", 0.1}};
+       },
+       "scene.json: /observers/min: must lie within ±1e+07 m on every axis"},
+      {[](json& j) {
+         j["observers"] = {{"min", {0, 0, 0}}, {"max", {1, 1, 1}}, {"voxel_m", 1e-7}};
+       },
+       "scene.json: /observers/voxel_m: must be in [1e-06, 100000] m"},
+  };
+  for (const Case& c : cases) {
+    json j = minimal();
+    c.edit(j);
+    EXPECT_EQ(refusal(j), c.message);
+  }
+  // The limits themselves are accepted: a 1 PW laser on a 1 µm-smooth target is a scene.
+  json edge = minimal();
+  edge["laser"]["power_w"] = 1e15;
+  edge["materials"]["polished"]["sigma"] = 1e-6;
+  EXPECT_NO_THROW(parseScene(edge.dump(), "scene.json"));
+}
+
 TEST(Scene, RefusesDuplicateKeys) {
   const std::string text = R"({"laser": {"position": [0,0,0], "power_w": 1, "power_w": 2}})";
   EXPECT_EQ(refusal(text), "scene.json: /laser/power_w: duplicate key");
