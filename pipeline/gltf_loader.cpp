@@ -409,6 +409,15 @@ GltfModel parseGltf(std::span<const unsigned char> bytes, const std::string& nam
   if (bytes.size() > limits.max_file_bytes || bytes.size() > std::numeric_limits<unsigned>::max())
     throw InputError(name + ": larger than " + std::to_string(limits.max_file_bytes) + " bytes");
   const bool binary = isBinary(bytes);
+  // Neither a .glb nor JSON text: refused without quoting it, since a scene can name any file
+  // (a system file by a ../ path) and its bytes have no place in a message.
+  if (!binary) {
+    const auto first = std::find_if(bytes.begin(), bytes.end(), [](unsigned char c) {
+      return c != ' ' && c != '\t' && c != '\n' && c != '\r';
+    });
+    if (first == bytes.end() || *first != '{')
+      throw InputError(name + ": not a glTF model (neither a binary .glb nor a JSON object)");
+  }
   checkJsonDepth(binary ? glbJson(bytes, name) : bytes, limits.max_json_depth, name);
 
   std::error_code ec;
@@ -432,7 +441,10 @@ GltfModel parseGltf(std::span<const unsigned char> bytes, const std::string& nam
     throw InputError(name + ": not a readable glTF model (" + e.what() + ")");
   }
   if (!ok) {
+    // The JSON parser quotes what it last read: the position is enough, the bytes stay out.
+    if (const auto quote = err.find("; last read:"); quote != std::string::npos) err.resize(quote);
     while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
+    err = printable(err, 240);
     if (!confinement.refusal.empty()) throw InputError(name + ": refused: " + confinement.refusal);
     throw InputError(name +
                      ": not a readable glTF model: " + (err.empty() ? "unknown error" : err));

@@ -67,7 +67,8 @@ class ObjectReader {
   }
 
   bool has(const std::string& key) {
-    known_.push_back(key);
+    // Asked once per use (has, then require): remembered once, for the unknown-key message.
+    if (std::find(known_.begin(), known_.end(), key) == known_.end()) known_.push_back(key);
     return j_.contains(key);
   }
 

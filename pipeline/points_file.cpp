@@ -50,7 +50,7 @@ std::vector<Vec3> parsePoints(std::string_view text, const std::string& source) 
     const std::vector<std::string_view> fields = splitFields(line);
     if (!header_seen) {
       if (fields.size() != 3 || fields[0] != "x" || fields[1] != "y" || fields[2] != "z") {
-        throw InputError(where() + "the header must be x,y,z (found \"" + std::string(trim(line)) +
+        throw InputError(where() + "the header must be x,y,z (found \"" + printable(trim(line)) +
                          "\")");
       }
       header_seen = true;
@@ -68,16 +68,16 @@ std::vector<Vec3> parsePoints(std::string_view text, const std::string& source) 
       const std::string column =
           std::string("column ") + std::to_string(i + 1) + " (" + "xyz"[i] + ")";
       if (ec == std::errc::result_out_of_range) {
-        throw InputError(where() + column + ": \"" + std::string(f) + "\" is out of range");
+        throw InputError(where() + column + ": \"" + printable(f) + "\" is out of range");
       }
       if (f.empty() || ec != std::errc() || ptr != f.data() + f.size()) {
-        throw InputError(where() + column + ": \"" + std::string(f) + "\" is not a number");
+        throw InputError(where() + column + ": \"" + printable(f) + "\" is not a number");
       }
       if (!std::isfinite(v)) {
-        throw InputError(where() + column + ": \"" + std::string(f) + "\" is not finite");
+        throw InputError(where() + column + ": \"" + printable(f) + "\" is not finite");
       }
       if (!(std::abs(v) <= limits::kMaxCoordinateM)) {
-        throw InputError(where() + column + ": " + std::string(f) +
+        throw InputError(where() + column + ": " + printable(f) +
                          " m is beyond ±1e7 m, the coordinates glint's arithmetic carries");
       }
       p[i] = v;

@@ -187,6 +187,21 @@ TEST_F(GltfLoader, RefusesWhatIsNotGltf) {
   EXPECT_NE(refusal(dir_ / "model").find("not a file"), std::string::npos);
 }
 
+// A scene may name any file (a system file by a ../ path): its bytes never reach the message,
+// neither from the check before parsing nor from the JSON parser's "last read".
+TEST_F(GltfLoader, QuotesNoContentOfAFileThatIsNotGltf) {
+  const fs::path passwd = dir_ / "model" / "passwd";
+  std::ofstream(passwd) << "root:x:0:0:secret\n";
+  EXPECT_EQ(refusal(passwd),
+            passwd.string() + ": not a glTF model (neither a binary .glb nor a JSON object)");
+  const fs::path broken = dir_ / "model" / "broken.gltf";
+  std::ofstream(broken) << "{\"asset\": secret\x07}";
+  const std::string message = refusal(broken);
+  EXPECT_EQ(message.find("secret"), std::string::npos) << message;
+  EXPECT_EQ(message.find('\x07'), std::string::npos) << message;
+  EXPECT_NE(message.find("not a readable glTF model"), std::string::npos) << message;
+}
+
 TEST(GltfExamples, TheExampleTargetsLoadWhole) {
   const fs::path dir = fs::path(GLINT_EXAMPLES_DIR) / "targets";
   const GltfModel capsule = loadGltf(dir / "capsule.glb");

@@ -34,6 +34,13 @@ TEST(PointsFile, RefusesMalformedInputWithTheLineNumber) {
   EXPECT_EQ(refusal("x,y,z\n1,-2e7,3\n"),
             "P.csv:2: column 2 (y): -2e7 m is beyond ±1e7 m, the coordinates glint's arithmetic "
             "carries");
+  // Control bytes of a garbage file are escaped: they must not ring or move the terminal.
+  EXPECT_EQ(refusal("\x1b[2J\a,y,z\n"),
+            "P.csv:1: the header must be x,y,z (found \"\\x1b[2J\\x07,y,z\")");
+  EXPECT_EQ(refusal("x,y,z\n1,\x7f,3\n"), "P.csv:2: column 2 (y): \"\\x7f\" is not a number");
+  EXPECT_EQ(refusal("x,y,z\n1,2," + std::string(100, '9') + "x\n"),
+            "P.csv:2: column 3 (z): \"" + std::string(64, '9') + "…\" is not a number")
+      << "a long field is quoted to 64 bytes and an ellipsis";
   EXPECT_EQ(refusal(""), "P.csv: empty file (expected a header x,y,z)");
   EXPECT_EQ(refusal("x,y,z\n\n"), "P.csv: no observer points after the header");
 }

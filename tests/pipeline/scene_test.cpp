@@ -68,7 +68,9 @@ TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
       {[](json& j) { j["laser"]["colour"] = "green"; },
        "scene.json: /laser/colour: unknown key (expected one of: position, direction, power_w, "
        "wavelength_nm, exposure_s, beam)"},
-      {[](json& j) { j["extra"] = 1; }, "scene.json: /extra: unknown key"},
+      {[](json& j) { j["extra"] = 1; },
+       "scene.json: /extra: unknown key (expected one of: description, laser, materials, "
+       "objects, accuracy, observers, planes)"},
       {[](json& j) { j["laser"].erase("power_w"); },
        "scene.json: /laser/power_w: missing (required)"},
       {[](json& j) { j.erase("objects"); }, "scene.json: /objects: missing (required)"},
@@ -279,7 +281,7 @@ TEST(ScenePlanes, PlaneLoadsWithDefaultsAndRefusesBadValues) {
   EXPECT_EQ(refused("size_m", json::array({10})).rfind("scene.json: /planes/0/size_m: must be", 0),
             0u);
   EXPECT_EQ(refused("size_m", json::array({10, -1})),
-            "scene.json: /planes/0/size_m: must be finite and > 0");
+            "scene.json: /planes/0/size_m: must be > 0 and at most 2e7 m");
   EXPECT_EQ(refused("block_m", 0.3),
             "scene.json: /planes/0/block_m: must be pixel_m times a power of two (1, 2, 4, ..., "
             "4096)");
@@ -307,7 +309,7 @@ TEST(SceneObservers, BoxLoadsWithDefaultsAndRefusesBadValues) {
     bad["observers"][key] = value;
     return refusal(bad);
   };
-  EXPECT_EQ(refused("voxel_m", 0.0), "scene.json: /observers/voxel_m: must be > 0");
+  EXPECT_EQ(refused("voxel_m", 0.0), "scene.json: /observers/voxel_m: must be in [1e-06, 100000] m");
   EXPECT_EQ(refused("block_m", 0.3),
             "scene.json: /observers/block_m: must be voxel_m times a power of two (1, 2, 4, "
             "..., 4096)");
