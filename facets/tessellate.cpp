@@ -133,9 +133,13 @@ std::uint32_t addDisk(Target& target, const DiskShape& s, std::uint32_t material
 
 std::size_t fillNormals(TriangleMesh& mesh, double crease_angle_rad) {
   const std::vector<std::uint32_t> weld = weldByPosition(mesh.positions_m);
-  std::vector<std::vector<std::uint32_t>> faces_at(mesh.positions_m.size());
+  const std::size_t welded = weld.empty() ? 0 : *std::max_element(weld.begin(), weld.end()) + 1;
   std::vector<Vec3> area_normal(mesh.triangles.size());  // |cross| = twice the area
   std::vector<Vec3> unit_normal(mesh.triangles.size());
+  std::vector<bool> has_normal(mesh.triangles.size(), false);
+  // The faces around each welded position, as one array with offsets (compressed rows): a
+  // vector per vertex would cost 24 bytes for each of millions of unused vertex copies.
+  std::vector<std::uint32_t> first(welded + 1, 0);
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
     const auto& tri = mesh.triangles[t];
     const Vec3& a = mesh.positions_m[tri[0]];
@@ -143,30 +147,63 @@ std::size_t fillNormals(TriangleMesh& mesh, double crease_angle_rad) {
     const auto unit = tryNormalize(area_normal[t]);
     if (!unit) continue;  // no direction to lend its neighbours
     unit_normal[t] = *unit;
-    for (std::uint32_t v : tri) faces_at[weld[v]].push_back(t);
+    has_normal[t] = true;
+    for (std::uint32_t v : tri) ++first[weld[v] + 1];
+  }
+  for (std::size_t w = 0; w < welded; ++w) first[w + 1] += first[w];
+  std::vector<std::uint32_t> faces(first[welded]);
+  {
+    std::vector<std::uint32_t> next(first.begin(), first.end() - 1);
+    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+      if (!has_normal[t]) continue;
+      for (std::uint32_t v : mesh.triangles[t]) faces[next[weld[v]]++] = t;
+    }
   }
   // Each corner compares its face with every face around its vertex: corners × valence in all.
   // A 128-segment pole or fan is within the cap; a hostile file that puts a thousand faces at
   // every vertex of two million triangles would otherwise take minutes.
-  constexpr std::size_t kMaxValence = 128;
+  constexpr std::uint32_t kMaxValence = 128;
   const double cos_crease = std::cos(crease_angle_rad);
+  // Corners at one position given the same normal share one new vertex: on a smooth surface
+  // that is every corner there, so the mesh grows by its positions, not by its corners.
+  struct Key {
+    std::uint32_t weld;
+    std::array<std::uint64_t, 3> normal_bits;
+    bool operator==(const Key&) const = default;
+  };
+  struct Hash {
+    std::size_t operator()(const Key& k) const {
+      std::uint64_t h = 1469598103934665603ull ^ k.weld;
+      for (std::uint64_t b : k.normal_bits) h = (h ^ (b >> 32) ^ b) * 1099511628211ull;
+      return static_cast<std::size_t>(h ^ (h >> 29));
+    }
+  };
+  std::unordered_map<Key, std::uint32_t, Hash> shared;
   std::size_t filled = 0;
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
-    const auto own = tryNormalize(area_normal[t]);
+    if (!has_normal[t]) continue;
+    const Vec3& own = unit_normal[t];
     for (std::uint32_t& v : mesh.triangles[t]) {
-      if (mesh.normals[v] != Vec3(0.0) || !own) continue;
-      const std::vector<std::uint32_t>& around = faces_at[weld[v]];
-      Vec3 sum = *own;  // beyond the valence limit, the face's own normal
-      if (around.size() <= kMaxValence) {
+      if (mesh.normals[v] != Vec3(0.0)) continue;
+      const std::uint32_t w = weld[v];
+      Vec3 sum = own;  // beyond the valence limit, the face's own normal
+      if (first[w + 1] - first[w] <= kMaxValence) {
         sum = Vec3(0.0);
-        for (std::uint32_t f : around) {
-          if (glm::dot(unit_normal[f], *own) >= cos_crease) sum += area_normal[f];
+        for (std::uint32_t i = first[w]; i < first[w + 1]; ++i) {
+          if (glm::dot(unit_normal[faces[i]], own) >= cos_crease) sum += area_normal[faces[i]];
         }
       }
-      const Vec3 position = mesh.positions_m[v];
-      mesh.positions_m.push_back(position);
-      mesh.normals.push_back(tryNormalize(sum).value_or(*own));
-      v = static_cast<std::uint32_t>(mesh.positions_m.size() - 1);
+      const Vec3 normal = tryNormalize(sum).value_or(own);
+      Key key{w, {}};
+      std::memcpy(key.normal_bits.data(), &normal, sizeof normal);
+      const auto [it, added] =
+          shared.emplace(key, static_cast<std::uint32_t>(mesh.positions_m.size()));
+      if (added) {
+        const Vec3 position = mesh.positions_m[v];
+        mesh.positions_m.push_back(position);
+        mesh.normals.push_back(normal);
+      }
+      v = it->second;
       ++filled;
     }
   }

@@ -66,8 +66,9 @@ struct TriangleMesh {
 
 /// @brief Gives every triangle corner whose vertex has a zero normal the area-weighted mean of
 /// the face normals around its position, over the faces within @p crease_angle_rad of the
-/// corner's own face: smooth across gentle bends, sharp across creases. Such corners get
-/// vertices of their own. @return the number of corners given a normal.
+/// corner's own face: smooth across gentle bends, sharp across creases. Such corners get new
+/// vertices, one per position and normal (shared by the corners that agree).
+/// @return the number of corners given a normal.
 std::size_t fillNormals(TriangleMesh& mesh, double crease_angle_rad);
 
 /// @brief What happened to a mesh's triangles: counts for the run summary.

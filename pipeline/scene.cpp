@@ -109,7 +109,7 @@ MeshTransform readTransform(ObjectReader r) {
   return t;
 }
 
-MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder) {
+MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder, const GltfLimits& limits) {
   MeshSpec m;
   const std::string file = r.string("file");
   m.file = folder / file;
@@ -125,7 +125,7 @@ MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder) {
 
   GltfModel model;
   try {
-    model = loadGltf(m.file);
+    model = loadGltf(m.file, limits);
   } catch (const InputError& e) {
     r.fail("file", e.what());
   }
@@ -160,7 +160,7 @@ MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder) {
 }
 
 ObjectSpec readObject(ObjectReader r, const std::vector<MaterialSpec>& materials,
-                      const std::filesystem::path& folder) {
+                      const std::filesystem::path& folder, const GltfLimits& mesh_limits) {
   ObjectSpec o;
   const std::vector<std::string> shapes = {"cylinder", "sphere", "disk", "mesh"};
   const std::size_t shape = r.choice("shape", shapes);
@@ -169,7 +169,7 @@ ObjectSpec readObject(ObjectReader r, const std::vector<MaterialSpec>& materials
             : shape == 2 ? ShapeKind::Disk
                          : ShapeKind::Mesh;
   if (o.shape == ShapeKind::Mesh) {
-    o.mesh = readMesh(r, folder);
+    o.mesh = readMesh(r, folder, mesh_limits);
     o.center_m = o.mesh->transform.translation_m;
   } else {
     o.center_m = position(r, "center");
@@ -311,7 +311,8 @@ PlaneSpec readPlane(ObjectReader r, const std::vector<PlaneSpec>& earlier) {
 }  // namespace
 
 Scene parseScene(std::string_view text, const std::string& source,
-                 const std::optional<std::filesystem::path>& folder) {
+                 const std::optional<std::filesystem::path>& folder,
+                 const GltfLimits& mesh_limits) {
   const std::filesystem::path base = folder ? *folder : std::filesystem::path(source).parent_path();
   const json root = parseJson(text, source);
   Scene scene;
@@ -334,7 +335,8 @@ Scene parseScene(std::string_view text, const std::string& source,
   }
   for (std::size_t i = 0; i < objects.size(); ++i) {
     scene.objects.push_back(readObject(
-        ObjectReader(objects[i], "/objects/" + std::to_string(i), source), scene.materials, base));
+        ObjectReader(objects[i], "/objects/" + std::to_string(i), source), scene.materials, base,
+        mesh_limits));
   }
 
   if (r.has("accuracy")) scene.accuracy = readAccuracy(r.object("accuracy"));

@@ -16,6 +16,7 @@
 #include "facets/patch.h"
 #include "facets/tessellate.h"
 #include "facets/vec3.h"
+#include "pipeline/gltf_loader.h"
 #include "pipeline/mpe.h"
 
 namespace glint {
@@ -140,10 +141,11 @@ struct Scene {
 Scene loadScene(const std::filesystem::path& path);
 
 /// @brief Validates scene JSON text; @p source names it in messages, and mesh `file`s are
-/// relative to @p folder (default: the folder of @p source).
+/// relative to @p folder (default: the folder of @p source) and loaded within @p mesh_limits.
 /// @throw InputError as loadScene.
 Scene parseScene(std::string_view json_text, const std::string& source,
-                 const std::optional<std::filesystem::path>& folder = std::nullopt);
+                 const std::optional<std::filesystem::path>& folder = std::nullopt,
+                 const GltfLimits& mesh_limits = {});
 
 /// @brief The rotation R = Rz(yaw) Ry(pitch) Rx(roll), angles in degrees (the convention of
 /// studies and of a mesh's `yaw_pitch_roll_deg`).

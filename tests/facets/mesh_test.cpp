@@ -40,6 +40,45 @@ TEST(MeshNormals, SmoothBelowTheCreaseAngleSharpAbove) {
   EXPECT_NEAR(n.z, std::cos(0.5 * bend), 1e-15);
 }
 
+// A flat n × n grid of unindexed triangles (every corner its own vertex, no normals), stacked
+// `copies` times at the same place: the valence of an inner vertex is 6 × copies.
+TriangleMesh stackedGrid(int n, int copies) {
+  TriangleMesh m;
+  for (int c = 0; c < copies; ++c) {
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        const Vec3 a(i, j, 0), b(i + 1, j, 0), d(i, j + 1, 0), e(i + 1, j + 1, 0);
+        for (const auto& tri : {std::array<Vec3, 3>{a, b, e}, std::array<Vec3, 3>{a, e, d}}) {
+          const auto first = static_cast<std::uint32_t>(m.positions_m.size());
+          m.positions_m.insert(m.positions_m.end(), tri.begin(), tri.end());
+          m.triangles.push_back({first, first + 1, first + 2});
+        }
+      }
+    }
+  }
+  m.normals.assign(m.positions_m.size(), Vec3(0.0));
+  return m;
+}
+
+TEST(MeshNormals, CornersThatAgreeShareOneVertexAtAnyValence) {
+  // 1 and 1024 stacked copies: below and far beyond the 128-face valence cap. Every corner
+  // gets +z, and the mesh grows by one vertex per distinct position, not one per corner.
+  for (const int copies : {1, 1024}) {
+    const int n = 8;
+    TriangleMesh m = stackedGrid(n, copies);
+    const std::size_t before = m.positions_m.size();
+    EXPECT_EQ(fillNormals(m, 30.0 * kPi / 180.0), before) << copies << " copies";
+    EXPECT_EQ(m.positions_m.size() - before, static_cast<std::size_t>((n + 1) * (n + 1)))
+        << copies << " copies: corners at one position with one normal share a vertex";
+    for (const auto& tri : m.triangles) {
+      for (std::uint32_t v : tri) {
+        ASSERT_GE(v, before) << "a corner kept its normal-less vertex";
+        ASSERT_EQ(m.normals[v], Vec3(0.0, 0.0, 1.0)) << copies << " copies";
+      }
+    }
+  }
+}
+
 TEST(MeshNormals, GivenNormalsAreKept) {
   TriangleMesh m = roof(0.3, true);
   const std::vector<Vec3> before = m.normals;

@@ -9,22 +9,13 @@
 
 #include "pipeline/gltf_loader.h"
 #include "pipeline/input_error.h"
+#include "fuzz_limits.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   // External buffer uris resolve in the seed corpus folder, so inputs can reach real files
   // there (and the loader's confinement refuses everything else).
   static const std::filesystem::path folder = GLINT_FUZZ_GLTF_DIR;
-  // Below the defaults: a model that legitimately asks for millions of triangles or a million
-  // node instances takes gigabytes or seconds under the sanitizers, beyond the fuzzer's memory
-  // and time limits (README.md), without being a bug; and a mutant of a seed that reaches a
-  // limit should cost milliseconds, not the fuzzer's throughput.
-  static const glint::GltfLimits limits = [] {
-    glint::GltfLimits l;
-    l.max_file_bytes = std::uintmax_t{1} << 20;
-    l.max_triangles = 100'000;
-    l.max_node_instances = 10'000;
-    return l;
-  }();
+  static const glint::GltfLimits limits = glint::fuzz::modelLimits();
   try {
     glint::parseGltf(std::span<const unsigned char>(data, size), "fuzz.gltf", folder, limits);
   } catch (const glint::InputError&) {

@@ -11,12 +11,14 @@
 
 #include "pipeline/input_error.h"
 #include "pipeline/scene.h"
+#include "fuzz_limits.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const std::optional<std::filesystem::path> folder{GLINT_FUZZ_GLTF_DIR};
+  static const glint::GltfLimits limits = glint::fuzz::modelLimits();
   try {
     glint::parseScene(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.json",
-                      folder);
+                      folder, limits);
   } catch (const glint::InputError&) {
     // The contract: bad input is refused with an InputError, nothing else.
   }
