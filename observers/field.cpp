@@ -220,7 +220,9 @@ class FieldBuilder {
       std::vector<std::vector<Candidate>> lists(blocks.size());
       std::vector<RegionBound> bounds(blocks.size());
       boundBlocks(blocks, parent_lists, parent_dropped, lists, bounds);
+      throwIfStopped();
       evaluateSamples(blocks, lists, bounds);
+      throwIfStopped();
       const std::vector<Decision> decisions = decide(blocks, bounds);
 
       std::vector<Block> children;
@@ -265,6 +267,7 @@ class FieldBuilder {
     }
 
     std::unique_ptr<FieldGrids> grids = writeGrids();
+    throwIfStopped();
     std::vector<FieldBlock> blocks_out;
     blocks_out.reserve(final_.size());
     for (const FinalBlock& f : final_) {
@@ -280,6 +283,15 @@ class FieldBuilder {
   }
 
  private:
+  // The run's watcher asked to stop (memory): the loops skip their remaining items, and the
+  // builder leaves between them; nothing half-computed is returned.
+  [[nodiscard]] bool stopRequested() const {
+    return counter_ != nullptr && counter_->stopRequested();
+  }
+  void throwIfStopped() const {
+    if (stopRequested()) throw WorkStopped();
+  }
+
   struct FinalBlock {
     Block block;
     Decision decision;
@@ -325,6 +337,7 @@ class FieldBuilder {
                    std::vector<std::vector<Candidate>>& lists, std::vector<RegionBound>& bounds) {
     tbb::enumerable_thread_specific<std::int64_t> bound_evaluations(0);
     tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t i) {
+      if (stopRequested()) return;
       const Block& b = blocks[i];
       const bool root = b.parent == kNoParent;
       const std::span<const Candidate> inherited =
@@ -396,6 +409,7 @@ class FieldBuilder {
     std::vector<std::int64_t> evaluations(wanted.size(), 0);
     tbb::enumerable_thread_specific<IntegratorWorkspace> workspaces;
     tbb::parallel_for(std::size_t{0}, wanted.size(), [&](std::size_t w) {
+      if (stopRequested()) return;
       const std::uint64_t key = wanted[w].first;
       const auto nk = static_cast<std::uint64_t>(lattice_.n[2]);
       const auto nj = static_cast<std::uint64_t>(lattice_.n[1]);
@@ -779,6 +793,25 @@ ObserverField::Region ObserverField::regionAbove(double threshold_w_m2,
   return r;
 }
 
+std::uint64_t fieldMemoryFloorBytes(const FieldSpec& spec, bool dense) {
+  // Measured (glint run -q, peak resident memory against box size, nothing to evaluate): the
+  // dense twin 43 bytes per lattice point, the adaptive field 1 600 bytes per coarse block
+  // (its Block, bound, decision and final record, the grids' tiles, the VTU cell); a little
+  // below, so the floor stays one.
+  constexpr double kDenseBytesPerPoint = 40.0;
+  constexpr double kAdaptiveBytesPerCoarseBlock = 1500.0;
+  const std::array<int, 3> n = spec.nodes();
+  double points = 1.0, blocks = 1.0;
+  for (int a = 0; a < 3; ++a) {
+    points *= n[a];
+    const int cells = std::max(1, n[a] - 1);
+    blocks *= spec.plane && a == 2 ? 1.0 : std::ceil(static_cast<double>(cells) / spec.block_voxels);
+  }
+  const double bytes = dense ? kDenseBytesPerPoint * points : kAdaptiveBytesPerCoarseBlock * blocks;
+  return bytes >= 1.8e19 ? std::numeric_limits<std::uint64_t>::max()
+                         : static_cast<std::uint64_t>(bytes);
+}
+
 ObserverField computeField(const FacetIntegrator& integrator, const FieldSpec& spec,
                            const ExcludedFn& excluded, WorkCounter* counter) {
   validate(spec);
@@ -812,6 +845,7 @@ ObserverField computeDenseField(const FacetIntegrator& integrator, const FieldSp
   // One task per line of points along z: each thread's grid then holds whole lines.
   const std::int64_t lines = static_cast<std::int64_t>(lattice.n[0]) * lattice.n[1];
   tbb::parallel_for(std::int64_t{0}, lines, [&](std::int64_t line) {
+    if (counter != nullptr && counter->stopRequested()) return;
     Local& local = per_thread.local();
     const int i = static_cast<int>(line / lattice.n[1]);
     const int j = static_cast<int>(line % lattice.n[1]);
@@ -846,6 +880,7 @@ ObserverField computeDenseField(const FacetIntegrator& integrator, const FieldSp
       }
     }
   });
+  if (counter != nullptr && counter->stopRequested()) throw WorkStopped();
   std::unique_ptr<FieldGrids> grids = makeGrids(spec);
   for (Local& local : per_thread) {
     mergeInto(*grids, *local.grids.grids);

@@ -162,11 +162,19 @@ class ObserverField {
   std::vector<FieldBlock> blocks_;
 };
 
+/// @brief A floor under the memory computeField (@p dense: computeDenseField) takes for
+/// @p spec, in bytes, known before anything is allocated: per coarse block (adaptive) or per
+/// lattice point (dense), as measured on fields with nothing to evaluate, with the grids and
+/// the output writers. Evaluated points cost more (the run's summary reports bytes per
+/// active voxel), which the run's memory watch covers.
+std::uint64_t fieldMemoryFloorBytes(const FieldSpec& spec, bool dense);
+
 /// @brief The adaptive field: top-down over blocks, each pruning its candidate facets by
 /// bound, skipping where the bound is below the floor, else evaluating its 3×3×3 lattice and
 /// refining into eight where interpolation misses. Evaluated points are cached and never
 /// computed twice; TBB runs over blocks and points. @p integrator's options are used per
 /// point. @p counter (optional) counts evaluated points and evaluations.
+/// @throw WorkStopped when the counter's stop flag is raised (also computeDenseField).
 ObserverField computeField(const FacetIntegrator& integrator, const FieldSpec& spec,
                            const ExcludedFn& excluded, WorkCounter* counter = nullptr);
 

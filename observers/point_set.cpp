@@ -16,6 +16,7 @@ std::vector<ObserverResult> evaluatePoints(const FacetIntegrator& integrator,
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       IntegratorWorkspace& ws = workspaces.local();
                       std::int64_t evaluations = 0;
+                      if (counter != nullptr && counter->stopRequested()) return;
                       for (std::size_t i = range.begin(); i != range.end(); ++i) {
                         results[i] = scheme.uniform
                                          ? integrator.uniform(points_m[i], scheme.uniform_level, ws)
@@ -27,6 +28,7 @@ std::vector<ObserverResult> evaluatePoints(const FacetIntegrator& integrator,
                         counter->evaluations += evaluations;
                       }
                     });
+  if (counter != nullptr && counter->stopRequested()) throw WorkStopped();
   return results;
 }
 

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cstdint>
 #include <span>
+#include <stdexcept>
 #include <vector>
 
 #include "facets/integrator.h"
@@ -18,6 +19,19 @@ struct WorkCounter {
   /// Items known so far, where the total is not known in advance (the adaptive field learns
   /// its points level by level).
   std::atomic<std::size_t> items_scheduled{0};
+  /// Raised by whoever watches the run (pipeline/memory_budget.h); the work then stops at its
+  /// next item and throws WorkStopped from outside its parallel loops.
+  const std::atomic<bool>* stop = nullptr;
+
+  [[nodiscard]] bool stopRequested() const {
+    return stop != nullptr && stop->load(std::memory_order_relaxed);
+  }
+};
+
+/// @brief The work was stopped through WorkCounter::stop; the one who raised it says why.
+class WorkStopped : public std::runtime_error {
+ public:
+  WorkStopped() : std::runtime_error("stopped on request") {}
 };
 
 /// @brief Which integration every point gets.

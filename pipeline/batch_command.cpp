@@ -18,6 +18,7 @@
 #include "pipeline/cluster.h"
 #include "pipeline/input_error.h"
 #include "pipeline/json_reader.h"
+#include "pipeline/memory_budget.h"
 #include "pipeline/progress.h"
 #include "pipeline/run_command.h"
 #include "pipeline/study.h"
@@ -105,7 +106,7 @@ nlohmann::json parametersJson(const Scenario& s) {
 // Computes one scenario on this rank, writes its folder (result.json last: its presence means
 // the scenario is done) and adds it to the rank's aggregates. Returns result.json's text.
 std::string runScenario(const Study& study, const Scenario& s, std::vector<Region>& regions,
-                        const fs::path& out_dir) {
+                        const fs::path& out_dir, const MemoryWatch& watch) {
   const auto start = Clock::now();
   const std::string scene_json = scenarioSceneJson(study, s);
   const Scene scene = scenarioScene(study, s, scene_json);
@@ -130,7 +131,16 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Regio
     // The region's own lattice (the observers do not move with the target), so every
     // scenario's map adds point for point.
     const FieldProblem problem = fieldProblem(scene, r.spec);
-    const ObserverField field = computeField(problem.integrator, r.spec, problem.excluded);
+    WorkCounter counter;
+    counter.stop = &watch.stopFlag();
+    const ObserverField field = [&] {
+      try {
+        return computeField(problem.integrator, r.spec, problem.excluded, &counter);
+      } catch (const WorkStopped&) {
+        watch.check("scenario " + std::to_string(s.index) + ", region " + r.name);
+        throw;
+      }
+    }();
     requireFinite(field, "scenario " + std::to_string(s.index) + ", region " + r.name);
     AtomicFile map(dir / r.scenarioFile());
     std::vector<float> e;
@@ -418,6 +428,22 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   }
 
   std::vector<Region> regions = studyRegions(study.base);
+  // Each region keeps two dense maps over the scenarios (float maximum, uint32 count) besides
+  // one scenario's field at a time.
+  const std::uint64_t budget =
+      args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
+  std::uint64_t floor_bytes = 0;
+  for (const Region& r : regions) {
+    const std::array<int, 3> n = r.spec.nodes();
+    floor_bytes += 8 * static_cast<std::uint64_t>(n[0]) * static_cast<std::uint64_t>(n[1]) *
+                       static_cast<std::uint64_t>(n[2]) +
+                   fieldMemoryFloorBytes(r.spec, false);
+  }
+  requireWithinBudget("the study's regions (" + std::to_string(regions.size()) + ")",
+                      floor_bytes, budget,
+                      "coarsen the base scene's voxel_m or pixel_m, shrink its regions, or "
+                      "raise --memory");
+  const MemoryWatch watch(budget);
   std::map<std::size_t, nlohmann::json> records;  // rank 0: every scenario's result
   std::vector<std::size_t> todo;
   std::size_t resumed = 0;
@@ -448,7 +474,7 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   cluster.shareOut(
       todo,
       [&](std::size_t index) {
-        return runScenario(study, study.scenarios[index], regions, out_dir);
+        return runScenario(study, study.scenarios[index], regions, out_dir, watch);
       },
       [&](std::size_t index, const std::string& record) {
         records[index] = nlohmann::json::parse(record);

@@ -4,6 +4,7 @@
 /// shared among the ranks of an MPI job, and aggregated into maximum-irradiance and coverage
 /// maps (README "Batch studies").
 
+#include <cstdint>
 #include <ostream>
 #include <string>
 
@@ -19,6 +20,7 @@ struct BatchArgs {
   bool fresh = false;   ///< discard the results of an earlier run in out_dir
   bool quiet = false;
   bool terminal = false;
+  std::uint64_t memory_bytes = 0;  ///< the memory budget per process; 0: the default
 };
 
 /// @brief Runs the study. Each scenario leaves scenarios/sNNNNNN/ (its scene.json, maps and

@@ -12,6 +12,7 @@
 #include "pipeline/batch_command.h"
 #include "pipeline/cluster.h"
 #include "pipeline/input_error.h"
+#include "pipeline/memory_budget.h"
 #include "pipeline/points_command.h"
 #include "pipeline/progress.h"
 #include "pipeline/run_command.h"
@@ -64,6 +65,23 @@ CLI::Validator finiteIn(double lo, double hi) {
       "FLOAT in " + range);
 }
 
+// A memory size ("512M", "4G", bytes), checked and converted at the boundary.
+CLI::Validator byteSize() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        if (!parseByteSize(text))
+          return "must be a memory size such as 512M, 4G or 16GiB, not '" + text + "'";
+        return {};
+      },
+      "SIZE");
+}
+
+std::string memoryHelp() {
+  return "Memory budget, e.g. 4G (default: 3/4 of this machine's, " +
+         formatBytes(static_cast<double>(defaultMemoryBudgetBytes())) +
+         "); a region needing more is refused before it starts, a run passing it stops";
+}
+
 }  // namespace
 
 int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
@@ -103,6 +121,8 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
   points_cmd->add_option("--threads", points.threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(1, 4096));
   points_cmd->add_flag("-q,--quiet", points.quiet, "No progress and no summary on standard error");
+  std::string points_memory;
+  points_cmd->add_option("--memory", points_memory, memoryHelp())->check(byteSize());
 
   RunArgs run;
   CLI::App* run_cmd = app.add_subcommand(
@@ -116,6 +136,8 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
   run_cmd->add_option("--threads", run.threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(1, 4096));
   run_cmd->add_flag("-q,--quiet", run.quiet, "No progress and no summary on standard error");
+  std::string run_memory;
+  run_cmd->add_option("--memory", run_memory, memoryHelp())->check(byteSize());
 
   BatchArgs batch;
   CLI::App* batch_cmd = app.add_subcommand(
@@ -129,6 +151,8 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
   batch_cmd->add_flag("--fresh", batch.fresh,
                       "Discard the scenarios an earlier run left in the output folder");
   batch_cmd->add_flag("-q,--quiet", batch.quiet, "No progress and no summary on standard error");
+  std::string batch_memory;
+  batch_cmd->add_option("--memory", batch_memory, memoryHelp())->check(byteSize());
 
   try {
     app.parse(argc, argv);
@@ -142,15 +166,18 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
       if (*tolerance_opt) points.tolerance = tolerance;
       if (*uniform_opt) points.uniform_level = level;
       if (*normals_opt) points.normals = normals;
+      if (!points_memory.empty()) points.memory_bytes = *parseByteSize(points_memory);
       points.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
       runPoints(points, out, err);
     }
     if (app.got_subcommand(run_cmd)) {
       run.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
+      if (!run_memory.empty()) run.memory_bytes = *parseByteSize(run_memory);
       runField(run, err);
     }
     if (app.got_subcommand(batch_cmd)) {
       batch.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
+      if (!batch_memory.empty()) batch.memory_bytes = *parseByteSize(batch_memory);
       return runBatchCommand(batch, err);
     }
     return 0;

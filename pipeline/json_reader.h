@@ -285,9 +285,15 @@ inline json parseJson(std::string_view text, const std::string& source) {
   }
 }
 
-/// @brief The bytes of a user's file; @p what names it in messages ("scene file").
-/// @throw InputError when it is a folder or cannot be read.
-std::string readUserFile(const std::filesystem::path& path, const std::string& what);
+/// @brief The largest scene, study or result file glint reads: a scene with every object
+/// written out by hand is kilobytes; meshes come in files of their own (with their limits).
+inline constexpr std::uintmax_t kMaxSceneFileBytes = std::uintmax_t{64} << 20;
+
+/// @brief The bytes of a user's file; @p what names it in messages ("scene file"). Reads at
+/// most @p max_bytes, whatever the file is (a FIFO, /dev/zero), and refuses a longer one.
+/// @throw InputError when it is a folder, cannot be read or is longer than @p max_bytes.
+std::string readUserFile(const std::filesystem::path& path, const std::string& what,
+                         std::uintmax_t max_bytes = kMaxSceneFileBytes);
 
 /// @brief fnv1a64() of @p bytes as 16 hex digits.
 std::string fnv1a64Hex(std::string_view bytes);

@@ -13,6 +13,7 @@
 #include "export/atomic_file.h"
 #include "export/points_csv.h"
 #include "observers/point_set.h"
+#include "pipeline/memory_budget.h"
 #include "pipeline/points_file.h"
 #include "pipeline/progress.h"
 #include "pipeline/scene.h"
@@ -76,7 +77,14 @@ void printSummary(std::ostream& err, const PointsArgs& args, const FacetIntegrat
 
 void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   const Scene scene = loadScene(args.scene_path);
-  const std::vector<Vec3> points = loadPoints(args.points_path);
+  // The text, its points (24 bytes each) and their results (about 40) take about three times
+  // the file's size at ~30 bytes a row: a quarter of the budget for the file keeps them in it.
+  const std::uint64_t budget =
+      args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
+  const std::vector<Vec3> points = loadPoints(args.points_path, budget / 4);
+  requireWithinBudget(std::to_string(points.size()) + " observer points",
+                      points.size() * (sizeof(Vec3) + sizeof(ObserverResult)), budget,
+                      "split the points file or raise --memory");
   IntegratorOptions options = integratorOptions(scene);
   if (args.tolerance) options.tolerance = *args.tolerance;
   if (args.normals)

@@ -2,6 +2,7 @@
 /// @file
 /// @brief `glint points`: irradiance at observer points from a CSV file.
 
+#include <cstdint>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -19,6 +20,7 @@ struct PointsArgs {
   int threads = 0;                     ///< 0: all cores
   bool quiet = false;                  ///< no progress, no summary
   bool terminal = false;               ///< standard error is a terminal (progress redraws)
+  std::uint64_t memory_bytes = 0;      ///< the memory budget; 0: defaultMemoryBudgetBytes()
 };
 
 /// @brief Runs the command. Inputs are validated and the output file opened before any work.

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "pipeline/input_error.h"
+#include "pipeline/json_reader.h"
 #include "pipeline/limits.h"
 
 namespace glint {
@@ -89,16 +90,8 @@ std::vector<Vec3> parsePoints(std::string_view text, const std::string& source) 
   return points;
 }
 
-std::vector<Vec3> loadPoints(const std::filesystem::path& path) {
-  const std::string name = path.string();
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
-    throw InputError(name + ": is a folder, not a points file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(name + ": cannot open the points file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parsePoints(text.str(), name);
+std::vector<Vec3> loadPoints(const std::filesystem::path& path, std::uintmax_t max_bytes) {
+  return parsePoints(readUserFile(path, "points file", max_bytes), path.string());
 }
 
 }  // namespace glint

@@ -13,6 +13,7 @@
 #include "glint/version.h"
 #include "pipeline/input_error.h"
 #include "pipeline/json_reader.h"
+#include "pipeline/memory_budget.h"
 #include "pipeline/progress.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
@@ -267,15 +268,44 @@ struct RegionResult {
 };
 
 RegionResult computeRegion(const Scene& scene, const FieldSpec& spec, const RunArgs& args,
-                           const char* what, std::ostream& err) {
+                           const char* what, const MemoryWatch& watch, std::ostream& err) {
   RegionResult r{fieldProblem(scene, spec), nullptr};
   WorkCounter counter;
+  counter.stop = &watch.stopFlag();
   std::unique_ptr<ProgressReporter> progress;
   if (!args.quiet) progress = std::make_unique<ProgressReporter>(err, args.terminal, what, 0, counter);
-  r.field = std::make_unique<ObserverField>(
-      args.uniform ? computeDenseField(r.problem.integrator, spec, r.problem.excluded, &counter)
-                   : computeField(r.problem.integrator, spec, r.problem.excluded, &counter));
+  try {
+    r.field = std::make_unique<ObserverField>(
+        args.uniform ? computeDenseField(r.problem.integrator, spec, r.problem.excluded, &counter)
+                     : computeField(r.problem.integrator, spec, r.problem.excluded, &counter));
+  } catch (const WorkStopped&) {
+    if (progress) progress->stop();
+    watch.check(spec.plane ? std::string("plane ") + what : std::string("the observer box"));
+    throw;
+  }
   return r;
+}
+
+// Refuses a region whose memory floor exceeds the budget before any of it is allocated, and
+// tells the user at once what the run is about to do.
+void checkRegionMemory(const FieldSpec& spec, const std::string& what, const RunArgs& args,
+                       std::uint64_t budget_bytes, std::ostream& err) {
+  const std::array<int, 3> n = spec.nodes();
+  const std::string lattice = std::to_string(n[0]) + "×" + std::to_string(n[1]) +
+                              (spec.plane ? "" : "×" + std::to_string(n[2]));
+  const std::uint64_t floor_bytes = fieldMemoryFloorBytes(spec, args.uniform);
+  requireWithinBudget(what + " (" + lattice + " lattice points at " +
+                          formatNumber("%g", spec.voxel_m) + " m" +
+                          (args.uniform ? ", dense" : "") + ")",
+                      floor_bytes, budget_bytes,
+                      "coarsen voxel_m or pixel_m, enlarge block_m, shrink the region, or raise "
+                      "--memory");
+  if (!args.quiet) {
+    err << "glint run: " << what << ", " << lattice << " lattice points at "
+        << formatNumber("%g", spec.voxel_m) << " m; memory: at least "
+        << formatBytes(static_cast<double>(floor_bytes)) << " of the "
+        << formatBytes(static_cast<double>(budget_bytes)) << " budget\n";
+  }
 }
 
 // A plane's lattice points stand for pixel_m² each.
@@ -415,6 +445,14 @@ void runField(const RunArgs& args, std::ostream& err) {
   const RunInfo info = runInfo(scene, args.scene_path, readUserFile(args.scene_path, "scene file"),
                                args.uniform ? "uniform" : "adaptive");
 
+  const std::uint64_t budget =
+      args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
+  if (scene.observers) checkRegionMemory(fieldSpec(scene), "observer box", args, budget, err);
+  for (const PlaneSpec& plane : scene.planes) {
+    checkRegionMemory(planeFieldSpec(scene, plane), "plane " + plane.name, args, budget, err);
+  }
+  const MemoryWatch watch(budget);
+
   nlohmann::json j;
   // The target as the first region's problem made it (every region builds the same one).
   const bool has_meshes = std::any_of(scene.objects.begin(), scene.objects.end(),
@@ -425,7 +463,7 @@ void runField(const RunArgs& args, std::ostream& err) {
   };
   if (scene.observers) {
     const FieldSpec spec = fieldSpec(scene);
-    const RegionResult box = computeRegion(scene, spec, args, "points", err);
+    const RegionResult box = computeRegion(scene, spec, args, "points", watch, err);
     const ObserverField& field = *box.field;
     requireFinite(field, "the observer box");
     const FacetIntegrator& integrator = box.problem.integrator;
@@ -451,7 +489,7 @@ void runField(const RunArgs& args, std::ostream& err) {
     for (std::size_t p = 0; p < scene.planes.size(); ++p) {
       const PlaneSpec& plane = scene.planes[p];
       const FieldSpec spec = planeFieldSpec(scene, plane);
-      const RegionResult r = computeRegion(scene, spec, args, plane.name.c_str(), err);
+      const RegionResult r = computeRegion(scene, spec, args, plane.name.c_str(), watch, err);
       const ObserverField& field = *r.field;
       requireFinite(field, "plane " + plane.name);
       writeExr(exrs[p]->stream(), planeMap(field, info.mpe_w_m2),
@@ -474,6 +512,7 @@ void runField(const RunArgs& args, std::ostream& err) {
     j["planes"] = planes;
   }
   summary.stream() << j.dump(2) << "\n";
+  watch.check("writing the outputs");  // a file written short of memory is not committed
   for (const auto& f : files) f->commit();
   if (args.quiet) return;
   std::string list;

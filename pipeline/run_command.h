@@ -3,6 +3,7 @@
 /// @brief `glint run`: the adaptive hazard volume over the scene's observer box (the main job)
 /// and the maps over its observer planes.
 
+#include <cstdint>
 #include <ostream>
 #include <string>
 #include <string_view>
@@ -22,6 +23,7 @@ struct RunArgs {
   int threads = 0;       ///< 0: all cores
   bool quiet = false;    ///< no progress, no summary
   bool terminal = false;
+  std::uint64_t memory_bytes = 0;  ///< the memory budget; 0: defaultMemoryBudgetBytes()
 };
 
 /// @brief Runs the command: writes irradiance.vdb, irradiance.vti, blocks.vtu and target.vtp

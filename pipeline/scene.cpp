@@ -353,17 +353,30 @@ Scene parseScene(std::string_view text, const std::string& source,
   return scene;
 }
 
-std::string readUserFile(const std::filesystem::path& path, const std::string& what) {
+std::string readUserFile(const std::filesystem::path& path, const std::string& what,
+                         std::uintmax_t max_bytes) {
   std::ifstream in(path, std::ios::binary);
   const std::string name = path.string();
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw InputError(name + ": is a folder, not a " + what);
   if (!in) throw InputError(name + ": cannot open the " + what);
-  std::ostringstream text;
-  text << in.rdbuf();
+  // In chunks up to the cap: the size a file claims is no help for a pipe or a device.
+  std::string text;
+  std::vector<char> chunk(std::size_t{1} << 20);
+  while (in) {
+    in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+    const auto got = static_cast<std::size_t>(in.gcount());
+    if (text.size() + got > max_bytes) {
+      char limit[32];
+      std::snprintf(limit, sizeof limit, "%.3g", static_cast<double>(max_bytes) / (1 << 20));
+      throw InputError(name + ": longer than " + limit + " MiB, more than a " + what +
+                       " may be");
+    }
+    text.append(chunk.data(), got);
+  }
   if (in.bad()) throw InputError(name + ": cannot read the " + what);
-  return text.str();
+  return text;
 }
 
 std::string fnv1a64Hex(std::string_view bytes) {

@@ -94,7 +94,8 @@ TEST_F(CliTest, EveryOptionValueIsCheckedAtTheBoundaryAndNamed) {
       {"--tolerance", "nan"}, {"--tolerance", "inf"},   {"--tolerance", "-1e-3"},
       {"--tolerance", "0"},   {"--tolerance", "1e-3x"}, {"--tolerance", ""},
       {"--threads", "0"},     {"--threads", "nan"},     {"--threads", "1.5"},
-      {"--uniform", "13"},    {"--uniform", "-1"},      {"--normals", "bent"}};
+      {"--uniform", "13"},    {"--uniform", "-1"},      {"--normals", "bent"},
+      {"--memory", "0"},      {"--memory", "12Q"},      {"--memory", "-4G"}};
   for (const auto& [option, value] : bad) {
     const Outcome r = glint({"points", example("cylinder.json"), "--points",
                              example("cylinder_186.csv"), option, value, "--quiet"});
@@ -225,6 +226,51 @@ TEST_F(CliTest, RunWritesEachPlaneAsAnExrMapAndSummarisesIt) {
   EXPECT_GT(plane.at("hazardous_area_m2").get<double>(), 0.0);
   const auto below = std::count(status.begin(), status.end(), 3.0f);
   EXPECT_GT(below, width * height / 2) << "most of the wall proven below the floor, and marked";
+}
+
+// issue 15: `glint run /dev/zero` once grew by 250 MB/s; a box of 64 000 voxels a side
+// climbed to 6 GB showing "0/0 points". Now the inputs are capped, a region is refused before
+// it starts with what it needs, and a run that passes the budget stops with nothing written.
+TEST_F(CliTest, MemoryIsBudgetedFromTheFirstByte) {
+  const Outcome zero = glint({"run", "/dev/zero", "-o", path("out"), "--quiet"});
+  EXPECT_EQ(zero.status, 2) << zero.err;
+  EXPECT_NE(zero.err.find("/dev/zero: longer than 64 MiB, more than a scene file may be"),
+            std::string::npos)
+      << zero.err;
+  const Outcome points = glint({"points", example("disk_glint.json"), "--points", "/dev/zero",
+                                "--memory", "64M", "--quiet"});
+  EXPECT_EQ(points.status, 2) << points.err;
+  EXPECT_NE(points.err.find("longer than 16 MiB, more than a points file may be"),
+            std::string::npos)
+      << points.err;
+
+  nlohmann::json scene = nlohmann::json::parse(readFile(example("disk_glint.json")));
+  scene["observers"] = {{"min", {-2000, -2000, -2000}}, {"max", {2000, 2000, 2000}},
+                        {"voxel_m", 0.0625}};
+  const std::string huge = write("huge.json", scene.dump());
+  const Outcome refused = glint({"run", huge, "-o", path("huge"), "--memory", "16G"});
+  EXPECT_EQ(refused.status, 2) << refused.err;
+  EXPECT_NE(refused.err.find("observer box (64001×64001×64001 lattice points at 0.0625 m) needs "
+                             "at least 87.3 TB of memory, more than the budget of 16 GB"),
+            std::string::npos)
+      << refused.err;
+
+  // 125 000 coarse blocks with nothing to evaluate: a floor of 179 MB starts; the run itself
+  // needs about 450 MB, so at 250 MB it is stopped by the watch, in the built program (this
+  // test process's own memory must not count).
+  scene["observers"] = {{"min", {-50, -110, -50}}, {"max", {50, -10, 50}},
+                        {"voxel_m", 0.125}, {"block_m", 2.0}};
+  const std::string big = write("big.json", scene.dump());
+  const std::string cmd = std::string(GLINT_EXE) + " run " + big + " -o " + path("big") +
+                          " --memory 250M 2> " + path("err.txt");
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2) << readFile(path("err.txt"));
+  const std::string err = readFile(path("err.txt"));
+  EXPECT_NE(err.find("memory: at least 179 MB of the 250 MB budget"), std::string::npos) << err;
+  EXPECT_NE(err.find("stopped when the resident memory reached"), std::string::npos) << err;
+  EXPECT_NE(err.find("nothing was written"), std::string::npos) << err;
+  EXPECT_TRUE(fs::is_empty(path("big"))) << "an output or a temporary was left";
 }
 
 TEST_F(CliTest, TheBuiltCommandExitsTwoOnBadInput) {

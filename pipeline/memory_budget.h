@@ -1,0 +1,62 @@
+#pragma once
+/// @file
+/// @brief The memory a run may use: a budget (`--memory`, or three quarters of what the
+/// machine or its cgroup has), an estimate checked before allocating, and a watch that stops
+/// the run, with a message, when its resident memory passes the budget.
+
+#include <atomic>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <thread>
+
+namespace glint {
+
+/// @brief Physical memory of the machine, or the cgroup's limit when lower (bytes).
+std::uint64_t machineMemoryBytes();
+
+/// @brief The default budget: three quarters of machineMemoryBytes(), leaving room for the
+/// system and for the output writers' buffers.
+std::uint64_t defaultMemoryBudgetBytes();
+
+/// @brief "512M", "4G", "1.5GiB", "2e9" (bytes); K, M, G, T are powers of 1024.
+/// @return nothing for text that is not a positive finite size.
+std::optional<std::uint64_t> parseByteSize(std::string_view text);
+
+/// @brief "1.5 GB"-style text (powers of 1024, three significant digits).
+std::string formatBytes(double bytes);
+
+/// @brief Resident memory of this process now (bytes), 0 where it cannot be read.
+std::uint64_t residentBytes();
+
+/// @brief Refuses, before anything is allocated, work whose memory floor exceeds the budget.
+/// @throw InputError naming @p what, the estimate, the budget and what to change.
+void requireWithinBudget(const std::string& what, std::uint64_t floor_bytes,
+                         std::uint64_t budget_bytes, std::string_view advice);
+
+/// @brief Samples the resident memory every 20 ms on a thread of its own; once it passes the
+/// budget, stopFlag() turns true (the field builders poll it and stop).
+class MemoryWatch {
+ public:
+  explicit MemoryWatch(std::uint64_t budget_bytes);
+  ~MemoryWatch();
+  MemoryWatch(const MemoryWatch&) = delete;
+  MemoryWatch& operator=(const MemoryWatch&) = delete;
+
+  [[nodiscard]] const std::atomic<bool>& stopFlag() const { return exceeded_; }
+  [[nodiscard]] bool exceeded() const { return exceeded_.load(); }
+  [[nodiscard]] std::uint64_t budgetBytes() const { return budget_bytes_; }
+  [[nodiscard]] std::uint64_t peakBytes() const { return peak_bytes_.load(); }
+  /// @throw InputError if the budget was passed, naming @p what was being computed.
+  void check(const std::string& what) const;
+
+ private:
+  std::uint64_t budget_bytes_;
+  std::atomic<bool> exceeded_{false};
+  std::atomic<bool> stopping_{false};
+  std::atomic<std::uint64_t> peak_bytes_{0};
+  std::thread thread_;
+};
+
+}  // namespace glint
