@@ -11,6 +11,7 @@ the tests' shell scripts) are scanned, so a new non-standard import must be list
 
 Usage: /usr/bin/python3 tests/check_clients.py REPOSITORY_ROOT [MPIEXEC]
 """
+import glob
 import os
 import re
 import shutil
@@ -32,6 +33,10 @@ PROGRAMS = {
     "ninja": "ninja-build",
     "ccache": "ccache",
     "g++": "g++",  # cmake's c++ is an alternative for it
+    "clang++-14": "clang-14",  # .ci/sanitize and the fuzzers (tests/fuzz/README.md)
+    "/usr/lib/llvm-14/bin/llvm-symbolizer": "llvm-14",  # names in sanitizer reports
+    "/usr/lib/llvm-14/lib/clang/*/lib/linux/libclang_rt.asan-x86_64.a":
+        "libclang-rt-14-dev",  # ASan, UBSan and libFuzzer runtimes (a file, not a program)
 }
 
 # Modules outside Python's standard library that some script imports, with the interpreter
@@ -116,8 +121,13 @@ def main():
         else:
             print(f"{kind} {client}: {path} from {package}")
 
+    def locate(program):
+        if os.path.isabs(program):  # a runtime library, or a program outside PATH
+            return next(iter(sorted(glob.glob(program))), None)
+        return shutil.which(program)
+
     for program, expected in programs.items():
-        check("program", program, shutil.which(program), expected)
+        check("program", program, locate(program), expected)
 
     imports = scanned_imports(root)
     stdlib = set(sys.stdlib_module_names)
