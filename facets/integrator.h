@@ -12,9 +12,22 @@
 #include "facets/beam.h"
 #include "facets/patch.h"
 #include "facets/reflection.h"
+#include "facets/surface_map.h"
 #include "facets/target.h"
 
 namespace glint {
+
+/// @brief How each observer's integral over a lit facet is computed.
+enum class IntegrationScheme : std::uint8_t {
+  /// The paper's: a one-point rule per sub-facet (the curved patch's area at its centroid), split
+  /// 1→4 while the estimate changes. The pieces must resolve the lobe to about one σ each.
+  Paper,
+  /// A 16-point product Gauss rule (degree 7, triangle_rule.h) per piece over the exact surface
+  /// map of the coarse facet (surface_map.h), split 1→4 while the rule's answer changes. Pieces
+  /// need only resolve the lobe to a few σ, and a piece costs one bound per 16 samples. The
+  /// normal model is always the surface's (IntegratorOptions::normals applies to Paper only).
+  Cubature,
+};
 
 /// @brief Accuracy settings of the per-observer integration.
 ///
@@ -33,6 +46,7 @@ struct IntegratorOptions {
   /// Trace occlusion rays (Occluder) where the target can shadow itself: a facet counts only
   /// if its centre sees the laser and the observer. Off: every facet sees everything.
   bool occlusion = true;
+  IntegrationScheme scheme = IntegrationScheme::Paper;
 };
 
 /// @brief The irradiance at one observer and how it was obtained.
@@ -168,6 +182,7 @@ class FacetIntegrator {
   IntegratorOptions options_;
   std::vector<Beam> object_beams_;  // the beam in each object's frame
   std::vector<Candidate> lit_;
+  std::vector<SurfaceMap> maps_;  // per coarse facet, for the cubature scheme
   CullStats cull_;
   std::shared_ptr<const Occluder> occluder_;  // null where the target cannot shadow itself
 };

@@ -118,6 +118,13 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
           ->add_option("--normals", normals,
                        "Facet normals for the BRDF: surface (default) or flat (the paper's)")
           ->check(CLI::IsMember({"surface", "flat"}));
+  std::string scheme;
+  CLI::Option* scheme_opt =
+      points_cmd
+          ->add_option("--scheme", scheme,
+                       "Integration scheme: paper (1→4 one-point, the default) or cubature "
+                       "(a degree-7 rule on the exact surface); overrides the scene")
+          ->check(CLI::IsMember({"paper", "cubature"}));
   points_cmd->add_option("--threads", points.threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(1, 4096));
   points_cmd->add_flag("-q,--quiet", points.quiet, "No progress and no summary on standard error");
@@ -166,6 +173,7 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
       if (*tolerance_opt) points.tolerance = tolerance;
       if (*uniform_opt) points.uniform_level = level;
       if (*normals_opt) points.normals = normals;
+      if (*scheme_opt) points.scheme = scheme;
       if (!points_memory.empty()) points.memory_bytes = *parseByteSize(points_memory);
       points.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
       runPoints(points, out, err);

@@ -89,6 +89,10 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   if (args.tolerance) options.tolerance = *args.tolerance;
   if (args.normals)
     options.normals = *args.normals == "flat" ? NormalModel::Flat : NormalModel::Surface;
+  if (args.scheme) {
+    options.scheme =
+        *args.scheme == "cubature" ? IntegrationScheme::Cubature : IntegrationScheme::Paper;
+  }
 
   // Open the output first: a missing folder should stop the run before the work, not after.
   std::unique_ptr<AtomicFile> file;

@@ -17,6 +17,7 @@ struct PointsArgs {
   std::optional<double> tolerance;     ///< overrides the scene's accuracy.tolerance
   std::optional<int> uniform_level;    ///< the uniform twin instead of adaptive refinement
   std::optional<std::string> normals;  ///< "surface" or "flat", overrides the scene
+  std::optional<std::string> scheme;   ///< "paper" or "cubature", overrides the scene
   int threads = 0;                     ///< 0: all cores
   bool quiet = false;                  ///< no progress, no summary
   bool terminal = false;               ///< standard error is a terminal (progress redraws)

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "facets/beam.h"
+#include "facets/integrator.h"  // IntegrationScheme
 #include "facets/patch.h"
 #include "facets/tessellate.h"
 #include "facets/vec3.h"
@@ -86,6 +87,8 @@ struct AccuracySpec {
   std::int64_t max_evaluations = 4'000'000;  ///< per observer
   NormalModel normals = NormalModel::Surface;
   bool occlusion = true;  ///< occlusion rays where the target can shadow itself
+  /// "paper" (1→4 one-point refinement, the default) or "cubature" (integrator.h)
+  IntegrationScheme scheme = IntegrationScheme::Paper;
 };
 
 /// @brief The observer box of `glint run` (key `observers`; see FieldSpec for the meaning).

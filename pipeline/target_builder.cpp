@@ -57,6 +57,7 @@ IntegratorOptions integratorOptions(const Scene& scene) {
   o.max_evaluations = a.max_evaluations;
   o.normals = a.normals;
   o.occlusion = a.occlusion;
+  o.scheme = a.scheme;
   return o;
 }
 

@@ -22,6 +22,33 @@ inline double mirrorSphere(double rho, double e0, double radius, const Vec3& obs
          (4.0 * (len + 0.5 * radius * cos_i) * (len + 0.5 * radius / cos_i));
 }
 
+// A mirror cylinder (radius R, axis z through the origin) lit along +x with irradiance e0,
+// seen from `obs` at a height within its length. Each glint reflects a pencil that diverges
+// horizontally from the convex mirror's virtual line focus, R cos θi / 2 behind the surface,
+// and stays collimated vertically:  E = ρ e0 R cos θi / (2L + R cos θi).
+inline double mirrorCylinder(double rho, double e0, double radius, const Vec3& obs) {
+  auto miss = [&](double phi) {  // (O − P) × r in the horizontal plane
+    const double px = -radius * std::cos(phi), py = radius * std::sin(phi);
+    const double rx = -std::cos(2 * phi), ry = std::sin(2 * phi);
+    return (obs.x - px) * ry - (obs.y - py) * rx;
+  };
+  double lo = -0.2, hi = lo;
+  for (double phi = -0.2; phi < 0.5 * kPi; phi += 1e-3) {  // bracket the glint
+    if (miss(phi) * miss(phi + 1e-3) <= 0.0) {
+      lo = phi;
+      hi = phi + 1e-3;
+      break;
+    }
+  }
+  for (int k = 0; k < 200; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (miss(lo) * miss(mid) <= 0.0 ? hi : lo) = mid;
+  }
+  const double phi = 0.5 * (lo + hi);
+  const double len = std::hypot(obs.x + radius * std::cos(phi), obs.y - radius * std::sin(phi));
+  return rho * e0 * radius * std::cos(phi) / (2.0 * len + radius * std::cos(phi));
+}
+
 // ∫ Ξ cos θN dω over the hemisphere of normals, with Ξ evaluated through the vector form the
 // integrator uses (normal +z, half vector at θN). It is integrated in s = tan θN / σ, where
 // the lobe lives, so the same rule resolves σ = 1e-5 and σ = 1: 20 000 Simpson intervals of a
