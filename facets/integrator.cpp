@@ -41,8 +41,8 @@ struct Leaf {
   std::array<double, 4> child_unresolved{};
   bool has_children = false;
   bool significant = false;  // resolved and |ΔE| not negligible: accounted signed
-  // Cubature leaves start from their bound alone (estimate 0, error = upper): a rule costs 16
-  // kernel evaluations, which only the leaves whose bound matters are worth.
+  // Cubature leaves start from their bound alone (estimate 0, error = upper): the rule and its
+  // check cost 25 kernel evaluations, which only resolved pieces whose bound matters are worth.
   bool sampled = true;
 
   [[nodiscard]] double value() const { return has_children ? refined : estimate; }
@@ -473,8 +473,7 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
     totals.account(leaf, -1);
     const Leaf parent = leaf;
     ws.free_slots.push_back(slot);
-    const std::array<SubFacet, 4> children =
-        cubature ? maps_[parent.facet.coarse].split(parent.facet) : split(target_, parent.facet);
+    const std::array<SubFacet, 4> children = split(target_, parent.facet);
     for (int k = 0; k < 4; ++k) {
       Leaf child;
       child.facet = children[k];

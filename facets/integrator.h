@@ -23,9 +23,10 @@ enum class IntegrationScheme : std::uint8_t {
   /// 1→4 while the estimate changes. The pieces must resolve the lobe to about one σ each.
   Paper,
   /// A 16-point product Gauss rule (degree 7, triangle_rule.h) per piece over the exact surface
-  /// map of the coarse facet (surface_map.h), split 1→4 while the rule's answer changes. Pieces
-  /// need only resolve the lobe to a few σ, and a piece costs one bound per 16 samples. The
-  /// normal model is always the surface's (IntegratorOptions::normals applies to Paper only).
+  /// map of the coarse facet (surface_map.h), its error estimated by the 9-point rule. Pieces are
+  /// split 1→4 on their bounds alone, without a sample, until the rule can resolve them (the
+  /// lobe to a few σ, no terminator, horizon or beam edge), then while the two rules disagree.
+  /// The normal model is always the surface's (IntegratorOptions::normals applies to Paper only).
   Cubature,
 };
 
