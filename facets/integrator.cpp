@@ -155,10 +155,13 @@ RuleResult ruleIrradiance(const SurfaceMap& map, const SubFacet& f, const Vec3& 
                           const Beam& beam, const Material& material) {
   const Vec3 e1 = f.bary[1] - f.bary[0], e2 = f.bary[2] - f.bary[0];
   const double area_uv = 0.5 * std::abs(e1[1] * e2[2] - e1[2] * e2[1]);
+  // The rules are built once; fetching them per piece would pass a once-flag per call.
+  static const std::span<const TriangleNode> kRule = conicalProductRule(kRulePointsPerAxis);
+  static const std::span<const TriangleNode> kCheck = conicalProductRule(kRulePointsPerAxis - 1);
   RuleResult r;
-  auto apply = [&](int n) {
+  auto apply = [&](std::span<const TriangleNode> rule) {
     double sum = 0.0;
-    for (const TriangleNode& node : conicalProductRule(n)) {
+    for (const TriangleNode& node : rule) {
       const Vec3 b =
           node.bary[0] * f.bary[0] + node.bary[1] * f.bary[1] + node.bary[2] * f.bary[2];
       const SurfacePoint p = map.at(b);
@@ -172,8 +175,8 @@ RuleResult ruleIrradiance(const SurfaceMap& map, const SubFacet& f, const Vec3& 
     }
     return area_uv * sum;
   };
-  r.value = apply(kRulePointsPerAxis);
-  r.check = apply(kRulePointsPerAxis - 1);
+  r.value = apply(kRule);
+  r.check = apply(kCheck);
   return r;
 }
 

@@ -85,7 +85,7 @@ TEST(Cubature, LambertianDiskOnAxisMatchesClosedFormThroughItsCurvedRim) {
       cubature(1e-6));
   IntegratorWorkspace ws;
   for (double h : {0.1, 0.5, 2.0, 10.0}) {
-    const double expected = 2.0 * rho_d * e0 * (1.0 - h / std::hypot(radius, h));
+    const double expected = test::lambertianDiskOnAxis(rho_d, e0, 1.0, radius, h);
     const ObserverResult r = fi.adaptive(Vec3(0, 0, h), ws);
     EXPECT_NEAR(r.irradiance_w_m2 / expected, 1.0, 2e-6) << "h = " << h << " m";
   }

@@ -102,7 +102,7 @@ TEST(Integrator, LambertianDiskOnAxisMatchesClosedForm) {
         accuracy(1e-4));
     IntegratorWorkspace ws;
     for (double h : {0.1, 0.5, 2.0, 10.0}) {
-      const double expected = 2.0 * rho_d * e0 * std::cos(ti) * (1.0 - h / std::hypot(radius, h));
+      const double expected = test::lambertianDiskOnAxis(rho_d, e0, std::cos(ti), radius, h);
       const ObserverResult r = fi.adaptive(Vec3(0, 0, h), ws);
       EXPECT_NEAR(r.irradiance_w_m2 / expected, 1.0, 1e-4)
           << "h = " << h << " m, incidence " << incidence_deg << " deg";

@@ -49,6 +49,13 @@ inline double mirrorCylinder(double rho, double e0, double radius, const Vec3& o
   return rho * e0 * radius * std::cos(phi) / (2.0 * len + radius * std::cos(phi));
 }
 
+// A Lambertian disk of radius R lit at cos θi by irradiance e0, seen on its axis at height h:
+// E = ∫ (ρd/π) e0 cos θi cos θr / d² dA = 2 ρd e0 cos θi (1 − h / √(R² + h²)).
+inline double lambertianDiskOnAxis(double rho_d, double e0, double cos_i, double radius,
+                                   double h) {
+  return 2.0 * rho_d * e0 * cos_i * (1.0 - h / std::hypot(radius, h));
+}
+
 // ∫ Ξ cos θN dω over the hemisphere of normals, with Ξ evaluated through the vector form the
 // integrator uses (normal +z, half vector at θN). It is integrated in s = tan θN / σ, where
 // the lobe lives, so the same rule resolves σ = 1e-5 and σ = 1: 20 000 Simpson intervals of a
