@@ -44,6 +44,27 @@ Beam::Sample Beam::at(const Vec3& x_m) const {
   return {e, -glm::normalize(ray)};
 }
 
+Beam::Footprint Beam::footprint(const Vec3& x_m) const {
+  const Vec3 rel = x_m - origin_m;
+  const double z = glm::dot(rel, direction);
+  const Vec3 radial = rel - z * direction;
+  const double rho2 = glm::dot(radial, radial);
+  const double r = radiusAt(z);
+  const double r2 = r * r;
+  Footprint f{0.0, -direction, 1.0, z};
+  if (profile == BeamProfile::Gaussian) {
+    f.irradiance_w_m2 = 2.0 * power_w / (kPi * r2) * std::exp(-2.0 * rho2 / r2);
+  } else {
+    f.irradiance_w_m2 = power_w / (kPi * r2);
+    f.edge_margin = 1.0 - rho2 / r2;
+  }
+  if (divergence_rad > 0.0 && z > 0.0) {
+    const double half = 0.5 * divergence_rad;
+    f.toward_laser = -glm::normalize(direction + radial * (z * half * half / r2));
+  }
+  return f;
+}
+
 double Beam::maxIrradianceInBall(const Vec3& center_m, double radius_m_ball) const {
   const Vec3 rel = center_m - origin_m;
   const double zc = glm::dot(rel, direction);

@@ -41,6 +41,20 @@ struct Beam {
   /// @brief The beam at point @p x_m. Points behind the laser (z < 0) get 0.
   [[nodiscard]] Sample at(const Vec3& x_m) const;
 
+  /// @brief The beam at a point, continued smoothly across its edges, with how far inside
+  /// them the point lies: what a rule that clips its pieces at the edges needs.
+  struct Footprint {
+    /// Irradiance as if the point were inside (flat top: P / π r(z)²; Gaussian: untruncated).
+    double irradiance_w_m2;
+    Vec3 toward_laser;
+    double edge_margin;  ///< flat top: 1 − ρ² / r(z)², > 0 inside the edge; Gaussian: 1
+    double axial_m;      ///< z along the axis: points with z < 0 are behind the laser
+  };
+
+  /// @brief The beam's smooth continuation at @p x_m (see Footprint). Where the margin and z are
+  /// positive it agrees with at().
+  [[nodiscard]] Footprint footprint(const Vec3& x_m) const;
+
   /// @brief Beam radius parameter (a or w) at distance @p z_m ≥ 0 along the axis.
   [[nodiscard]] double radiusAt(double z_m) const;
 

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "facets/detail/patch_models.h"
+#include "facets/lobe_rule.h"
 #include "facets/occluder.h"
 #include "facets/sum.h"
 #include "facets/triangle_rule.h"
@@ -180,6 +181,53 @@ RuleResult ruleIrradiance(const SurfaceMap& map, const SubFacet& f, const Vec3& 
   return r;
 }
 
+// A piece of the lobe scheme. Its six nodes (and, once refined, the nine new nodes of its
+// children) live in the workspace's node pool, so the children inherit them.
+struct LobePiece {
+  SubFacet facet;           // corners placed by the surface map
+  double upper = 0.0;       // bound of its true contribution (+∞ if unbounded)
+  double unresolved = 0.0;  // bound of what the rule cannot be trusted with (0: resolved)
+  double estimate = 0.0;    // the rule on the piece, once sampled
+  double refined = 0.0;     // Σ of the rule on its children, once refined
+  double error = 0.0;       // a magnitude: the bound until refined, then |refined − estimate|
+  std::array<double, 4> child_estimate{};
+  std::uint32_t nodes = 0;  // offset of its 15 nodes in the pool, once sampled
+  bool sampled = false;
+  bool refined_ok = false;
+
+  [[nodiscard]] double value() const { return refined_ok ? refined : estimate; }
+};
+
+// The pool layout of a refined piece: its own nodes (corners 0–2, midpoints of 01, 12, 20) at
+// 0–5, then the midpoints of its children's edges at 6–14, and for each child (in split()'s
+// order) where its own six nodes sit.
+constexpr int kLobeNodes = 15;
+constexpr std::array<std::array<int, 6>, 4> kChildNodes{{
+    {0, 3, 5, 6, 7, 8},     // (b0, m01, m20)
+    {3, 1, 4, 9, 10, 11},   // (m01, b1, m12)
+    {5, 4, 2, 12, 13, 14},  // (m20, m12, b2)
+    {3, 4, 5, 11, 12, 7},   // (m01, m12, m20)
+}};
+
+// When the lobe rule may be trusted with a piece: its normals (with the half vector's turn
+// across it) spread at most this much, so that q = H/(H·n) − n is close enough to quadratic
+// for its interpolant to place the specular point (tan's cubic term is ~1 % of q here), and
+// it is small against the observer's distance.
+constexpr double kLobeSpreadRad = 0.3;
+ResolutionLimits lobeLimits(double sigma) {
+  ResolutionLimits limits;
+  limits.lobe = kLobeSpreadRad / sigma;
+  limits.clipped_log_variation = std::numeric_limits<double>::infinity();
+  limits.near_field = 0.25;
+  limits.clips_beam_edges = true;
+  return limits;
+}
+
+double parameterArea(const SubFacet& f) {
+  const Vec3 e1 = f.bary[1] - f.bary[0], e2 = f.bary[2] - f.bary[0];
+  return 0.5 * std::abs(e1[1] * e2[2] - e1[2] * e2[1]);
+}
+
 }  // namespace
 
 struct IntegratorWorkspace::Impl {
@@ -190,8 +238,12 @@ struct IntegratorWorkspace::Impl {
   std::vector<std::uint32_t> frozen;   // leaves that may not split further (depth limit)
   std::vector<SubFacet> stack;         // the uniform twin's traversal
   std::vector<Vec3> observer_local_m;  // the observer in each object's frame
+  std::vector<LobePiece> pieces;       // the lobe scheme's leaves
+  std::vector<LobeNode> lobe_nodes;    // their nodes, kLobeNodes per sampled piece
 
   void reset() {
+    pieces.clear();
+    lobe_nodes.clear();
     leaves.clear();
     free_slots.clear();
     bounded.clear();
@@ -247,6 +299,8 @@ struct IntegratorWorkspace::Impl {
   }
 };
 
+std::vector<std::string> integrationSchemeNames() { return {"paper", "cubature", "lobe"}; }
+
 IntegratorWorkspace::IntegratorWorkspace() : impl_(std::make_unique<Impl>()) {}
 IntegratorWorkspace::~IntegratorWorkspace() = default;
 IntegratorWorkspace::IntegratorWorkspace(IntegratorWorkspace&&) noexcept = default;
@@ -298,7 +352,7 @@ FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const Integrat
     }
   }
   cull_.lit = lit_.size();
-  if (options_.scheme == IntegrationScheme::Cubature) {
+  if (options_.scheme != IntegrationScheme::Paper) {
     maps_.reserve(target_.facetCount());
     for (std::uint32_t i = 0; i < target_.facetCount(); ++i) maps_.emplace_back(target_, i);
   }
@@ -334,6 +388,7 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
                                          IntegratorWorkspace& workspace) const {
   IntegratorWorkspace::Impl& ws = *workspace.impl_;
   prepareObserver(observer_m, ws);
+  if (options_.scheme == IntegrationScheme::Lobe) return adaptiveLobe(observer_m, candidates, ws);
   const IntegratorOptions& opt = options_;
   ObserverResult result;
   Totals totals;  // running; confirmed by exactTotals() before stopping
@@ -493,6 +548,227 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
   result.irradiance_w_m2 = totals.value;
   result.error_estimate_w_m2 = totals.error();
   result.converged = done(totals);
+  return result;
+}
+
+ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
+                                             std::span<const Candidate> candidates,
+                                             IntegratorWorkspace::Impl& ws) const {
+  const IntegratorOptions& opt = options_;
+  ObserverResult result;
+  // Running sums (value, magnitudes, unbounded count), confirmed exactly before stopping.
+  double value = 0.0, magnitude = 0.0;
+  std::int64_t unbounded = 0;
+  auto account = [&](const LobePiece& p, int sign) {
+    value += sign * p.value();
+    if (!(p.error < kInf)) {
+      unbounded += sign;
+    } else {
+      magnitude += sign * p.error;
+    }
+  };
+  auto budget = [&](double total) {
+    return std::max(opt.tolerance * std::abs(total), opt.floor_w_m2);
+  };
+  std::vector<std::uint32_t>& frozen = ws.frozen;  // at the depth limit
+  double frozen_magnitude = 0.0;
+  std::int64_t frozen_unbounded = 0;
+  auto exact = [&]() {
+    CompensatedSum v, m;
+    std::int64_t u = 0;
+    auto add = [&](std::uint32_t slot) {
+      const LobePiece& p = ws.pieces[slot];
+      v.add(p.value());
+      if (!(p.error < kInf)) {
+        ++u;
+      } else {
+        m.add(p.error);
+      }
+    };
+    for (const HeapEntry& h : ws.bounded.entries()) add(h.leaf);
+    for (std::uint32_t slot : frozen) add(slot);
+    value = v.value();
+    magnitude = m.value();
+    unbounded = u;
+  };
+  auto done = [&]() { return unbounded == 0 && magnitude <= budget(value); };
+  // A piece whose specular term is below this is not worth its sigma points: a hundredth of
+  // the error budget shared among the pieces (the running total may still grow: the budget
+  // only rises, so this errs small).
+  auto negligible = [&]() {
+    const std::size_t live = ws.pieces.size() - ws.free_slots.size();
+    return 0.01 * budget(value) / static_cast<double>(live + 16);
+  };
+  auto store = [&](const LobePiece& p) {
+    std::uint32_t slot;
+    if (!ws.free_slots.empty()) {
+      slot = ws.free_slots.back();
+      ws.free_slots.pop_back();
+      ws.pieces[slot] = p;
+    } else {
+      slot = static_cast<std::uint32_t>(ws.pieces.size());
+      ws.pieces.push_back(p);
+    }
+    LobePiece& stored = ws.pieces[slot];
+    if (std::isnan(stored.error)) stored.error = kInf;  // a NaN must count as unbounded
+    ws.bounded.push(0, stored.error, slot);
+    account(stored, 1);
+  };
+  auto bounded = [&](const SubFacet& f, const Vec3& x, const Beam& beam,
+                     const Material& material) {
+    const PatchGeometry g = patchGeometry(target_, f, NormalModel::Surface);
+    const ContributionBound b =
+        contributionBound(g, x, beam, material, lobeLimits(material.lobe.sigma));
+    LobePiece p;
+    p.facet = f;
+    p.upper = b.upper_w_m2;
+    p.unresolved = b.unresolved_w_m2;
+    p.error = b.upper_w_m2;
+    return p;
+  };
+
+  for (const Candidate& lit : candidates) {
+    const Vec3& x = ws.observer_local_m[lit.object];
+    if (!mayFaceObserver(lit.geometry, x) || !visible(lit, observer_m)) continue;
+    const Beam& beam = object_beams_[lit.object];
+    const Material& material = target_.materials[target_.objects[lit.object].material];
+    // A candidate split by boundRegion() has its corners from 1→4 subdivision; the pieces
+    // here are those of the surface map, over the same barycentric triangle.
+    const SubFacet f = lit.facet.depth > 0 ? maps_[lit.facet.coarse].subFacet(
+                                                 lit.facet.bary, lit.facet.depth,
+                                                 lit.facet.rim_edges)
+                                           : lit.facet;
+    const LobePiece p = bounded(f, x, beam, material);
+    if (p.upper == 0.0) continue;
+    store(p);
+  }
+
+  while (true) {
+    if (done()) {
+      exact();
+      if (done()) break;
+    }
+    if (result.evaluations >= opt.max_evaluations) break;
+    if (frozen_unbounded > 0 || frozen_magnitude > budget(value)) break;
+    if (ws.bounded.empty()) break;  // everything left is frozen at the depth limit
+    const std::uint32_t slot = ws.bounded.pop();
+    LobePiece piece = ws.pieces[slot];
+    const std::uint32_t obj = target_.object[piece.facet.coarse];
+    const Vec3& x = ws.observer_local_m[obj];
+    const Beam& beam = object_beams_[obj];
+    const Material& material = target_.materials[target_.objects[obj].material];
+    const SurfaceMap& map = maps_[piece.facet.coarse];
+    const double sigma = material.lobe.sigma;
+
+    if (piece.unresolved == 0.0 && !piece.refined_ok) {
+      // Sample the piece (if its nodes are not inherited) and its four children: the change
+      // is the piece's error estimate, and the children's sum its value.
+      account(piece, -1);
+      const auto& b = piece.facet.bary;
+      const std::array<Vec3, 6> node_bary{b[0], b[1], b[2], 0.5 * (b[0] + b[1]),
+                                          0.5 * (b[1] + b[2]), 0.5 * (b[2] + b[0])};
+      if (!piece.sampled) {
+        piece.nodes = static_cast<std::uint32_t>(ws.lobe_nodes.size());
+        ws.lobe_nodes.resize(ws.lobe_nodes.size() + kLobeNodes);
+        for (int j = 0; j < 6; ++j) {
+          ws.lobe_nodes[piece.nodes + j] = lobeNode(map, node_bary[j], x, beam, material);
+        }
+        result.evaluations += 6;
+        const LobeNode* n = &ws.lobe_nodes[piece.nodes];
+        const LobeEstimate e =
+            lobeRule(PieceSampler(map, b, x, beam, material), {n, n + 1, n + 2, n + 3, n + 4, n + 5},
+                     parameterArea(piece.facet), sigma, negligible());
+        result.evaluations += e.evaluations;
+        piece.sampled = true;
+        piece.estimate = e.irradiance_w_m2;
+        if (!e.ok) piece.unresolved = piece.upper;  // known by its bound alone: split further
+      }
+      if (piece.unresolved == 0.0) {
+        LobeNode* n = &ws.lobe_nodes[piece.nodes];
+        for (int k = 0; k < 3; ++k) {  // children 0–2 hold the nine new midpoints between them
+          const std::array<int, 6>& c = kChildNodes[k];
+          for (int e = 0; e < 3; ++e) {
+            n[c[3 + e]] = lobeNode(map, 0.5 * (node_bary[c[e]] + node_bary[c[(e + 1) % 3]]), x,
+                                   beam, material);
+          }
+        }
+        result.evaluations += 9;
+        piece.refined = 0.0;
+        double rule_error = 0.0;
+        bool ok = true;
+        for (int k = 0; k < 4; ++k) {
+          const std::array<int, 6>& c = kChildNodes[k];
+          const std::array<Vec3, 3> child{node_bary[c[0]], node_bary[c[1]], node_bary[c[2]]};
+          const LobeEstimate e =
+              lobeRule(PieceSampler(map, child, x, beam, material),
+                       {n + c[0], n + c[1], n + c[2], n + c[3], n + c[4], n + c[5]},
+                       0.25 * parameterArea(piece.facet), sigma, negligible());
+          result.evaluations += e.evaluations;
+          ok = ok && e.ok;
+          piece.child_estimate[k] = e.irradiance_w_m2;
+          piece.refined += e.irradiance_w_m2;
+          rule_error += e.rule_error_w_m2;
+        }
+        if (ok) {
+          // The change under splitting, plus what the children's rule may miss that splitting
+          // does not show (where the lobe is narrower than both levels' pieces).
+          piece.refined_ok = true;
+          piece.error = std::abs(piece.refined - piece.estimate) + rule_error;
+          // No rule may claim more than the piece's rigorous bound: beyond it the model has
+          // failed, and the piece is known only to within its bound.
+          if (!(piece.refined <= piece.upper)) {
+            piece.refined = std::min(piece.refined, piece.upper);
+            piece.error = std::max(piece.error, piece.upper);
+          }
+        } else {
+          piece.unresolved = piece.upper;
+        }
+      }
+      if (!piece.refined_ok) piece.error = piece.upper;
+      ws.pieces[slot] = piece;
+      ws.free_slots.push_back(slot);
+      // Re-stored (same slot) so that its error enters the heap and the sums afresh.
+      store(piece);
+      continue;
+    }
+
+    // Split: unresolved pieces on their bounds alone, refined ones into their children, which
+    // inherit their nodes and estimates and are refined in turn when their error (the bound,
+    // until refined) is among the largest.
+    if (piece.facet.depth + 1 >= opt.max_depth) {
+      frozen.push_back(slot);
+      result.depth_limited = true;
+      if (!(piece.error < kInf)) {
+        ++frozen_unbounded;
+      } else {
+        frozen_magnitude += piece.error;
+      }
+      continue;  // stays in the sums: no further work can reduce it
+    }
+    account(piece, -1);
+    ws.free_slots.push_back(slot);
+    const std::array<SubFacet, 4> children = map.split(piece.facet);
+    for (int k = 0; k < 4; ++k) {
+      LobePiece child = bounded(children[k], x, beam, material);
+      if (child.upper == 0.0) continue;  // provably dark
+      if (piece.refined_ok) {
+        child.sampled = true;
+        // Known to within its bound until refined in turn (its error is that bound).
+        child.estimate = std::clamp(piece.child_estimate[k], 0.0, child.upper);
+        child.nodes = static_cast<std::uint32_t>(ws.lobe_nodes.size());
+        ws.lobe_nodes.resize(ws.lobe_nodes.size() + kLobeNodes);
+        for (int j = 0; j < 6; ++j) {
+          ws.lobe_nodes[child.nodes + j] = ws.lobe_nodes[piece.nodes + kChildNodes[k][j]];
+        }
+      }
+      store(child);
+    }
+  }
+
+  exact();
+  result.irradiance_w_m2 = value;
+  result.error_estimate_w_m2 = magnitude + (unbounded > 0 ? kInf : 0.0);
+  result.converged = done();
   return result;
 }
 

@@ -7,6 +7,7 @@
 #include <limits>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "facets/beam.h"
@@ -28,7 +29,16 @@ enum class IntegrationScheme : std::uint8_t {
   /// lobe to a few σ, no terminator, horizon or beam edge), then while the two rules disagree.
   /// The normal model is always the surface's (IntegratorOptions::normals applies to Paper only).
   Cubature,
+  /// The lobe rule (lobe_rule.h) per piece over the exact surface map: six nodes, the specular
+  /// lobe integrated in closed form about the piece's specular point, the piece clipped at the
+  /// terminator, the horizon and the beam's edge. A piece's error is the change of its estimate
+  /// when it is split 1→4 (the four children reuse its nodes: nine new ones). Pieces are split
+  /// on their bounds alone until their normals spread less than 0.3 rad.
+  Lobe,
 };
+
+/// @brief The schemes' names in scene files and on the command line, in the enum's order.
+std::vector<std::string> integrationSchemeNames();
 
 /// @brief Accuracy settings of the per-observer integration.
 ///
@@ -172,6 +182,8 @@ class FacetIntegrator {
 
  private:
   void prepareObserver(const Vec3& observer_m, IntegratorWorkspace::Impl& ws) const;
+  ObserverResult adaptiveLobe(const Vec3& observer_m, std::span<const Candidate> candidates,
+                              IntegratorWorkspace::Impl& ws) const;
   // Where the occlusion rays of a facet (geometry g, world frame) start: its centre, lifted
   // off the surface (Occluder::lift_m). Only with an occluder.
   Vec3 rayOrigin(const PatchGeometry& g, std::uint32_t object, std::uint32_t coarse) const;
@@ -183,7 +195,7 @@ class FacetIntegrator {
   IntegratorOptions options_;
   std::vector<Beam> object_beams_;  // the beam in each object's frame
   std::vector<Candidate> lit_;
-  std::vector<SurfaceMap> maps_;  // per coarse facet, for the cubature scheme
+  std::vector<SurfaceMap> maps_;  // per coarse facet, for the cubature and lobe schemes
   CullStats cull_;
   std::shared_ptr<const Occluder> occluder_;  // null where the target cannot shadow itself
 };

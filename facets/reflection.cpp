@@ -58,7 +58,8 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
   // edges; the specular term also varies on the scale σ of the lobe. Where cos θi or cos θr
   // may change sign the kernel clips the facet, and there the lobe must be nearly flat too.
   const bool smooth =
-      reach <= limits.near_field * d && !beam.edgeMayCrossBall(g.centre_m, g.radius_m);
+      reach <= limits.near_field * d &&
+      (limits.clips_beam_edges || !beam.edgeMayCrossBall(g.centre_m, g.radius_m));
   const bool may_be_clipped =
       std::abs(angleBetween(g.normal, wi) - 0.5 * kPi) <= g.cone_rad + eps_i ||
       std::abs(angleBetween(g.normal, v) - 0.5 * kPi) <= g.cone_rad + eps_o;

@@ -80,6 +80,9 @@ struct ResolutionLimits {
   /// one-level error estimate; away from the cut the sample errors cancel and σ is enough.
   double clipped_log_variation = 1.0;
   double near_field = 0.1;  ///< bounding radius ≤ near_field × distance to the observer
+  /// The rule clips its pieces at the beam's edges itself: an edge crossing the patch leaves
+  /// it resolved.
+  bool clips_beam_edges = false;
 };
 
 /// @brief An upper bound of what a patch can send to an observer, and of the part of it that

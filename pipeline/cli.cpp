@@ -8,6 +8,7 @@
 #include <string>
 
 #include "export/atomic_file.h"
+#include "facets/integrator.h"
 #include "glint/version.h"
 #include "pipeline/batch_command.h"
 #include "pipeline/cluster.h"
@@ -122,9 +123,10 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
   CLI::Option* scheme_opt =
       points_cmd
           ->add_option("--scheme", scheme,
-                       "Integration scheme: paper (1→4 one-point, the default) or cubature "
-                       "(a degree-7 rule on the exact surface); overrides the scene")
-          ->check(CLI::IsMember({"paper", "cubature"}));
+                       "Integration scheme: paper (1→4 one-point, the default), cubature "
+                       "(a degree-7 rule on the exact surface) or lobe (the specular lobe in "
+                       "closed form about each piece's specular point); overrides the scene")
+          ->check(CLI::IsMember(integrationSchemeNames()));
   points_cmd->add_option("--threads", points.threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(1, 4096));
   points_cmd->add_flag("-q,--quiet", points.quiet, "No progress and no summary on standard error");

@@ -90,8 +90,9 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   if (args.normals)
     options.normals = *args.normals == "flat" ? NormalModel::Flat : NormalModel::Surface;
   if (args.scheme) {
-    options.scheme =
-        *args.scheme == "cubature" ? IntegrationScheme::Cubature : IntegrationScheme::Paper;
+    const std::vector<std::string> names = integrationSchemeNames();
+    options.scheme = static_cast<IntegrationScheme>(
+        std::find(names.begin(), names.end(), *args.scheme) - names.begin());
   }
 
   // Open the output first: a missing folder should stop the run before the work, not after.

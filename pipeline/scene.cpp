@@ -216,8 +216,7 @@ AccuracySpec readAccuracy(ObjectReader r) {
   if (a.max_evaluations < 1) r.fail("max_evaluations", "must be an integer ≥ 1");
   a.normals =
       r.choice("normals", {"surface", "flat"}, 0) == 0 ? NormalModel::Surface : NormalModel::Flat;
-  a.scheme = r.choice("scheme", {"paper", "cubature"}, 0) == 0 ? IntegrationScheme::Paper
-                                                                 : IntegrationScheme::Cubature;
+  a.scheme = static_cast<IntegrationScheme>(r.choice("scheme", integrationSchemeNames(), 0));
   if (r.has("occlusion")) {
     const json& v = r.require("occlusion");
     if (!v.is_boolean()) r.fail("occlusion", "must be true or false");

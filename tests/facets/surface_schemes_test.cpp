@@ -1,5 +1,5 @@
-// The cubature scheme (IntegrationScheme::Cubature) against closed forms and against the
-// paper's scheme at a tolerance a thousand times tighter.
+// The schemes that integrate over the exact surface map (IntegrationScheme::Cubature and
+// ::Lobe) against closed forms and against the paper's scheme at a tighter tolerance.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -16,20 +16,23 @@ namespace {
 using test::flatTop;
 using test::mirror;
 
-IntegratorOptions cubature(double tolerance, double floor_w_m2 = 1e-12) {
-  IntegratorOptions o = test::accuracy(tolerance, floor_w_m2);
-  o.scheme = IntegrationScheme::Cubature;
-  return o;
-}
+class SurfaceScheme : public ::testing::TestWithParam<IntegrationScheme> {
+ protected:
+  [[nodiscard]] IntegratorOptions options(double tolerance, double floor_w_m2 = 1e-12) const {
+    IntegratorOptions o = test::accuracy(tolerance, floor_w_m2);
+    o.scheme = GetParam();
+    return o;
+  }
+};
 
-TEST(Cubature, CylinderMatchesTheMirrorLineFocus) {
+TEST_P(SurfaceScheme, CylinderMatchesTheMirrorLineFocus) {
   const Beam beam = flatTop(Vec3(0), Vec3(1, 0, 0), 100.0, 2.0);
   const FacetIntegrator fi = test::singleObject(
       mirror(0.9, 0.003), beam,
       [](Target& t, std::uint32_t m, Vec3 ref) {
         addCylinder(t, {Vec3(0), Vec3(0, 0, 1), 0.5, 2.0}, m, 16, ref);
       },
-      cubature(1e-4));
+      options(1e-4));
   IntegratorWorkspace ws;
   // Far, and 5 cm off the surface (where the point-source form needs small pieces).
   for (const Vec3& obs : {Vec3(-3.0, 0.0, 0.2), Vec3(-3.0 * std::cos(0.8), 3.0 * std::sin(0.8), 0.2),
@@ -49,13 +52,13 @@ TEST(Cubature, CylinderMatchesTheMirrorLineFocus) {
   }
 }
 
-TEST(Cubature, SphereMatchesTheMirrorFocalLines) {
+TEST_P(SurfaceScheme, SphereMatchesTheMirrorFocalLines) {
   const double e0 = 100.0, radius = 0.5, rho = 0.8;
   const Beam beam = flatTop(Vec3(0), Vec3(0, 0, -1), e0, 1.0);
   const FacetIntegrator fi = test::singleObject(
       mirror(rho, 0.005), beam,
       [&](Target& t, std::uint32_t m, Vec3 ref) { addSphere(t, {Vec3(0), radius}, m, 16, ref); },
-      cubature(1e-4, 1e-16));
+      options(1e-4, 1e-16));
   IntegratorWorkspace ws;
   // The focal-line form holds far from the sphere (its glint's offset from the centre is
   // O(R/d)); nearer observers are compared with the paper's scheme in the test below.
@@ -72,7 +75,7 @@ TEST(Cubature, SphereMatchesTheMirrorFocalLines) {
   }
 }
 
-TEST(Cubature, LambertianDiskOnAxisMatchesClosedFormThroughItsCurvedRim) {
+TEST_P(SurfaceScheme, LambertianDiskOnAxisMatchesClosedFormThroughItsCurvedRim) {
   // E = 2 ρd E0 cos θi (1 − h / √(R² + h²)) on the axis: the rim's arcs, not the polygon of
   // the coarse facets, bound the integral (surface_map.h blends the rim edges onto them).
   const double e0 = 40.0, radius = 0.5, rho_d = 0.8;
@@ -82,7 +85,7 @@ TEST(Cubature, LambertianDiskOnAxisMatchesClosedFormThroughItsCurvedRim) {
       [&](Target& t, std::uint32_t m, Vec3 ref) {
         addDisk(t, {Vec3(0), Vec3(0, 0, 1), radius}, m, 16, ref);
       },
-      cubature(1e-6));
+      options(1e-6));
   IntegratorWorkspace ws;
   for (double h : {0.1, 0.5, 2.0, 10.0}) {
     const double expected = test::lambertianDiskOnAxis(rho_d, e0, 1.0, radius, h);
@@ -92,10 +95,10 @@ TEST(Cubature, LambertianDiskOnAxisMatchesClosedFormThroughItsCurvedRim) {
 }
 
 // Random observers (fixed seed) around a cylinder, a sphere and a disk under a Gaussian beam
-// narrower than the target, σ from 0.003 to 0.1, a diffuse part or none: where the cubature
+// narrower than the target, σ from 0.003 to 0.1, a diffuse part or none: where the
 // scheme says it converged at 1e-3, it is within 1e-3 (and within its own error estimate) of
 // the paper's scheme at 1e-5 (whose own estimate is allowed for).
-TEST(Cubature, AgreesWithThePaperSchemeWithinItsErrorEstimate) {
+TEST_P(SurfaceScheme, AgreesWithThePaperSchemeWithinItsErrorEstimate) {
   std::mt19937_64 rng(20261123);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   int compared = 0;
@@ -116,7 +119,7 @@ TEST(Cubature, AgreesWithThePaperSchemeWithinItsErrorEstimate) {
       const Material material{0.9 - diffuse, diffuse, Beckmann{sigma}};
       IntegratorOptions paper = test::accuracy(1e-5, 1e-9);
       const FacetIntegrator reference = test::singleObject(material, beam, add, paper);
-      const FacetIntegrator fi = test::singleObject(material, beam, add, cubature(1e-3, 1e-6));
+      const FacetIntegrator fi = test::singleObject(material, beam, add, options(1e-3, 1e-6));
       IntegratorWorkspace ws;
       for (int k = 0; k < 4; ++k) {
         // Toward the laser's side, from 0.6 m to 6 m, anywhere in that hemisphere.
@@ -139,6 +142,12 @@ TEST(Cubature, AgreesWithThePaperSchemeWithinItsErrorEstimate) {
   }
   EXPECT_GE(compared, 24) << "most observers converge in both schemes";
 }
+
+INSTANTIATE_TEST_SUITE_P(Schemes, SurfaceScheme,
+                         ::testing::Values(IntegrationScheme::Cubature, IntegrationScheme::Lobe),
+                         [](const ::testing::TestParamInfo<IntegrationScheme>& param) {
+                           return integrationSchemeNames()[static_cast<std::size_t>(param.param)];
+                         });
 
 }  // namespace
 }  // namespace glint

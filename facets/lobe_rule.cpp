@@ -1,0 +1,502 @@
+#include "facets/lobe_rule.h"
+
+#include <algorithm>
+#include <boost/math/special_functions/owens_t.hpp>
+#include <cmath>
+#include <limits>
+
+namespace glint {
+namespace {
+
+namespace bmp = boost::math::policies;
+// Double precision throughout (the default would promote to long double for no gain here),
+// and no exceptions: this is hot code, and every argument it is given is finite and checked.
+using OwensPolicy =
+    bmp::policy<bmp::promote_double<false>, bmp::domain_error<bmp::ignore_error>,
+                bmp::overflow_error<bmp::ignore_error>, bmp::underflow_error<bmp::ignore_error>,
+                bmp::evaluation_error<bmp::ignore_error>, bmp::denorm_error<bmp::ignore_error>,
+                bmp::rounding_error<bmp::ignore_error>, bmp::pole_error<bmp::ignore_error>>;
+
+constexpr double kSqrt2 = 1.41421356237309504880;
+constexpr double kInvSqrt2Pi = 0.39894228040143267794;
+
+// The largest |ln(f / Gaussian)| at a sigma point for which the Gaussian still models a piece.
+constexpr double kMaxLogRatio = 2.0;
+
+// How far outside the piece (in its (s, t) units) a sigma point may be sampled: the integrand
+// continues smoothly there, and truncated Gaussians put a sigma point up to ~0.7 standard
+// deviations past the part's edge.
+constexpr double kSigmaPointReach = 0.5;
+
+// Beyond this distance from the origin the normal density (e^{-h²/2} < 1e-322) is nothing.
+constexpr double kFarTail = 38.5;
+
+// Φ(b) − Φ(a) for a ≤ b, in whichever tail keeps it accurate.
+double normalInterval(double a, double b) {
+  if (a >= 0.0) return 0.5 * (std::erfc(a / kSqrt2) - std::erfc(b / kSqrt2));
+  if (b <= 0.0) return 0.5 * (std::erfc(-b / kSqrt2) - std::erfc(-a / kSqrt2));
+  return 1.0 - 0.5 * std::erfc(b / kSqrt2) - 0.5 * std::erfc(-a / kSqrt2);
+}
+
+double upperTail(double x) { return 0.5 * std::erfc(x / kSqrt2); }  // Q(x) = 1 − Φ(x)
+
+// The standard normal's mass beyond the line at distance h > 0 from the origin and within the
+// wedge from the foot of the perpendicular to the point at s ≥ 0 along the line is Owen's
+// T(h, s/h) = Q(h)/2 + V. Only V is returned, so that an edge whose line passes near the
+// origin but whose ends lie far along it (both T ≈ Q(h)/2) loses nothing to cancellation:
+// for s ≥ h, T(h, a) = Q(h)/2 + Q(ah)/2 − Q(h) Q(ah) − T(ah, 1/a) (Owen 1956), whose last three
+// terms are all small where s is large.
+double wedgeTailExcess(double h, double s) {
+  if (s <= h) return boost::math::owens_t(h, s / h, OwensPolicy()) - 0.5 * upperTail(h);
+  if (s > kFarTail) return 0.0;
+  const double qs = upperTail(s);
+  return 0.5 * qs - upperTail(h) * qs - boost::math::owens_t(s, h / s, OwensPolicy());
+}
+
+// Σ of that mass between the points sa < sb along an edge at distance h > 0 (signed along s).
+double edgeTail(double h, double sa, double sb) {
+  if (h > kFarTail) return 0.0;
+  auto excess = [&](double s) { return s < 0.0 ? -wedgeTailExcess(h, -s) : wedgeTailExcess(h, s); };
+  // The Q(h)/2 parts cancel where sa and sb lie on the same side of the foot (V(0) = −Q(h)/2
+  // makes s = 0 either side).
+  const double straddle = sa < 0.0 && sb >= 0.0 ? upperTail(h) : 0.0;
+  return straddle + excess(sb) - excess(sa);
+}
+
+// A convex polygon in the piece's (s, t) coordinates, where the piece is the triangle
+// (0,0), (1,0), (0,1). Four clips of a triangle leave at most 7 vertices.
+struct Polygon {
+  std::array<Vec2, 8> v{};
+  int n = 0;
+};
+
+// Keeps the part where the function, linear over the reference triangle with corner values f,
+// is positive (Sutherland–Hodgman for one half-plane).
+void clipPolygon(Polygon& p, const std::array<double, 3>& f) {
+  auto value = [&](const Vec2& x) { return f[0] + (f[1] - f[0]) * x.x + (f[2] - f[0]) * x.y; };
+  Polygon out;
+  for (int i = 0; i < p.n; ++i) {
+    const Vec2& a = p.v[i];
+    const Vec2& b = p.v[(i + 1) % p.n];
+    const double fa = value(a), fb = value(b);
+    if (fa > 0.0) out.v[out.n++] = a;
+    if ((fa > 0.0) != (fb > 0.0)) {
+      const double w = fa / (fa - fb);
+      out.v[out.n++] = a + w * (b - a);
+    }
+    if (out.n >= 7) break;  // cannot happen for a convex polygon and a line; never overrun
+  }
+  p = out;
+}
+
+double cross2(const Vec2& a, const Vec2& b) { return a.x * b.y - a.y * b.x; }
+
+// The quadratic (P2) Lagrange basis on the reference triangle at (s, t), nodes ordered as the
+// rule's (corners, then midpoints of 01, 12, 20), with its derivatives.
+struct P2 {
+  std::array<double, 6> n, ds, dt;
+  explicit P2(const Vec2& x) {
+    const double l0 = 1.0 - x.x - x.y, l1 = x.x, l2 = x.y;
+    n = {l0 * (2 * l0 - 1), l1 * (2 * l1 - 1), l2 * (2 * l2 - 1), 4 * l0 * l1, 4 * l1 * l2,
+         4 * l2 * l0};
+    ds = {1 - 4 * l0, 4 * l1 - 1, 0.0, 4 * (l0 - l1), 4 * l2, -4 * l2};
+    dt = {1 - 4 * l0, 0.0, 4 * l2 - 1, -4 * l1, 4 * l1, 4 * (l0 - l2)};
+  }
+};
+
+// The nearest point of the reference triangle (0,0), (1,0), (0,1).
+Vec2 projectIntoTriangle(const Vec2& x) {
+  if (x.x >= 0.0 && x.y >= 0.0 && x.x + x.y <= 1.0) return x;
+  auto onSegment = [&](const Vec2& a, const Vec2& b) {
+    const Vec2 e = b - a;
+    const double w = std::clamp(glm::dot(x - a, e) / glm::dot(e, e), 0.0, 1.0);
+    return a + w * e;
+  };
+  const std::array<Vec2, 3> candidates{onSegment({0.0, 0.0}, {1.0, 0.0}),
+                                       onSegment({1.0, 0.0}, {0.0, 1.0}),
+                                       onSegment({0.0, 1.0}, {0.0, 0.0})};
+  Vec2 best = candidates[0];
+  for (const Vec2& c : candidates) {
+    if (glm::dot(c - x, c - x) < glm::dot(best - x, best - x)) best = c;
+  }
+  return best;
+}
+
+// The quadratic interpolant of q over the piece, and its derivatives.
+class SlopeModel {
+ public:
+  struct Local {
+    Vec3 q, q_s, q_t;
+  };
+  explicit SlopeModel(const std::array<const LobeNode*, 6>& nodes) {
+    for (int j = 0; j < 6; ++j) slope_[j] = nodes[j]->slope;
+  }
+  [[nodiscard]] Local at(const Vec2& x) const {
+    const P2 b(x);
+    Local l{Vec3(0.0), Vec3(0.0), Vec3(0.0)};
+    for (int j = 0; j < 6; ++j) {
+      l.q += b.n[j] * slope_[j];
+      l.q_s += b.ds[j] * slope_[j];
+      l.q_t += b.dt[j] * slope_[j];
+    }
+    return l;
+  }
+
+ private:
+  std::array<Vec3, 6> slope_{};
+};
+
+// The lobe with q linearised at c, L(u) = q + J u for u = x − c: the Gaussian
+// exp(−(|L|² + κ|u|²)/2σ²) in the piece's coordinates, and its moments over the part.
+// κ = 1e-7 σ² changes it by at most 1e-7 over the piece and keeps it integrable where J is
+// singular (a cylinder's stripe runs along its null direction).
+class GaussianLobe {
+ public:
+  // False where the linearisation cannot be whitened (not finite).
+  bool linearise(const SlopeModel::Local& l, const Vec2& c, double sigma, const Polygon& part) {
+    l_ = l;
+    c_ = c;
+    s2_ = sigma * sigma;
+    kappa_ = 1e-7 * s2_;
+    const double a11 = glm::dot(l.q_s, l.q_s) + kappa_, a12 = glm::dot(l.q_s, l.q_t),
+                 a22 = glm::dot(l.q_t, l.q_t) + kappa_;
+    const double b1 = glm::dot(l.q_s, l.q), b2 = glm::dot(l.q_t, l.q);
+    const double det = a11 * a22 - a12 * a12;
+    if (!(det > 0.0) || !std::isfinite(det)) return false;
+    const Vec2 u_star(-(a22 * b1 - a12 * b2) / det, -(a11 * b2 - a12 * b1) / det);
+    least_ = std::max(0.0, glm::dot(l.q, l.q) + b1 * u_star.x + b2 * u_star.y);
+    // Whiten: y = Λ^{1/2} Vᵀ (x − centre) with S = A/σ² = V Λ Vᵀ, V a rotation (so the
+    // polygon stays counter-clockwise).
+    const double theta = 0.5 * std::atan2(2.0 * a12, a11 - a22);
+    cs_ = std::cos(theta);
+    sn_ = std::sin(theta);
+    const double floor_l = kappa_ / s2_;
+    l1_ = std::max((a11 * cs_ * cs_ + 2.0 * a12 * sn_ * cs_ + a22 * sn_ * sn_) / s2_, floor_l);
+    l2_ = std::max((a11 * sn_ * sn_ - 2.0 * a12 * sn_ * cs_ + a22 * cs_ * cs_) / s2_, floor_l);
+    r1_ = std::sqrt(l1_);
+    r2_ = std::sqrt(l2_);
+    centre_ = c + u_star;
+    std::array<Vec2, 8> y{};
+    for (int i = 0; i < part.n; ++i) y[i] = whiten(part.v[i]);
+    mom_ = standardNormalOverPolygon(std::span<const Vec2>(y.data(), part.n));
+    return std::isfinite(mom_.mass);
+  }
+
+  [[nodiscard]] double mass() const { return mom_.mass; }
+  // ln ∫ over the part of the Gaussian (requires mass() > 0).
+  [[nodiscard]] double logIntegral() const {
+    return -least_ / (2.0 * s2_) + std::log(2.0 * kPi * mom_.mass) - 0.5 * std::log(l1_ * l2_);
+  }
+  // The centroid of the Gaussian over the part (requires mass() > 0).
+  [[nodiscard]] Vec2 mean() const { return unwhiten(mom_.first / mom_.mass); }
+  // The mean and ±√3 standard deviations along the principal axes of the Gaussian as
+  // restricted to the part.
+  [[nodiscard]] std::array<Vec2, 5> sigmaPoints() const {
+    const Vec2 ym = mom_.first / mom_.mass;
+    const double cxx = std::max(0.0, mom_.second_xx / mom_.mass - ym.x * ym.x);
+    const double cyy = std::max(0.0, mom_.second_yy / mom_.mass - ym.y * ym.y);
+    const double bound = std::sqrt(cxx * cyy);
+    const double cxy = std::clamp(mom_.second_xy / mom_.mass - ym.x * ym.y, -bound, bound);
+    const double phi = 0.5 * std::atan2(2.0 * cxy, cxx - cyy);
+    const double pc = std::cos(phi), ps = std::sin(phi);
+    const double c1 = std::max(0.0, cxx * pc * pc + 2.0 * cxy * ps * pc + cyy * ps * ps);
+    const double c2 = std::max(0.0, cxx * ps * ps - 2.0 * cxy * ps * pc + cyy * pc * pc);
+    const Vec2 a1 = std::sqrt(3.0 * c1) * Vec2(pc, ps), a2 = std::sqrt(3.0 * c2) * Vec2(-ps, pc);
+    return {unwhiten(ym), unwhiten(ym + a1), unwhiten(ym - a1), unwhiten(ym + a2),
+            unwhiten(ym - a2)};
+  }
+  // ln(f / (h · Gaussian)) at x for the true slope q there: what the linearisation missed.
+  [[nodiscard]] double logRatio(const Vec2& x, const Vec3& q) const {
+    const Vec2 u = x - c_;
+    const Vec3 lin = l_.q + u.x * l_.q_s + u.y * l_.q_t;
+    return -(glm::dot(q, q) - glm::dot(lin, lin) - kappa_ * glm::dot(u, u)) / (2.0 * s2_);
+  }
+
+ private:
+  [[nodiscard]] Vec2 whiten(const Vec2& x) const {
+    const Vec2 w = x - centre_;
+    return {r1_ * (cs_ * w.x + sn_ * w.y), r2_ * (-sn_ * w.x + cs_ * w.y)};
+  }
+  [[nodiscard]] Vec2 unwhiten(const Vec2& y) const {
+    const Vec2 w(y.x / r1_, y.y / r2_);
+    return centre_ + Vec2(cs_ * w.x - sn_ * w.y, sn_ * w.x + cs_ * w.y);
+  }
+
+  SlopeModel::Local l_{};
+  Vec2 c_{0.0}, centre_{0.0};
+  double s2_ = 1.0, kappa_ = 0.0, least_ = 0.0, l1_ = 1.0, l2_ = 1.0, r1_ = 1.0, r2_ = 1.0;
+  double cs_ = 1.0, sn_ = 0.0;
+  NormalMoments mom_{};
+};
+
+}  // namespace
+
+NormalMoments standardNormalOverPolygon(std::span<const Vec2> ccw) {
+  NormalMoments m;
+  const std::size_t n = ccw.size();
+  if (n < 3 || n > 16) return m;
+  double winding = 0.0, tails = 0.0;
+  bool on_boundary = false;  // the origin lies exactly on an edge (a symmetric glint does)
+  Vec2 boundary{0.0};
+  double sxx = 0.0, sxy = 0.0, syy = 0.0;  // ∮ yⱼ φ₂ nᵢ ds, symmetrised
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2& a = ccw[i];
+    const Vec2& b = ccw[(i + 1) % n];
+    const Vec2 e = b - a;
+    const double len = glm::length(e);
+    if (!(len > 0.0)) continue;
+    const Vec2 dir = e / len;
+    const Vec2 out(dir.y, -dir.x);  // outward for a counter-clockwise polygon
+    // The distance from the nearer end, whose rounding is the smaller; and the angle the edge
+    // subtends from the same h, sa, sb, so that the winding and the tails agree on which side
+    // of the edge the origin lies even when it is within rounding of a vertex.
+    const double h = glm::dot(glm::dot(a, a) <= glm::dot(b, b) ? a : b, out);
+    const double sa = glm::dot(a, dir), sb = glm::dot(b, dir);
+    winding += std::atan2(h * (sb - sa), h * h + sa * sb);
+    if (h == 0.0 && sa <= 0.0 && sb >= 0.0) on_boundary = true;
+    const double ah = std::abs(h);
+    if (ah > kFarTail) continue;
+    // Signed mass of the triangle (origin, a, b) is sign(h)·[wedge − tail] between sa and sb;
+    // the wedges add up to the winding number, the tails are subtracted here.
+    if (ah > 0.0) tails += (h > 0.0 ? 1.0 : -1.0) * edgeTail(ah, sa, sb);
+    // ∫ y φ₂ = −∮ φ₂ n ds, and φ₂ along the edge is φ(h) φ(s).
+    // Along the edge y = h·out + s·dir and φ₂ = φ(h) φ(s).
+    const double phi_h = kInvSqrt2Pi * std::exp(-0.5 * h * h);
+    const double along = normalInterval(sa, sb);  // ∫ φ(s) ds
+    const double s_along = kInvSqrt2Pi * (std::exp(-0.5 * sa * sa) - std::exp(-0.5 * sb * sb));
+    boundary += out * (phi_h * along);
+    const Vec2 y_along = phi_h * (h * along * out + s_along * dir);  // ∫ y φ₂ ds
+    sxx += out.x * y_along.x;
+    sxy += 0.5 * (out.x * y_along.y + out.y * y_along.x);
+    syy += out.y * y_along.y;
+  }
+  // The winding number is 0 or 1: rounding removes the atan2 noise. On an edge (atan2 of ±0
+  // would say ±π for it) the origin has half of its neighbourhood inside, at a corner the
+  // corner's share.
+  double inside = std::round(winding / (2.0 * kPi));
+  if (on_boundary) {
+    inside = 0.5;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (ccw[i] != Vec2(0.0)) continue;
+      const Vec2 next = ccw[(i + 1) % n], prev = ccw[(i + n - 1) % n];
+      inside = std::atan2(cross2(next, prev), glm::dot(next, prev)) / (2.0 * kPi);
+    }
+  }
+  m.mass = std::max(0.0, inside - tails);
+  m.first = -boundary;
+  m.second_xx = m.mass - sxx;
+  m.second_xy = -sxy;
+  m.second_yy = m.mass - syy;
+  return m;
+}
+
+LobeNode lobeNode(const SurfaceMap& map, const Vec3& bary, const Vec3& observer_m,
+                  const Beam& beam, const Material& material) {
+  LobeNode node;
+  const SurfacePoint p = map.at(bary);
+  if (!p.valid) return node;
+  const Beam::Footprint b = beam.footprint(p.position_m);
+  const Vec3 to_observer = observer_m - p.position_m;
+  const double d2 = glm::dot(to_observer, to_observer);
+  if (!(d2 > 0.0)) return node;
+  const double d = std::sqrt(d2);
+  const Vec3 wo = to_observer / d;
+  const double cos_i = glm::dot(p.normal, b.toward_laser);
+  const double cos_r = glm::dot(p.normal, wo);
+  node.clip = {cos_i, cos_r * d, b.edge_margin, b.axial_m};
+  const double scale = b.irradiance_w_m2 * p.jacobian_m2 / d2;
+  node.diffuse = material.diffuse_reflectance / kPi * scale * cos_i * cos_r;
+  node.valid = true;
+  const Vec3 h = b.toward_laser + wo;
+  const double hn = glm::dot(h, p.normal);
+  if (!(hn > 0.0)) return node;  // θN ≥ 90°: no lobe, and q is undefined
+  node.has_slope = true;
+  if (material.specular_reflectance > 0.0) {
+    node.slope = h / hn - p.normal;
+    const double s = glm::dot(node.slope, node.slope);
+    const double sigma = material.lobe.sigma;
+    node.specular = material.specular_reflectance * scale * (1.0 + s) * (1.0 + s) /
+                    (8.0 * kPi * sigma * sigma);
+  }
+  return node;
+}
+
+namespace {
+
+// The specular term over the part: ∫ f ds dt in the piece's coordinates, with its error.
+struct SpecularPart {
+  double value = 0.0;
+  double error = 0.0;
+  int evaluations = 0;
+};
+
+// False where the rule cannot be applied (the map breaks down, or a wide lobe lacks a model).
+bool integrateLobe(const LobeSampler& sampler, const std::array<const LobeNode*, 6>& nodes,
+                   const Polygon& poly, double sigma, double negligible, SpecularPart& part) {
+  // A node past θN = 90° leaves q without a model. The piece's normals spread less than 0.3 rad
+  // (the lobe scheme's resolution), so all of it then lies beyond θN = 73°, where for σ < 0.2
+  // the lobe is below e^-130 of its peak: nothing. Wider lobes must be split further.
+  if (std::any_of(nodes.begin(), nodes.end(), [](const LobeNode* n) { return !n->has_slope; })) {
+    return sigma < 0.2;
+  }
+  const SlopeModel model(nodes);
+  // The specular point: least |q|² over the piece, by projected Gauss–Newton on the
+  // interpolant (q is nearly affine, so a few steps settle it).
+  Vec2 c(1.0 / 3.0);
+  for (int it = 0; it < 8; ++it) {
+    const SlopeModel::Local l = model.at(c);
+    const double a11 = glm::dot(l.q_s, l.q_s), a12 = glm::dot(l.q_s, l.q_t),
+                 a22 = glm::dot(l.q_t, l.q_t);
+    const double g1 = glm::dot(l.q_s, l.q), g2 = glm::dot(l.q_t, l.q);
+    const double reg = 1e-12 * (a11 + a22) + 1e-300;
+    const double det = (a11 + reg) * (a22 + reg) - a12 * a12;
+    if (!(det > 0.0)) break;
+    const Vec2 step(-((a22 + reg) * g1 - a12 * g2) / det, -((a11 + reg) * g2 - a12 * g1) / det);
+    const Vec2 next = projectIntoTriangle(c + step);
+    const double moved = glm::length(next - c);
+    c = next;
+    if (!(moved > 1e-10)) break;
+  }
+  GaussianLobe lobe;
+  if (!lobe.linearise(model.at(c), c, sigma, poly)) return false;
+  // Where the specular point lies outside the piece (or the part is clipped), the mass sits
+  // away from c: linearised again at its centroid, the Gaussian follows q where it matters,
+  // and what is left for the sigma points is flatter.
+  if (lobe.mass() > 0.0) {
+    const Vec2 m = projectIntoTriangle(lobe.mean());
+    if (glm::length(m - c) > 1e-3) {
+      GaussianLobe again;
+      if (again.linearise(model.at(m), m, sigma, poly) && again.mass() > 0.0) lobe = again;
+    }
+  }
+  if (lobe.mass() > 0.0 && negligible > 0.0) {
+    // The interpolants' own estimate, at the centroid: where even e² times it is negligible,
+    // the piece is not worth the sigma points (it is kept, with all of it as its error).
+    const Vec2 m = lobe.mean();
+    const P2 b(m);
+    double factor = 0.0;
+    for (int j = 0; j < 6; ++j) factor += b.n[j] * nodes[j]->specular;
+    const double log_value = lobe.logIntegral() + lobe.logRatio(m, model.at(m).q);
+    const double value = std::max(0.0, factor) * std::exp(std::min(log_value, 700.0));
+    if (std::exp(kMaxLogRatio) * value < negligible) {
+      part.value = value;
+      part.error = std::exp(kMaxLogRatio) * value;
+      return true;
+    }
+  }
+  if (lobe.mass() > 0.0) {
+    // The rest of the integrand, R = f / Gaussian, is smooth: it is averaged over the Gaussian
+    // (as restricted to the part) with the five sigma points of its mean and covariance
+    // (weights 1/3 at the mean, 1/6 at ±√3 standard deviations along each principal axis),
+    // exact for R quadratic. R is sampled from the integrand itself, continued smoothly past
+    // the part's edges where a sigma point falls outside it.
+    std::array<Vec2, 5> points = lobe.sigmaPoints();
+    constexpr std::array<double, 5> kWeight{1.0 / 3.0, 1.0 / 6.0, 1.0 / 6.0, 1.0 / 6.0,
+                                            1.0 / 6.0};
+    std::array<double, 5> log_r{}, factor{};
+    double log_max = -std::numeric_limits<double>::infinity();
+    bool poor_model = false;
+    for (int i = 0; i < 5; ++i) {
+      // A sigma point far outside the piece (the moments of a part deep in the lobe's tail
+      // are not resolved in double precision) is brought back onto it, and the estimate is
+      // then only an order of magnitude.
+      const Vec2 inside = projectIntoTriangle(points[i]);
+      if (glm::length(inside - points[i]) > kSigmaPointReach) {
+        points[i] = inside;
+        poor_model = true;
+      }
+      const LobeNode at = sampler.at(points[i].x, points[i].y);
+      ++part.evaluations;
+      if (!at.valid) return false;
+      if (!at.has_slope) {  // no lobe there, where the Gaussian says there is some
+        poor_model = true;
+        continue;  // factor 0
+      }
+      log_r[i] = lobe.logRatio(points[i], at.slope);
+      if (!std::isfinite(log_r[i])) return false;
+      // Where the linearised lobe misses the true one by more than e², the Gaussian is not a
+      // model of this piece (a coarse piece of a strongly curved q, far out in a wide lobe's
+      // tail): the estimate stands, but as wholly uncertain, so that it is split if it matters.
+      if (std::abs(log_r[i]) > kMaxLogRatio) poor_model = true;
+      factor[i] = at.specular;
+      if (factor[i] > 0.0) log_max = std::max(log_max, log_r[i]);
+    }
+    double average = 0.0;
+    for (int i = 0; i < 5; ++i) {
+      if (factor[i] > 0.0) average += kWeight[i] * factor[i] * std::exp(log_r[i] - log_max);
+    }
+    if (average > 0.0) {
+      const double log_value = lobe.logIntegral() + log_max;
+      if (!(log_value < 700.0)) return false;  // not finite
+      const double scale = std::exp(log_value);
+      part.value = average * scale;
+      // The sigma points are exact for R quadratic over the part; beyond that, their error
+      // is taken to be no larger than the whole second-order term they add to the centre
+      // value (the truncated Gaussian is skewed, so the third-order term does not vanish).
+      part.error = poor_model
+                       ? part.value
+                       : std::abs(average - factor[0] * std::exp(log_r[0] - log_max)) * scale;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+LobeEstimate lobeRule(const LobeSampler& sampler, const std::array<const LobeNode*, 6>& nodes,
+                      double area_uv, double sigma, double negligible_w_m2) {
+  LobeEstimate result;
+  for (const LobeNode* node : nodes) {
+    if (!node->valid) return result;
+  }
+  Polygon poly;
+  poly.v[0] = {0.0, 0.0};
+  poly.v[1] = {1.0, 0.0};
+  poly.v[2] = {0.0, 1.0};
+  poly.n = 3;
+  for (int k = 0; k < 4; ++k) {
+    const std::array<double, 3> f{nodes[0]->clip[k], nodes[1]->clip[k], nodes[2]->clip[k]};
+    if (f[0] > 0.0 && f[1] > 0.0 && f[2] > 0.0) continue;
+    clipPolygon(poly, f);
+    if (poly.n < 3) {
+      result.ok = true;  // nothing of the piece is lit, in the beam and in view
+      return result;
+    }
+  }
+
+  // The diffuse term is smooth over the clipped part: its quadratic interpolant integrated
+  // exactly (the edge-midpoint rule on each triangle of a fan).
+  auto interpolate = [&](const P2& b, auto member) {
+    double v = 0.0;
+    for (int j = 0; j < 6; ++j) v += b.n[j] * (nodes[j]->*member);
+    return v;
+  };
+  double diffuse = 0.0;
+  if (std::any_of(nodes.begin(), nodes.end(), [](const LobeNode* n) { return n->diffuse != 0.0; })) {
+    for (int i = 1; i + 1 < poly.n; ++i) {
+      const Vec2 &a = poly.v[0], &b = poly.v[i], &c = poly.v[i + 1];
+      const double area = 0.5 * cross2(b - a, c - a);
+      const double sum = interpolate(P2(0.5 * (a + b)), &LobeNode::diffuse) +
+                         interpolate(P2(0.5 * (b + c)), &LobeNode::diffuse) +
+                         interpolate(P2(0.5 * (c + a)), &LobeNode::diffuse);
+      diffuse += area * sum / 3.0;
+    }
+  }
+
+  SpecularPart specular;
+  if (std::any_of(nodes.begin(), nodes.end(),
+                  [](const LobeNode* n) { return n->specular != 0.0; })) {
+    const double negligible = area_uv > 0.0 ? negligible_w_m2 / (2.0 * area_uv) : 0.0;
+    if (!integrateLobe(sampler, nodes, poly, sigma, negligible, specular)) return result;
+    result.evaluations = specular.evaluations;
+  }
+  const double value = 2.0 * area_uv * (specular.value + diffuse);
+  const double error = 2.0 * area_uv * specular.error;
+  if (!std::isfinite(value) || !std::isfinite(error)) return result;
+  result.irradiance_w_m2 = value;
+  result.rule_error_w_m2 = error;
+  result.ok = true;
+  return result;
+}
+
+}  // namespace glint
