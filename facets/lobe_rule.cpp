@@ -122,6 +122,24 @@ Vec2 projectIntoTriangle(const Vec2& x) {
   return best;
 }
 
+// The distance from the origin to a convex counter-clockwise polygon (0 inside it).
+double distanceToOrigin(std::span<const Vec2> ccw) {
+  const std::size_t n = ccw.size();
+  bool inside = n >= 3;
+  double d2 = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2& a = ccw[i];
+    const Vec2& b = ccw[(i + 1) % n];
+    const Vec2 e = b - a;
+    if (cross2(e, -a) < 0.0) inside = false;  // the origin is right of this edge
+    const double len2 = glm::dot(e, e);
+    const double w = len2 > 0.0 ? std::clamp(-glm::dot(a, e) / len2, 0.0, 1.0) : 0.0;
+    const Vec2 p = a + w * e;
+    d2 = std::min(d2, glm::dot(p, p));
+  }
+  return inside ? 0.0 : std::sqrt(d2);
+}
+
 // The quadratic interpolant of q over the piece, and its derivatives.
 class SlopeModel {
  public:
@@ -153,7 +171,10 @@ class SlopeModel {
 class GaussianLobe {
  public:
   // False where the linearisation cannot be whitened (not finite).
-  bool linearise(const SlopeModel::Local& l, const Vec2& c, double sigma, const Polygon& part) {
+  // With @p skip_below_log, the moments are not computed (skipped() turns true) where the
+  // bound of the integral's logarithm, upperLogIntegral(), is below it.
+  bool linearise(const SlopeModel::Local& l, const Vec2& c, double sigma, const Polygon& part,
+                 double skip_below_log = -std::numeric_limits<double>::infinity()) {
     l_ = l;
     c_ = c;
     s2_ = sigma * sigma;
@@ -178,9 +199,20 @@ class GaussianLobe {
     centre_ = c + u_star;
     std::array<Vec2, 8> y{};
     for (int i = 0; i < part.n; ++i) y[i] = whiten(part.v[i]);
-    mom_ = standardNormalOverPolygon(std::span<const Vec2>(y.data(), part.n));
+    // A convex part at distance d from the Gaussian's centre lies in a half plane that far
+    // out: its mass is at most Q(d), which needs no Owen's T.
+    const double d = distanceToOrigin(std::span<const Vec2>(y.data(), part.n));
+    upper_log_ = -least_ / (2.0 * s2_) + std::log(2.0 * kPi * upperTail(d)) -
+                 0.5 * std::log(l1_ * l2_);
+    skipped_ = upper_log_ < skip_below_log;
+    mom_ = skipped_ ? NormalMoments{}
+                    : standardNormalOverPolygon(std::span<const Vec2>(y.data(), part.n));
     return std::isfinite(mom_.mass);
   }
+
+  [[nodiscard]] bool skipped() const { return skipped_; }
+  // A bound of ln ∫ over the part of the Gaussian (−∞ where the part is beyond its tail).
+  [[nodiscard]] double upperLogIntegral() const { return upper_log_; }
 
   [[nodiscard]] double mass() const { return mom_.mass; }
   // ln ∫ over the part of the Gaussian (requires mass() > 0).
@@ -227,6 +259,8 @@ class GaussianLobe {
   double s2_ = 1.0, kappa_ = 0.0, least_ = 0.0, l1_ = 1.0, l2_ = 1.0, r1_ = 1.0, r2_ = 1.0;
   double cs_ = 1.0, sn_ = 0.0;
   NormalMoments mom_{};
+  double upper_log_ = 0.0;
+  bool skipped_ = false;
 };
 
 }  // namespace
@@ -357,8 +391,23 @@ bool integrateLobe(const LobeSampler& sampler, const std::array<const LobeNode*,
     c = next;
     if (!(moved > 1e-10)) break;
   }
+  // What the interpolated factor can reach over the piece (a quadratic through six values
+  // overshoots their range by at most an eighth of it on each side).
+  double low = nodes[0]->specular, high = low;
+  for (const LobeNode* n : nodes) {
+    low = std::min(low, n->specular);
+    high = std::max(high, n->specular);
+  }
+  const double factor_bound = high + 0.125 * (high - low);
+  const double skip_below = negligible > 0.0 && factor_bound > 0.0
+                                ? std::log(negligible / factor_bound) - kMaxLogRatio
+                                : -std::numeric_limits<double>::infinity();
   GaussianLobe lobe;
-  if (!lobe.linearise(model.at(c), c, sigma, poly)) return false;
+  if (!lobe.linearise(model.at(c), c, sigma, poly, skip_below)) return false;
+  if (lobe.skipped()) {  // negligible even at its bound: kept as 0, the bound as its error
+    part.error = factor_bound * std::exp(lobe.upperLogIntegral() + kMaxLogRatio);
+    return true;
+  }
   // Where the specular point lies outside the piece (or the part is clipped), the mass sits
   // away from c: linearised again at its centroid, the Gaussian follows q where it matters,
   // and what is left for the sigma points is flatter.
