@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "facets/triangle_rule.h"
+
 namespace glint {
 namespace {
 
@@ -513,22 +515,24 @@ LobeEstimate lobeRule(const LobeSampler& sampler, const std::array<const LobeNod
     }
   }
 
-  // The diffuse term is smooth over the clipped part: its quadratic interpolant integrated
-  // exactly (the edge-midpoint rule on each triangle of a fan).
-  auto interpolate = [&](const P2& b, auto member) {
-    double v = 0.0;
-    for (int j = 0; j < 6; ++j) v += b.n[j] * (nodes[j]->*member);
-    return v;
-  };
+  // The diffuse term is smooth over the clipped part: a degree-5 rule (3 × 3 conical product)
+  // on each triangle of a fan, sampled from the integrand itself (continued smoothly, signed,
+  // where the part's straight edges overshoot the true terminator or horizon).
   double diffuse = 0.0;
   if (std::any_of(nodes.begin(), nodes.end(), [](const LobeNode* n) { return n->diffuse != 0.0; })) {
+    static const std::span<const TriangleNode> kRule = conicalProductRule(3);
     for (int i = 1; i + 1 < poly.n; ++i) {
       const Vec2 &a = poly.v[0], &b = poly.v[i], &c = poly.v[i + 1];
       const double area = 0.5 * cross2(b - a, c - a);
-      const double sum = interpolate(P2(0.5 * (a + b)), &LobeNode::diffuse) +
-                         interpolate(P2(0.5 * (b + c)), &LobeNode::diffuse) +
-                         interpolate(P2(0.5 * (c + a)), &LobeNode::diffuse);
-      diffuse += area * sum / 3.0;
+      double sum = 0.0;
+      for (const TriangleNode& node : kRule) {
+        const Vec2 x = node.bary[0] * a + node.bary[1] * b + node.bary[2] * c;
+        const LobeNode at = sampler.at(x.x, x.y);
+        ++result.evaluations;
+        if (!at.valid) return result;
+        sum += node.weight * at.diffuse;
+      }
+      diffuse += area * sum;
     }
   }
 
@@ -537,7 +541,7 @@ LobeEstimate lobeRule(const LobeSampler& sampler, const std::array<const LobeNod
                   [](const LobeNode* n) { return n->specular != 0.0; })) {
     const double negligible = area_uv > 0.0 ? negligible_w_m2 / (2.0 * area_uv) : 0.0;
     if (!integrateLobe(sampler, nodes, poly, sigma, negligible, specular)) return result;
-    result.evaluations = specular.evaluations;
+    result.evaluations += specular.evaluations;
   }
   const double value = 2.0 * area_uv * (specular.value + diffuse);
   const double error = 2.0 * area_uv * specular.error;

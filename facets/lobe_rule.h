@@ -108,7 +108,8 @@ struct LobeEstimate {
 /// the edges 01, 12, 20), whose area in the coarse facet's (u, v) parameter plane is
 /// @p area_uv, for a lobe of RMS slope @p sigma: the Gaussian of q linearised at the specular
 /// point in closed form over the clipped part, times the rest of the integrand averaged over
-/// that Gaussian at five sigma points, where @p sampler evaluates it. A specular term whose
+/// that Gaussian at five sigma points, where @p sampler evaluates it; the diffuse term by a
+/// degree-5 rule on the part, also sampled from @p sampler. A specular term whose
 /// interpolated estimate (times e²) is below @p negligible_w_m2 is returned as that estimate,
 /// wholly uncertain, without the sigma points. Never throws.
 LobeEstimate lobeRule(const LobeSampler& sampler, const std::array<const LobeNode*, 6>& nodes,
