@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The whole benchmark suite: kernel throughput, the facet side (the paper's Figure 4) and the
+# The whole benchmark suite: kernel throughput, the facet side (the paper's Figure 4, with the
+# lobe scheme beside the paper's and the uniform twin) and the
 # observer side (adaptive field against its dense twin over tolerances and voxel sizes). Writes
 # CSV files and PNG plots into OUT (default build/bench-results) and bench/RESULTS.md.
 #
@@ -37,8 +38,11 @@ for case in "cylinder 0.003" "cylinder_broad 0.03"; do
     [[ $2 == 0.003 ]] && { reference=(--reference-tolerance 1e-7); levels=2,3,4,5,6,7,8; }
     [[ $quick == 1 ]] && { [[ $2 == 0.03 ]] && reference=(--reference-level 7); levels=3,5; }
     # The sweep's log names the reference and how settled it is: the report quotes it.
+    # The lobe scheme (always on the exact surface) beside the paper's, with surface normals.
+    lobe=()
+    [[ $normals == surface ]] && lobe=(--lobe-tolerances "$tolerances")
     "$build/glint_sweep" "examples/$1.json" examples/cylinder_186.csv "${reference[@]}" \
-      --tolerances "$tolerances" --levels "$levels" --normals "$normals" \
+      --tolerances "$tolerances" --levels "$levels" --normals "$normals" "${lobe[@]}" \
       --out "$out/facets_sigma$2_$normals.csv" 2>&1 |
       tee "$out/facets_sigma$2_$normals.log" >&2
   done
