@@ -138,7 +138,7 @@ ResolutionLimits cubatureLimits() {
   ResolutionLimits limits;
   limits.lobe = 4.0;
   limits.clipped_log_variation = -1.0;
-  limits.near_field = 0.25;
+  limits.near_field = 0.5;
   return limits;
 }
 
@@ -300,6 +300,13 @@ struct IntegratorWorkspace::Impl {
 };
 
 std::vector<std::string> integrationSchemeNames() { return {"paper", "cubature", "lobe"}; }
+
+std::optional<IntegrationScheme> integrationSchemeByName(std::string_view name) {
+  const std::vector<std::string> names = integrationSchemeNames();
+  const auto it = std::find(names.begin(), names.end(), name);
+  if (it == names.end()) return std::nullopt;
+  return static_cast<IntegrationScheme>(it - names.begin());
+}
 
 IntegratorWorkspace::IntegratorWorkspace() : impl_(std::make_unique<Impl>()) {}
 IntegratorWorkspace::~IntegratorWorkspace() = default;

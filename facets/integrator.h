@@ -6,8 +6,10 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "facets/beam.h"
@@ -39,6 +41,9 @@ enum class IntegrationScheme : std::uint8_t {
 
 /// @brief The schemes' names in scene files and on the command line, in the enum's order.
 std::vector<std::string> integrationSchemeNames();
+
+/// @brief The scheme of that name, or nothing when no scheme has it.
+std::optional<IntegrationScheme> integrationSchemeByName(std::string_view name);
 
 /// @brief Accuracy settings of the per-observer integration.
 ///

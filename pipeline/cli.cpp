@@ -147,6 +147,10 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
   run_cmd->add_flag("-q,--quiet", run.quiet, "No progress and no summary on standard error");
   std::string run_memory;
   run_cmd->add_option("--memory", run_memory, memoryHelp())->check(byteSize());
+  std::string run_scheme;
+  CLI::Option* run_scheme_opt =
+      run_cmd->add_option("--scheme", run_scheme, "Integration scheme (as for points); overrides the scene")
+          ->check(CLI::IsMember(integrationSchemeNames()));
 
   BatchArgs batch;
   CLI::App* batch_cmd = app.add_subcommand(
@@ -183,6 +187,7 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
     if (app.got_subcommand(run_cmd)) {
       run.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
       if (!run_memory.empty()) run.memory_bytes = *parseByteSize(run_memory);
+      if (*run_scheme_opt) run.scheme = integrationSchemeByName(run_scheme);
       runField(run, err);
     }
     if (app.got_subcommand(batch_cmd)) {

@@ -13,6 +13,7 @@
 #include "export/atomic_file.h"
 #include "export/points_csv.h"
 #include "observers/point_set.h"
+#include "pipeline/input_error.h"
 #include "pipeline/memory_budget.h"
 #include "pipeline/points_file.h"
 #include "pipeline/progress.h"
@@ -90,9 +91,9 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   if (args.normals)
     options.normals = *args.normals == "flat" ? NormalModel::Flat : NormalModel::Surface;
   if (args.scheme) {
-    const std::vector<std::string> names = integrationSchemeNames();
-    options.scheme = static_cast<IntegrationScheme>(
-        std::find(names.begin(), names.end(), *args.scheme) - names.begin());
+    const std::optional<IntegrationScheme> scheme = integrationSchemeByName(*args.scheme);
+    if (!scheme) throw InputError("--scheme " + *args.scheme + ": no such integration scheme");
+    options.scheme = *scheme;
   }
 
   // Open the output first: a missing folder should stop the run before the work, not after.

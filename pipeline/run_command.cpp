@@ -166,6 +166,7 @@ nlohmann::json summaryJson(const ObserverField& field, const HazardZone& zone, c
   j["scene_file"] = info.scene_file;
   j["scene_fnv1a64"] = info.scene_fnv1a64;
   j["scheme"] = info.scheme;
+  j["integration_scheme"] = info.integration_scheme;
   j["box"] = {{"min_m", {spec.min_m.x, spec.min_m.y, spec.min_m.z}},
               {"max_m",
                {spec.position(s.nodes[0] - 1, 0, 0).x, spec.position(0, s.nodes[1] - 1, 0).y,
@@ -392,6 +393,8 @@ RunInfo runInfo(const Scene& scene, const std::string& scene_file, std::string_v
   info.scene_file = scene_file;
   info.scene_fnv1a64 = fnv1a64Hex(scene_text);
   info.scheme = scheme;
+  info.integration_scheme =
+      integrationSchemeNames()[static_cast<std::size_t>(scene.accuracy.scheme)];
   info.wavelength_nm = scene.laser.wavelength_nm;
   info.power_w = scene.laser.power_w;
   info.exposure_s = scene.hazard.exposure_s;
@@ -401,7 +404,8 @@ RunInfo runInfo(const Scene& scene, const std::string& scene_file, std::string_v
 }
 
 void runField(const RunArgs& args, std::ostream& err) {
-  const Scene scene = loadScene(args.scene_path);
+  Scene scene = loadScene(args.scene_path);
+  if (args.scheme) scene.accuracy.scheme = *args.scheme;
   if (!scene.observers && scene.planes.empty()) {
     throw InputError(scene.source +
                      ": /observers: missing (glint run needs an observer box or `planes`)");
@@ -480,7 +484,8 @@ void runField(const RunArgs& args, std::ostream& err) {
     j = {{"program", info.program_version},
          {"scene_file", info.scene_file},
          {"scene_fnv1a64", info.scene_fnv1a64},
-         {"scheme", info.scheme}};
+         {"scheme", info.scheme},
+         {"integration_scheme", info.integration_scheme}};
     j["hazard"] = hazardJson(scene, nullptr);
   }
 

@@ -4,6 +4,7 @@
 /// and the maps over its observer planes.
 
 #include <cstdint>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <string_view>
@@ -24,6 +25,7 @@ struct RunArgs {
   bool quiet = false;    ///< no progress, no summary
   bool terminal = false;
   std::uint64_t memory_bytes = 0;  ///< the memory budget; 0: defaultMemoryBudgetBytes()
+  std::optional<IntegrationScheme> scheme;  ///< overrides the scene's accuracy.scheme
 };
 
 /// @brief Runs the command: writes irradiance.vdb, irradiance.vti, blocks.vtu and target.vtp

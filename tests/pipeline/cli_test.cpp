@@ -95,7 +95,8 @@ TEST_F(CliTest, EveryOptionValueIsCheckedAtTheBoundaryAndNamed) {
       {"--tolerance", "0"},   {"--tolerance", "1e-3x"}, {"--tolerance", ""},
       {"--threads", "0"},     {"--threads", "nan"},     {"--threads", "1.5"},
       {"--uniform", "13"},    {"--uniform", "-1"},      {"--normals", "bent"},
-      {"--memory", "0"},      {"--memory", "12Q"},      {"--memory", "-4G"}};
+      {"--memory", "0"},      {"--memory", "12Q"},      {"--memory", "-4G"},
+      {"--scheme", "fast"}};
   for (const auto& [option, value] : bad) {
     const Outcome r = glint({"points", example("cylinder.json"), "--points",
                              example("cylinder_186.csv"), option, value, "--quiet"});
@@ -226,6 +227,16 @@ TEST_F(CliTest, RunWritesEachPlaneAsAnExrMapAndSummarisesIt) {
   EXPECT_GT(plane.at("hazardous_area_m2").get<double>(), 0.0);
   const auto below = std::count(status.begin(), status.end(), 3.0f);
   EXPECT_GT(below, width * height / 2) << "most of the wall proven below the floor, and marked";
+
+  // --scheme overrides the scene's accuracy.scheme, and the summary says which ran; both
+  // schemes meet the default tolerance of 1e-3, so their peaks agree within 2e-3.
+  const Outcome lobe = glint({"run", scene, "-o", path("lobe"), "--scheme", "lobe", "--quiet"});
+  ASSERT_EQ(lobe.status, 0) << lobe.err;
+  const auto lobe_summary = nlohmann::json::parse(readFile(path("lobe/summary.json")));
+  EXPECT_EQ(summary.at("integration_scheme"), "paper");
+  EXPECT_EQ(lobe_summary.at("integration_scheme"), "lobe");
+  const double lobe_peak = lobe_summary.at("planes").at(0).at("peak_irradiance_w_m2").get<double>();
+  EXPECT_NEAR(lobe_peak, peak, 2e-3 * peak) << "the lobe scheme's peak on the wall";
 }
 
 // issue 15: `glint run /dev/zero` once grew by 250 MB/s; a box of 64 000 voxels a side
