@@ -184,16 +184,19 @@ RuleResult ruleIrradiance(const SurfaceMap& map, const SubFacet& f, const Vec3& 
 // A piece of the lobe scheme. Its six nodes (and, once refined, the nine new nodes of its
 // children) live in the workspace's node pool, so the children inherit them.
 struct LobePiece {
-  SubFacet facet;           // corners placed by the surface map
-  double upper = 0.0;       // bound of its true contribution (+∞ if unbounded)
-  double unresolved = 0.0;  // bound of what the rule cannot be trusted with (0: resolved)
-  double estimate = 0.0;    // the rule on the piece, once sampled
-  double refined = 0.0;     // Σ of the rule on its children, once refined
-  double error = 0.0;       // a magnitude: the bound until refined, then |refined − estimate|
+  SubFacet facet;               // corners placed by the surface map
+  double upper = 0.0;           // bound of its true contribution (+∞ if unbounded)
+  double specular_upper = 0.0;  // bound of its specular part alone
+  double unresolved = 0.0;      // bound of what the rule cannot be trusted with (0: resolved)
+  double estimate = 0.0;        // the rule on the piece, once sampled
+  double refined = 0.0;         // Σ of the rule on its children, once refined (or the estimate)
+  // A magnitude: the bound until refined, then |refined − estimate| (or the embedded error).
+  double error = 0.0;
   std::array<double, 4> child_estimate{};
-  std::uint32_t nodes = 0;  // offset of its 15 nodes in the pool, once sampled
+  std::uint32_t nodes = 0;      // offset of its 15 nodes in the pool, once sampled
   bool sampled = false;
-  bool refined_ok = false;
+  bool refined_ok = false;      // value and error known (by its children, or embedded)
+  bool children_known = false;  // child_estimate and nodes 6–14 hold its children's
 
   [[nodiscard]] double value() const { return refined_ok ? refined : estimate; }
 };
@@ -631,6 +634,13 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
     LobePiece p;
     p.facet = f;
     p.upper = b.upper_w_m2;
+    p.specular_upper = b.upper_w_m2;
+    if (material.diffuse_reflectance > 0.0 && b.upper_w_m2 > 0.0) {
+      Material specular = material;
+      specular.diffuse_reflectance = 0.0;
+      p.specular_upper =
+          contributionBound(g, x, beam, specular, lobeLimits(material.lobe.sigma)).upper_w_m2;
+    }
     p.unresolved = b.unresolved_w_m2;
     p.error = b.upper_w_m2;
     return p;
@@ -670,8 +680,9 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
     const double sigma = material.lobe.sigma;
 
     if (piece.unresolved == 0.0 && !piece.refined_ok) {
-      // Sample the piece (if its nodes are not inherited) and its four children: the change
-      // is the piece's error estimate, and the children's sum its value.
+      // Sample the piece (if its nodes are not inherited) and, unless its light is diffuse
+      // and its embedded estimate settles it, its four children: the change is the piece's
+      // error estimate, and the children's sum its value.
       account(piece, -1);
       const auto& b = piece.facet.bary;
       const std::array<Vec3, 6> node_bary{b[0], b[1], b[2], 0.5 * (b[0] + b[1]),
@@ -684,15 +695,27 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
         }
         result.evaluations += 6;
         const LobeNode* n = &ws.lobe_nodes[piece.nodes];
+        const double small = negligible();
         const LobeEstimate e =
             lobeRule(PieceSampler(map, b, x, beam, material), {n, n + 1, n + 2, n + 3, n + 4, n + 5},
-                     parameterArea(piece.facet), sigma, negligible());
+                     parameterArea(piece.facet), sigma, small, /*embedded=*/true);
         result.evaluations += e.evaluations;
         piece.sampled = true;
         piece.estimate = e.irradiance_w_m2;
-        if (!e.ok) piece.unresolved = piece.upper;  // known by its bound alone: split further
+        if (!e.ok) {
+          piece.unresolved = piece.upper;  // known by its bound alone: split further
+        } else if (piece.specular_upper <= small && e.diffuse_error_w_m2 < kInf) {
+          // Diffuse light only (the specular part is bounded below negligible: the rule's own
+          // lobe may be misplaced, the bound cannot), over a piece that is whole (lit, in view,
+          // in the beam): its smooth integrand is known to within the embedded rules'
+          // difference, without the children a lobe needs. The specular bound counts as error.
+          piece.refined_ok = true;
+          piece.refined = std::min(piece.estimate, piece.upper);
+          piece.error = e.diffuse_error_w_m2 + piece.specular_upper;
+          if (!(piece.estimate <= piece.upper)) piece.error = std::max(piece.error, piece.upper);
+        }
       }
-      if (piece.unresolved == 0.0) {
+      if (piece.unresolved == 0.0 && !piece.refined_ok) {
         LobeNode* n = &ws.lobe_nodes[piece.nodes];
         for (int k = 0; k < 3; ++k) {  // children 0–2 hold the nine new midpoints between them
           const std::array<int, 6>& c = kChildNodes[k];
@@ -722,6 +745,7 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
           // The change under splitting, plus what the children's rule may miss that splitting
           // does not show (where the lobe is narrower than both levels' pieces).
           piece.refined_ok = true;
+          piece.children_known = true;
           piece.error = std::abs(piece.refined - piece.estimate) + rule_error;
           // No rule may claim more than the piece's rigorous bound: beyond it the model has
           // failed, and the piece is known only to within its bound.
@@ -760,7 +784,7 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
     for (int k = 0; k < 4; ++k) {
       LobePiece child = bounded(children[k], x, beam, material);
       if (child.upper == 0.0) continue;  // provably dark
-      if (piece.refined_ok) {
+      if (piece.children_known) {
         child.sampled = true;
         // Known to within its bound until refined in turn (its error is that bound).
         child.estimate = std::clamp(piece.child_estimate[k], 0.0, child.upper);

@@ -495,7 +495,7 @@ bool integrateLobe(const LobeSampler& sampler, const std::array<const LobeNode*,
 }  // namespace
 
 LobeEstimate lobeRule(const LobeSampler& sampler, const std::array<const LobeNode*, 6>& nodes,
-                      double area_uv, double sigma, double negligible_w_m2) {
+                      double area_uv, double sigma, double negligible_w_m2, bool embedded) {
   LobeEstimate result;
   for (const LobeNode* node : nodes) {
     if (!node->valid) return result;
@@ -518,21 +518,35 @@ LobeEstimate lobeRule(const LobeSampler& sampler, const std::array<const LobeNod
   // The diffuse term is smooth over the clipped part: a degree-5 rule (3 × 3 conical product)
   // on each triangle of a fan, sampled from the integrand itself (continued smoothly, signed,
   // where the part's straight edges overshoot the true terminator or horizon).
-  double diffuse = 0.0;
-  if (std::any_of(nodes.begin(), nodes.end(), [](const LobeNode* n) { return n->diffuse != 0.0; })) {
-    static const std::span<const TriangleNode> kRule = conicalProductRule(3);
+  double diffuse = 0.0, diffuse_low = 0.0;
+  const bool has_diffuse =
+      std::any_of(nodes.begin(), nodes.end(), [](const LobeNode* n) { return n->diffuse != 0.0; });
+  // The embedded estimate needs the whole piece smooth: every node lit, in view, in the beam.
+  const bool unclipped = std::all_of(nodes.begin(), nodes.end(), [](const LobeNode* n) {
+    return std::all_of(n->clip.begin(), n->clip.end(), [](double f) { return f > 0.0; });
+  });
+  auto integrate = [&](std::span<const TriangleNode> rule, double& out) {
     for (int i = 1; i + 1 < poly.n; ++i) {
       const Vec2 &a = poly.v[0], &b = poly.v[i], &c = poly.v[i + 1];
       const double area = 0.5 * cross2(b - a, c - a);
       double sum = 0.0;
-      for (const TriangleNode& node : kRule) {
+      for (const TriangleNode& node : rule) {
         const Vec2 x = node.bary[0] * a + node.bary[1] * b + node.bary[2] * c;
         const LobeNode at = sampler.at(x.x, x.y);
         ++result.evaluations;
-        if (!at.valid) return result;
+        if (!at.valid) return false;
         sum += node.weight * at.diffuse;
       }
-      diffuse += area * sum;
+      out += area * sum;
+    }
+    return true;
+  };
+  if (has_diffuse) {
+    static const std::span<const TriangleNode> kRule = conicalProductRule(3);
+    if (!integrate(kRule, diffuse)) return result;
+    if (embedded && unclipped) {
+      static const std::span<const TriangleNode> kLowRule = conicalProductRule(2);
+      if (!integrate(kLowRule, diffuse_low)) return result;
     }
   }
 
@@ -548,6 +562,13 @@ LobeEstimate lobeRule(const LobeSampler& sampler, const std::array<const LobeNod
   if (!std::isfinite(value) || !std::isfinite(error)) return result;
   result.irradiance_w_m2 = value;
   result.rule_error_w_m2 = error;
+  result.specular_w_m2 = 2.0 * area_uv * (std::abs(specular.value) + specular.error);
+  if (embedded && unclipped) {
+    result.diffuse_error_w_m2 = has_diffuse ? 2.0 * area_uv * std::abs(diffuse - diffuse_low) : 0.0;
+  }
+  if (!std::isfinite(result.specular_w_m2) || !(result.diffuse_error_w_m2 >= 0.0)) {
+    result.diffuse_error_w_m2 = std::numeric_limits<double>::infinity();
+  }
   result.ok = true;
   return result;
 }

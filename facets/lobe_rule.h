@@ -15,6 +15,7 @@
 /// second-order product rule, with no sample ever needing to land on the peak.
 
 #include <array>
+#include <limits>
 #include <glm/vec2.hpp>
 #include <span>
 
@@ -102,6 +103,12 @@ struct LobeEstimate {
   double rule_error_w_m2 = 0.0;
   int evaluations = 0;  ///< integrand evaluations beyond the six nodes
   bool ok = false;      ///< false when a node is invalid or the estimate is not finite
+  /// The specular part of irradiance_w_m2 plus its rule error (W/m²).
+  double specular_w_m2 = 0.0;
+  /// With `embedded`: the diffuse part's error estimated within the piece, |degree 5 − degree 3|
+  /// on the same part (W/m²); +∞ when the piece is clipped anywhere its six nodes can see, since
+  /// the straight edges of the clipped part then err by more than the rules show.
+  double diffuse_error_w_m2 = std::numeric_limits<double>::infinity();
 };
 
 /// @brief Integrates the piece whose nodes are @p nodes (corners 0, 1, 2, then the midpoints of
@@ -111,8 +118,11 @@ struct LobeEstimate {
 /// that Gaussian at five sigma points, where @p sampler evaluates it; the diffuse term by a
 /// degree-5 rule on the part, also sampled from @p sampler. A specular term whose
 /// interpolated estimate (times e²) is below @p negligible_w_m2 is returned as that estimate,
-/// wholly uncertain, without the sigma points. Never throws.
+/// wholly uncertain, without the sigma points. With @p embedded, the diffuse term's error is
+/// also estimated (see LobeEstimate::diffuse_error_w_m2), at four more evaluations.
+/// Never throws.
 LobeEstimate lobeRule(const LobeSampler& sampler, const std::array<const LobeNode*, 6>& nodes,
-                      double area_uv, double sigma, double negligible_w_m2 = 0.0);
+                      double area_uv, double sigma, double negligible_w_m2 = 0.0,
+                      bool embedded = false);
 
 }  // namespace glint

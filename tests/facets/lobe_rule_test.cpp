@@ -72,11 +72,13 @@ TEST(StandardNormalOverPolygon, IsContinuousAsTheOriginCrossesAVertexOrAnEdge) {
   EXPECT_NEAR(half.mass, 0.5, 1e-15) << "the upper half plane";
 }
 
-// A triangle of the (s, t) plane whose integrand is spec(x) · exp(−|q(x)|²/2σ²), q and spec
-// given as functions of (s, t).
+// A triangle of the (s, t) plane whose integrand is spec(x) · exp(−|q(x)|²/2σ²) + diffuse(x),
+// q, spec, diffuse and the clip value (the same for all four clips) given as functions of (s, t).
 struct Synthetic final : LobeSampler {
   std::function<Vec3(const Vec2&)> q;
   std::function<double(const Vec2&)> spec;
+  std::function<double(const Vec2&)> diffuse = [](const Vec2&) { return 0.0; };
+  std::function<double(const Vec2&)> clip = [](const Vec2&) { return 1.0; };
   double sigma = 0.003;
   std::array<Vec2, 3> corner{Vec2(0, 0), Vec2(1, 0), Vec2(0, 1)};
 
@@ -88,15 +90,17 @@ struct Synthetic final : LobeSampler {
     LobeNode n;
     n.slope = q(x);
     n.specular = spec(x);
-    n.clip = {1.0, 1.0, 1.0, 1.0};
+    n.diffuse = diffuse(x);
+    const double c = clip(x);
+    n.clip = {c, c, c, c};
     n.valid = n.has_slope = true;
     return n;
   }
-  [[nodiscard]] LobeEstimate rule() const {
+  [[nodiscard]] LobeEstimate rule(bool embedded = false) const {
     std::array<LobeNode, 6> n{at(0, 0), at(1, 0), at(0, 1), at(0.5, 0), at(0.5, 0.5), at(0, 0.5)};
     const Vec2 e1 = corner[1] - corner[0], e2 = corner[2] - corner[0];
     const double area = 0.5 * std::abs(e1.x * e2.y - e1.y * e2.x);
-    return lobeRule(*this, {&n[0], &n[1], &n[2], &n[3], &n[4], &n[5]}, area, sigma);
+    return lobeRule(*this, {&n[0], &n[1], &n[2], &n[3], &n[4], &n[5]}, area, sigma, 0.0, embedded);
   }
   // The four children of the 1→4 split, as the integrator makes them.
   [[nodiscard]] std::array<Synthetic, 4> children() const {
@@ -170,6 +174,38 @@ TEST(LobeRule, CurvedSlopeIsWithinTheErrorEstimateOfOneSplit) {
     EXPECT_LE(std::abs(refined - truth), estimate + 1e-7 * truth)
         << "split once: " << refined << " against " << truth;
     EXPECT_NEAR(parent.irradiance_w_m2 / truth, 1.0, 2e-3) << "one piece";
+  }
+}
+
+TEST(LobeRule, EmbeddedDiffuseErrorBoundsTheDegreeFiveRuleAndIsRefusedWhenClipped) {
+  // A diffuse term as a near observer sees it (1/d², d from 0.2 or 0.5 to about 1 across the
+  // piece) and as a far one does (nearly constant): |degree 5 − degree 3| bounds the degree-5
+  // rule's own error in each, and is small where the piece is small against the distance.
+  for (double h : {0.2, 0.5, 5.0}) {
+    Synthetic piece;
+    piece.q = [](const Vec2&) { return Vec3(1.0, 0.0, 0.0); };  // the lobe far away
+    piece.spec = [](const Vec2&) { return 0.0; };
+    piece.diffuse = [h](const Vec2& x) {
+      const double dx = x.x - 0.3, dy = x.y - 0.2;
+      return 1.0 / (dx * dx + dy * dy + h * h);
+    };
+    const LobeEstimate e = piece.rule(/*embedded=*/true);
+    ASSERT_TRUE(e.ok) << "h = " << h;
+    const double truth = bruteTriangle(piece.corner[0], piece.corner[1], piece.corner[2], 3000,
+                                       [&](const Vec2& x) { return piece.diffuse(x); });
+    EXPECT_LE(std::abs(e.irradiance_w_m2 - truth), e.diffuse_error_w_m2 + 1e-9 * truth)
+        << "h = " << h;
+    if (h >= 0.5) {
+      EXPECT_LT(e.diffuse_error_w_m2, 0.05 * truth) << "h = " << h;
+    }
+    EXPECT_EQ(e.specular_w_m2, 0.0);
+    EXPECT_EQ(piece.rule().diffuse_error_w_m2, std::numeric_limits<double>::infinity())
+        << "not asked for";
+    // A terminator across the piece's far corner: the straight cut errs by more than the
+    // rules can show, so no embedded estimate is offered.
+    Synthetic clipped = piece;
+    clipped.clip = [](const Vec2& x) { return 0.9 - x.x - x.y; };
+    EXPECT_EQ(clipped.rule(true).diffuse_error_w_m2, std::numeric_limits<double>::infinity());
   }
 }
 
