@@ -138,7 +138,7 @@ ResolutionLimits cubatureLimits() {
   ResolutionLimits limits;
   limits.lobe = 4.0;
   limits.clipped_log_variation = -1.0;
-  limits.near_field = 0.5;
+  limits.near_field = 0.25;
   return limits;
 }
 
