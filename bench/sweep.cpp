@@ -152,23 +152,19 @@ int main(int argc, char** argv) {
   }
 
   std::vector<Row> rows;
-  for (double tol : parseList(tolerances)) {
-    IntegratorOptions o = options;
-    o.tolerance = tol;
-    rows.push_back(measure(FacetIntegrator(buildTarget(scene), beamOf(scene), o), points,
-                           PointScheme{}, ref, options.floor_w_m2));
-    rows.back().parameter = tol;
-  }
-  if (!lobe_tolerances.empty()) {
-    for (double tol : parseList(lobe_tolerances)) {
+  auto adaptive_runs = [&](const std::string& list, IntegrationScheme scheme) {
+    if (list.empty()) return;
+    for (double tol : parseList(list)) {
       IntegratorOptions o = options;
       o.tolerance = tol;
-      o.scheme = IntegrationScheme::Lobe;
+      o.scheme = scheme;
       rows.push_back(measure(FacetIntegrator(buildTarget(scene), beamOf(scene), o), points,
                              PointScheme{}, ref, options.floor_w_m2));
       rows.back().parameter = tol;
     }
-  }
+  };
+  adaptive_runs(tolerances, options.scheme);
+  adaptive_runs(lobe_tolerances, IntegrationScheme::Lobe);
   const FacetIntegrator fi(buildTarget(scene), beamOf(scene), options);
   for (double level : parseList(levels)) {
     rows.push_back(
@@ -187,17 +183,21 @@ int main(int argc, char** argv) {
     std::printf("%-9s %9g %14.0f %9.3f %12.3e %12.3e %d\n", r.scheme.c_str(), r.parameter,
                 r.evaluations_per_observer, r.seconds, r.max_error, r.rms_error, r.unconverged);
   }
+  // The cheapest row of `scheme` (by `cost`) at least as accurate as `than`, if any.
+  auto cheapest_as_accurate = [&](const std::string& scheme, const Row& than,
+                                  double Row::*cost) -> const Row* {
+    const Row* best = nullptr;
+    for (const Row& r : rows) {
+      if (r.scheme == scheme && r.max_error <= than.max_error && (!best || r.*cost < best->*cost)) {
+        best = &r;
+      }
+    }
+    return best;
+  };
   // The lobe scheme against the cheapest run of the paper's scheme at least as accurate.
   for (const Row& l : rows) {
     if (l.scheme != "lobe") continue;
-    const Row* best = nullptr;
-    for (const Row& a : rows) {
-      if (a.scheme == "adaptive" && a.max_error <= l.max_error &&
-          (!best || a.seconds < best->seconds)) {
-        best = &a;
-      }
-    }
-    if (best) {
+    if (const Row* best = cheapest_as_accurate("adaptive", l, &Row::seconds)) {
       std::printf("lobe at %-7g max error %.2e: %.0f vs %.0f evaluations (paper at %g): %.1fx "
                   "fewer, %.1fx faster\n",
                   l.parameter, l.max_error, l.evaluations_per_observer,
@@ -213,14 +213,7 @@ int main(int argc, char** argv) {
   std::printf("\nat equal accuracy (max error): adaptive vs the cheapest uniform level as good\n");
   for (const Row& a : rows) {
     if (a.scheme != "adaptive") continue;
-    const Row* best = nullptr;
-    for (const Row& u : rows) {
-      if (u.scheme == "uniform" && u.max_error <= a.max_error &&
-          (!best || u.evaluations_per_observer < best->evaluations_per_observer)) {
-        best = &u;
-      }
-    }
-    if (best) {
+    if (const Row* best = cheapest_as_accurate("uniform", a, &Row::evaluations_per_observer)) {
       std::printf(
           "tolerance %-7g max error %.2e: %.0f vs %.0f evaluations (level %g): %.1fx fewer, %.1fx "
           "faster\n",

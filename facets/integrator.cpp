@@ -634,13 +634,7 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
     LobePiece p;
     p.facet = f;
     p.upper = b.upper_w_m2;
-    p.specular_upper = b.upper_w_m2;
-    if (material.diffuse_reflectance > 0.0 && b.upper_w_m2 > 0.0) {
-      Material specular = material;
-      specular.diffuse_reflectance = 0.0;
-      p.specular_upper =
-          contributionBound(g, x, beam, specular, lobeLimits(material.lobe.sigma)).upper_w_m2;
-    }
+    p.specular_upper = b.specular_w_m2;
     p.unresolved = b.unresolved_w_m2;
     p.error = b.upper_w_m2;
     return p;

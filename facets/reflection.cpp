@@ -23,10 +23,10 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
   const double reach = g.radius_m + observer_radius_m;
   if (!(d > reach)) {
     const double inf = std::numeric_limits<double>::infinity();
-    return {inf, inf};
+    return {inf, inf, inf};
   }
   const double e_max = beam.maxIrradianceInBall(g.centre_m, g.radius_m);
-  if (e_max == 0.0 || g.area_bound_m2 == 0.0) return {0.0, 0.0};
+  if (e_max == 0.0 || g.area_bound_m2 == 0.0) return {0.0, 0.0, 0.0};
 
   // Half-vector spread: ωo turns by at most asin(r/d) over the ball, ωi by the beam's spread;
   // their sum moves by at most the two chords.
@@ -70,12 +70,13 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
   ContributionBound b;
   b.upper_w_m2 = specular + diffuse;
   b.unresolved_w_m2 = (specular_smooth ? 0.0 : specular) + (smooth ? 0.0 : diffuse);
+  b.specular_w_m2 = specular;
   // A bound is only useful if it fails safe: a NaN (from a NaN in the geometry, or an
   // overflowing beam power meeting a zero) would compare false against every threshold and
   // could be read as "nothing here". It becomes +∞, which every caller refines.
-  if (!(b.upper_w_m2 >= 0.0) || !(b.unresolved_w_m2 >= 0.0)) {
+  if (!(b.upper_w_m2 >= 0.0) || !(b.unresolved_w_m2 >= 0.0) || !(b.specular_w_m2 >= 0.0)) {
     const double inf = std::numeric_limits<double>::infinity();
-    return {inf, inf};
+    return {inf, inf, inf};
   }
   return b;
 }

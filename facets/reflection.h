@@ -93,6 +93,7 @@ struct ContributionBound {
   /// wider than the lobe (or, where it is clipped, not flat enough), both terms near a beam
   /// edge or in the near field. 0: resolved.
   double unresolved_w_m2 = 0.0;
+  double specular_w_m2 = 0.0;  ///< the specular term's share of upper_w_m2
 
   [[nodiscard]] bool resolved() const { return unresolved_w_m2 == 0.0; }
 };

@@ -33,6 +33,10 @@ struct CrossCheckCase {
 
 constexpr double kRadius = 0.5;
 constexpr double kLength = 2.0;
+// The three targets, each as the scheme and the brute force see it.
+const CylinderShape kCylinder{Vec3(0), Vec3(0, 0, 1), kRadius, kLength};
+const SphereShape kSphere{Vec3(0), kRadius};
+const DiskShape kDisk{Vec3(0), glm::normalize(Vec3(-1, 0.3, 0.2)), kRadius};
 
 // One random scene and observer. The target sits at the origin; the laser, 100 m away, aims
 // at a point up to 0.2 m off its centre from within 50° of +x.
@@ -89,26 +93,25 @@ CrossCheckCase drawCase(std::mt19937_64& rng, int index) {
 }
 
 test::brute::Parametrisation parametrisation(const CrossCheckCase& c) {
-  if (c.shape == 0) return test::brute::cylinder({Vec3(0), Vec3(0, 0, 1), kRadius, kLength});
+  if (c.shape == 0) return test::brute::cylinder(kCylinder);
   if (c.shape == 1) {
     // The glint lies in the plane of the laser, the centre and the observer: its normal is the
     // pole, so the glint sits on the equator, far from the parametrisation's singular points.
     Vec3 pole = glm::cross(c.beam.direction, c.observer_m);
     if (glm::length(pole) < 1e-6 * glm::length(c.observer_m))
       pole = glm::cross(c.beam.direction, Vec3(0.3, 0.5, 0.7));
-    return test::brute::sphere({Vec3(0), kRadius}, pole);
+    return test::brute::sphere(kSphere, pole);
   }
-  return test::brute::disk({Vec3(0), glm::normalize(Vec3(-1, 0.3, 0.2)), kRadius});
+  return test::brute::disk(kDisk);
 }
 
 FacetIntegrator integrator(const CrossCheckCase& c, const IntegratorOptions& options) {
   return test::singleObject(
       c.material, c.beam,
       [&](Target& t, std::uint32_t m, Vec3 ref) {
-        if (c.shape == 0) addCylinder(t, {Vec3(0), Vec3(0, 0, 1), kRadius, kLength}, m, 16, ref);
-        if (c.shape == 1) addSphere(t, {Vec3(0), kRadius}, m, 16, ref);
-        if (c.shape == 2)
-          addDisk(t, {Vec3(0), glm::normalize(Vec3(-1, 0.3, 0.2)), kRadius}, m, 16, ref);
+        if (c.shape == 0) addCylinder(t, kCylinder, m, 16, ref);
+        if (c.shape == 1) addSphere(t, kSphere, m, 16, ref);
+        if (c.shape == 2) addDisk(t, kDisk, m, 16, ref);
       },
       options);
 }

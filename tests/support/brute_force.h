@@ -214,9 +214,7 @@ inline Estimate irradiance(const Parametrisation& p, const Beam& beam, const Mat
 /// (keep it away from the glint: the parametrisation is singular there).
 inline Parametrisation cylinder(const CylinderShape& s) {
   const Vec3 a = glm::normalize(s.axis);
-  const Vec3 e1 =
-      glm::normalize(glm::cross(a, std::abs(a.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0)));
-  const Vec3 e2 = glm::cross(a, e1);
+  const Vec3 e1 = anyPerpendicular(a), e2 = glm::cross(a, e1);
   Parametrisation p;
   p.u0 = -0.5 * s.length_m;
   p.u1 = 0.5 * s.length_m;
@@ -231,9 +229,7 @@ inline Parametrisation cylinder(const CylinderShape& s) {
 
 inline Parametrisation sphere(const SphereShape& s, const Vec3& pole) {
   const Vec3 a = glm::normalize(pole);
-  const Vec3 e1 =
-      glm::normalize(glm::cross(a, std::abs(a.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0)));
-  const Vec3 e2 = glm::cross(a, e1);
+  const Vec3 e1 = anyPerpendicular(a), e2 = glm::cross(a, e1);
   Parametrisation p;
   p.u0 = 0.0;
   p.u1 = kPi;
@@ -249,9 +245,7 @@ inline Parametrisation sphere(const SphereShape& s, const Vec3& pole) {
 
 inline Parametrisation disk(const DiskShape& s) {
   const Vec3 n = glm::normalize(s.normal);
-  const Vec3 e1 =
-      glm::normalize(glm::cross(n, std::abs(n.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0)));
-  const Vec3 e2 = glm::cross(n, e1);
+  const Vec3 e1 = anyPerpendicular(n), e2 = glm::cross(n, e1);
   Parametrisation p;
   p.u0 = -s.radius_m;
   p.u1 = s.radius_m;
