@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
 #include "facets/detail/patch_models.h"
+#include "facets/detail/surface_cache.h"
 #include "facets/lobe_rule.h"
 #include "facets/occluder.h"
 #include "facets/sum.h"
@@ -245,6 +247,7 @@ struct IntegratorWorkspace::Impl {
   std::vector<Vec3> observer_local_m;  // the observer in each object's frame
   std::vector<LobePiece> pieces;       // the lobe scheme's leaves
   std::vector<LobeNode> lobe_nodes;    // their nodes, kLobeNodes per sampled piece
+  detail::SurfaceCache surfaces;       // the lobe scheme's geometry, kept between observers
 
   void reset() {
     pieces.clear();
@@ -320,6 +323,8 @@ IntegratorWorkspace& IntegratorWorkspace::operator=(IntegratorWorkspace&&) noexc
 
 FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const IntegratorOptions& options)
     : target_(std::move(target)), beam_(beam), options_(options) {
+  static std::atomic<std::uint64_t> instances{0};
+  id_ = ++instances;
   if (!(options_.tolerance >= 0.0) || !(options_.floor_w_m2 >= 0.0) ||
       !std::isfinite(options_.floor_w_m2) || options_.max_depth < 0 || options_.max_depth > 30 ||
       options_.max_evaluations < 1) {
@@ -372,6 +377,7 @@ FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const Integrat
 
 void FacetIntegrator::prepareObserver(const Vec3& observer_m, IntegratorWorkspace::Impl& ws) const {
   ws.reset();
+  ws.surfaces.bind(id_);
   ws.observer_local_m.resize(target_.objects.size());
   for (std::size_t k = 0; k < target_.objects.size(); ++k) {
     ws.observer_local_m[k] = observer_m - target_.objects[k].origin_m;
@@ -628,7 +634,7 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
   };
   auto bounded = [&](const SubFacet& f, const Vec3& x, const Beam& beam,
                      const Material& material) {
-    const PatchGeometry g = patchGeometry(target_, f, NormalModel::Surface);
+    const PatchGeometry g = ws.surfaces.geometry(target_, f);
     const ContributionBound b =
         contributionBound(g, x, beam, material, lobeLimits(material.lobe.sigma));
     LobePiece p;
@@ -647,10 +653,8 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
     const Material& material = target_.materials[target_.objects[lit.object].material];
     // A candidate split by boundRegion() has its corners from 1→4 subdivision; the pieces
     // here are those of the surface map, over the same barycentric triangle.
-    const SubFacet f = lit.facet.depth > 0 ? maps_[lit.facet.coarse].subFacet(
-                                                 lit.facet.bary, lit.facet.depth,
-                                                 lit.facet.rim_edges)
-                                           : lit.facet;
+    const SubFacet f = ws.surfaces.subFacet(maps_[lit.facet.coarse], lit.facet.coarse,
+                                            lit.facet.bary, lit.facet.depth, lit.facet.rim_edges);
     const LobePiece p = bounded(f, x, beam, material);
     if (p.upper == 0.0) continue;
     store(p);
@@ -685,7 +689,8 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
         piece.nodes = static_cast<std::uint32_t>(ws.lobe_nodes.size());
         ws.lobe_nodes.resize(ws.lobe_nodes.size() + kLobeNodes);
         for (int j = 0; j < 6; ++j) {
-          ws.lobe_nodes[piece.nodes + j] = lobeNode(map, node_bary[j], x, beam, material);
+          ws.lobe_nodes[piece.nodes + j] = lobeNode(
+              ws.surfaces.at(map, piece.facet.coarse, node_bary[j]), x, beam, material);
         }
         result.evaluations += 6;
         const LobeNode* n = &ws.lobe_nodes[piece.nodes];
@@ -714,8 +719,9 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
         for (int k = 0; k < 3; ++k) {  // children 0–2 hold the nine new midpoints between them
           const std::array<int, 6>& c = kChildNodes[k];
           for (int e = 0; e < 3; ++e) {
-            n[c[3 + e]] = lobeNode(map, 0.5 * (node_bary[c[e]] + node_bary[c[(e + 1) % 3]]), x,
-                                   beam, material);
+            const Vec3 mid = 0.5 * (node_bary[c[e]] + node_bary[c[(e + 1) % 3]]);
+            n[c[3 + e]] = lobeNode(ws.surfaces.at(map, piece.facet.coarse, mid), x, beam,
+                                   material);
           }
         }
         result.evaluations += 9;
@@ -774,7 +780,7 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
     }
     account(piece, -1);
     ws.free_slots.push_back(slot);
-    const std::array<SubFacet, 4> children = map.split(piece.facet);
+    const std::array<SubFacet, 4> children = ws.surfaces.split(map, piece.facet);
     for (int k = 0; k < 4; ++k) {
       LobePiece child = bounded(children[k], x, beam, material);
       if (child.upper == 0.0) continue;  // provably dark

@@ -328,8 +328,12 @@ NormalMoments standardNormalOverPolygon(std::span<const Vec2> ccw) {
 
 LobeNode lobeNode(const SurfaceMap& map, const Vec3& bary, const Vec3& observer_m,
                   const Beam& beam, const Material& material) {
+  return lobeNode(map.at(bary), observer_m, beam, material);
+}
+
+LobeNode lobeNode(const SurfacePoint& p, const Vec3& observer_m, const Beam& beam,
+                  const Material& material) {
   LobeNode node;
-  const SurfacePoint p = map.at(bary);
   if (!p.valid) return node;
   const Beam::Footprint b = beam.footprint(p.position_m);
   const Vec3 to_observer = observer_m - p.position_m;

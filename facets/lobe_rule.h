@@ -66,6 +66,10 @@ struct LobeNode {
 LobeNode lobeNode(const SurfaceMap& map, const Vec3& bary, const Vec3& observer_m,
                   const Beam& beam, const Material& material);
 
+/// @brief As above, with the surface there already known (@p surface = map.at(bary)).
+LobeNode lobeNode(const SurfacePoint& surface, const Vec3& observer_m, const Beam& beam,
+                  const Material& material);
+
 /// @brief Where the rule may sample a piece beyond its nodes: the integrand's parts at (s, t),
 /// the piece being the image of the triangle (0,0), (1,0), (0,1).
 class LobeSampler {

@@ -122,33 +122,45 @@ SurfacePoint SurfaceMap::at(const Vec3& bary) const {
 
 SubFacet SurfaceMap::subFacet(const std::array<Vec3, 3>& bary, std::uint8_t depth,
                               std::uint8_t rim_edges) const {
+  return subFacet(bary, depth, rim_edges, {at(bary[0]), at(bary[1]), at(bary[2])});
+}
+
+SubFacet SurfaceMap::subFacet(const std::array<Vec3, 3>& bary, std::uint8_t depth,
+                              std::uint8_t rim_edges,
+                              const std::array<SurfacePoint, 3>& corners) const {
   SubFacet f;
   f.bary = bary;
   f.coarse = facet_;
   f.depth = depth;
   f.rim_edges = rim_edges;
   for (int k = 0; k < 3; ++k) {
-    const SurfacePoint s = at(bary[k]);
     // An invalid corner keeps its chord position: the piece's bounds then describe the chord,
     // and the integrand there (invalid samples) is refined as unresolved.
-    f.corner_m[k] = s.valid ? s.position_m
-                            : bary[k][0] * corner_m_[0] + bary[k][1] * corner_m_[1] +
-                                  bary[k][2] * corner_m_[2];
+    f.corner_m[k] = corners[k].valid ? corners[k].position_m
+                                     : bary[k][0] * corner_m_[0] + bary[k][1] * corner_m_[1] +
+                                           bary[k][2] * corner_m_[2];
   }
   return f;
 }
 
-std::array<SubFacet, 4> SurfaceMap::split(const SubFacet& f) const {
+std::array<SurfaceMap::Child, 4> SurfaceMap::children(const SubFacet& f) {
   std::array<Vec3, 3> m;
   for (int e = 0; e < 3; ++e) m[e] = 0.5 * (f.bary[e] + f.bary[(e + 1) % 3]);
   const auto& b = f.bary;
   const auto d = static_cast<std::uint8_t>(f.depth + 1);
   const std::uint8_t r = f.rim_edges;
   // The same children, in the same order and with the same rim bits, as detail::splitWith.
-  return {subFacet({b[0], m[0], m[2]}, d, static_cast<std::uint8_t>(r & 0b101)),
-          subFacet({m[0], b[1], m[1]}, d, static_cast<std::uint8_t>(r & 0b011)),
-          subFacet({m[2], m[1], b[2]}, d, static_cast<std::uint8_t>(r & 0b110)),
-          subFacet({m[0], m[1], m[2]}, d, 0)};
+  return {Child{{b[0], m[0], m[2]}, d, static_cast<std::uint8_t>(r & 0b101)},
+          Child{{m[0], b[1], m[1]}, d, static_cast<std::uint8_t>(r & 0b011)},
+          Child{{m[2], m[1], b[2]}, d, static_cast<std::uint8_t>(r & 0b110)},
+          Child{{m[0], m[1], m[2]}, d, 0}};
+}
+
+std::array<SubFacet, 4> SurfaceMap::split(const SubFacet& f) const {
+  std::array<SubFacet, 4> out;
+  const std::array<Child, 4> c = children(f);
+  for (int k = 0; k < 4; ++k) out[k] = subFacet(c[k].bary, c[k].depth, c[k].rim_edges);
+  return out;
 }
 
 }  // namespace glint

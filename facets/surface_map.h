@@ -47,8 +47,23 @@ class SurfaceMap {
   [[nodiscard]] SubFacet subFacet(const std::array<Vec3, 3>& bary, std::uint8_t depth,
                                   std::uint8_t rim_edges) const;
 
+  /// @brief As subFacet(bary, depth, rim_edges), with the surface at the corners already
+  /// known: @p corners[k] = at(bary[k]).
+  [[nodiscard]] SubFacet subFacet(const std::array<Vec3, 3>& bary, std::uint8_t depth,
+                                  std::uint8_t rim_edges,
+                                  const std::array<SurfacePoint, 3>& corners) const;
+
   /// @brief The four children of @p f (as split() orders them), corners placed by at().
   [[nodiscard]] std::array<SubFacet, 4> split(const SubFacet& f) const;
+
+  /// @brief The children split() makes of @p f, before their corners are placed: barycentric
+  /// corners (in the coarse facet), depth and rim bits, in split()'s order.
+  struct Child {
+    std::array<Vec3, 3> bary;
+    std::uint8_t depth = 0;
+    std::uint8_t rim_edges = 0;
+  };
+  [[nodiscard]] static std::array<Child, 4> children(const SubFacet& f);
 
  private:
   struct RimArc {

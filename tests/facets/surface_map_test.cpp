@@ -3,6 +3,7 @@
 #include <cmath>
 #include <vector>
 
+#include "facets/detail/surface_cache.h"
 #include "facets/surface_map.h"
 #include "facets/tessellate.h"
 #include "facets/triangle_rule.h"
@@ -106,6 +107,60 @@ TEST(SurfaceMap, PointsLieOnTheQuadricWithItsGradientNormal) {
       EXPECT_NEAR(glm::dot(p.normal, glm::normalize(rel)), 1.0, 1e-12) << "facet " << i;
     }
   }
+}
+
+// The memo must be invisible: bit for bit what the map and patchGeometry() compute, asked once
+// or again, and never an answer kept from another target.
+TEST(SurfaceCache, ReturnsBitForBitWhatItMemoisesAndForgetsOnAnotherTarget) {
+  Target cyl, sphere;
+  for (Target* t : {&cyl, &sphere}) t->addMaterial({});
+  addCylinder(cyl, {Vec3(0.0), Vec3(0.0, 0.0, 1.0), 0.5, 2.0}, 0, 16, Vec3(0.0, -1.0, 0.0));
+  addSphere(sphere, {Vec3(0.0), 0.7}, 0, 16, Vec3(0.0, -1.0, 0.0));
+  detail::SurfaceCache cache;
+  auto same_point = [](const SurfacePoint& a, const SurfacePoint& b) {
+    return a.valid == b.valid && a.position_m == b.position_m && a.normal == b.normal &&
+           a.jacobian_m2 == b.jacobian_m2;
+  };
+  cache.bind(1);
+  for (int pass = 0; pass < 2; ++pass) {  // the second pass is answered from the memo
+    for (std::uint32_t i = 0; i < cyl.facetCount(); i += 7) {
+      const SurfaceMap map(cyl, i);
+      std::vector<SubFacet> pieces{map.subFacet(coarseSubFacet(cyl, i).bary, 0,
+                                                coarseSubFacet(cyl, i).rim_edges)};
+      for (std::size_t k = 0; k < pieces.size(); ++k) {
+        const SubFacet f = pieces[k];
+        const PatchGeometry want = patchGeometry(cyl, f, NormalModel::Surface);
+        const PatchGeometry got = cache.geometry(cyl, f);
+        EXPECT_TRUE(got.centre_m == want.centre_m && got.radius_m == want.radius_m &&
+                    got.cone_rad == want.cone_rad && got.area_bound_m2 == want.area_bound_m2 &&
+                    got.normal == want.normal)
+            << "facet " << i << " depth " << int(f.depth) << " pass " << pass;
+        if (f.depth == 4) continue;
+        const auto want_children = map.split(f);
+        const auto children = cache.split(map, f);
+        for (int c = 0; c < 4; ++c) {
+          for (int j = 0; j < 3; ++j) {
+            EXPECT_EQ(children[c].corner_m[j], want_children[c].corner_m[j])
+                << "facet " << i << " depth " << int(f.depth) << " child " << c;
+            EXPECT_TRUE(same_point(cache.at(map, i, children[c].bary[j]),
+                                   map.at(children[c].bary[j])));
+          }
+          pieces.push_back(children[c]);
+        }
+      }
+    }
+  }
+  // A point off the dyadic lattice is computed, not memoised under a neighbour's key.
+  const SurfaceMap cyl0(cyl, 0), sphere0(sphere, 0);
+  const Vec3 third(1.0 / 3.0);
+  EXPECT_TRUE(same_point(cache.at(cyl0, 0, third), cyl0.at(third)));
+  // Bound to another target, the same facet index and node give that target's surface.
+  const Vec3 node(0.5, 0.25, 0.25);
+  EXPECT_TRUE(same_point(cache.at(cyl0, 0, node), cyl0.at(node)));
+  cache.bind(2);
+  EXPECT_TRUE(same_point(cache.at(sphere0, 0, node), sphere0.at(node)))
+      << "a point of the cylinder was returned for the sphere";
+  EXPECT_FALSE(same_point(cyl0.at(node), sphere0.at(node))) << "the test needs distinct surfaces";
 }
 
 }  // namespace
