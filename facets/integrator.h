@@ -203,7 +203,7 @@ class FacetIntegrator {
   std::vector<SurfaceMap> maps_;  // per coarse facet, for the cubature and lobe schemes
   CullStats cull_;
   std::shared_ptr<const Occluder> occluder_;  // null where the target cannot shadow itself
-  // Unique to this target and beam: a workspace's geometry memo is kept while it serves the
+  // Unique to this integrator: a workspace's geometry memo is kept while it serves the
   // same integrator (or a copy) and cleared when it moves to another.
   std::uint64_t id_ = 0;
 };
