@@ -653,8 +653,8 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
     const Material& material = target_.materials[target_.objects[lit.object].material];
     // A candidate split by boundRegion() has its corners from 1→4 subdivision; the pieces
     // here are those of the surface map, over the same barycentric triangle.
-    const SubFacet f = ws.surfaces.subFacet(maps_[lit.facet.coarse], lit.facet.coarse,
-                                            lit.facet.bary, lit.facet.depth, lit.facet.rim_edges);
+    const SubFacet f = ws.surfaces.subFacet(maps_[lit.facet.coarse], lit.facet.bary,
+                                            lit.facet.depth, lit.facet.rim_edges);
     const LobePiece p = bounded(f, x, beam, material);
     if (p.upper == 0.0) continue;
     store(p);
@@ -689,8 +689,8 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
         piece.nodes = static_cast<std::uint32_t>(ws.lobe_nodes.size());
         ws.lobe_nodes.resize(ws.lobe_nodes.size() + kLobeNodes);
         for (int j = 0; j < 6; ++j) {
-          ws.lobe_nodes[piece.nodes + j] = lobeNode(
-              ws.surfaces.at(map, piece.facet.coarse, node_bary[j]), x, beam, material);
+          ws.lobe_nodes[piece.nodes + j] =
+              lobeNode(ws.surfaces.at(map, node_bary[j]), x, beam, material);
         }
         result.evaluations += 6;
         const LobeNode* n = &ws.lobe_nodes[piece.nodes];
@@ -720,8 +720,7 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
           const std::array<int, 6>& c = kChildNodes[k];
           for (int e = 0; e < 3; ++e) {
             const Vec3 mid = 0.5 * (node_bary[c[e]] + node_bary[c[(e + 1) % 3]]);
-            n[c[3 + e]] = lobeNode(ws.surfaces.at(map, piece.facet.coarse, mid), x, beam,
-                                   material);
+            n[c[3 + e]] = lobeNode(ws.surfaces.at(map, mid), x, beam, material);
           }
         }
         result.evaluations += 9;

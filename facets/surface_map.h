@@ -39,6 +39,9 @@ class SurfaceMap {
   SurfaceMap() = default;
   SurfaceMap(const Target& target, std::uint32_t facet);
 
+  /// @brief The coarse facet this map parametrises.
+  [[nodiscard]] std::uint32_t facet() const { return facet_; }
+
   /// @brief The surface at barycentric coordinates @p bary (components sum to 1).
   [[nodiscard]] SurfacePoint at(const Vec3& bary) const;
 

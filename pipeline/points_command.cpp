@@ -13,7 +13,6 @@
 #include "export/atomic_file.h"
 #include "export/points_csv.h"
 #include "observers/point_set.h"
-#include "pipeline/input_error.h"
 #include "pipeline/memory_budget.h"
 #include "pipeline/points_file.h"
 #include "pipeline/progress.h"
@@ -90,11 +89,7 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   if (args.tolerance) options.tolerance = *args.tolerance;
   if (args.normals)
     options.normals = *args.normals == "flat" ? NormalModel::Flat : NormalModel::Surface;
-  if (args.scheme) {
-    const std::optional<IntegrationScheme> scheme = integrationSchemeByName(*args.scheme);
-    if (!scheme) throw InputError("--scheme " + *args.scheme + ": no such integration scheme");
-    options.scheme = *scheme;
-  }
+  if (args.scheme) options.scheme = *args.scheme;
 
   // Open the output first: a missing folder should stop the run before the work, not after.
   std::unique_ptr<AtomicFile> file;

@@ -7,6 +7,8 @@
 #include <ostream>
 #include <string>
 
+#include "facets/integrator.h"  // IntegrationScheme
+
 namespace glint {
 
 /// @brief The arguments of `glint points`.
@@ -17,7 +19,7 @@ struct PointsArgs {
   std::optional<double> tolerance;     ///< overrides the scene's accuracy.tolerance
   std::optional<int> uniform_level;    ///< the uniform twin instead of adaptive refinement
   std::optional<std::string> normals;  ///< "surface" or "flat", overrides the scene
-  std::optional<std::string> scheme;   ///< "paper" or "cubature", overrides the scene
+  std::optional<IntegrationScheme> scheme;  ///< overrides the scene's accuracy.scheme
   int threads = 0;                     ///< 0: all cores
   bool quiet = false;                  ///< no progress, no summary
   bool terminal = false;               ///< standard error is a terminal (progress redraws)

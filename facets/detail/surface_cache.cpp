@@ -49,8 +49,8 @@ void SurfaceCache::bind(std::uint64_t target_id) {
   pieces_.clear();
 }
 
-SurfacePoint SurfaceCache::at(const SurfaceMap& map, std::uint32_t coarse, const Vec3& bary) {
-  const auto key = nodeKey(coarse, bary);
+SurfacePoint SurfaceCache::at(const SurfaceMap& map, const Vec3& bary) {
+  const auto key = nodeKey(map.facet(), bary);
   if (!key) return map.at(bary);
   if (const auto it = points_.find(*key); it != points_.end()) return it->second;
   if (points_.size() >= kMaxEntries) points_.clear();
@@ -65,17 +65,15 @@ PatchGeometry SurfaceCache::geometry(const Target& target, const SubFacet& f) {
   return pieces_.emplace(*key, patchGeometry(target, f, NormalModel::Surface)).first->second;
 }
 
-SubFacet SurfaceCache::subFacet(const SurfaceMap& map, std::uint32_t coarse,
-                                const std::array<Vec3, 3>& bary, std::uint8_t depth,
-                                std::uint8_t rim_edges) {
-  return map.subFacet(bary, depth, rim_edges,
-                      {at(map, coarse, bary[0]), at(map, coarse, bary[1]), at(map, coarse, bary[2])});
+SubFacet SurfaceCache::subFacet(const SurfaceMap& map, const std::array<Vec3, 3>& bary,
+                                std::uint8_t depth, std::uint8_t rim_edges) {
+  return map.subFacet(bary, depth, rim_edges, {at(map, bary[0]), at(map, bary[1]), at(map, bary[2])});
 }
 
 std::array<SubFacet, 4> SurfaceCache::split(const SurfaceMap& map, const SubFacet& f) {
   std::array<SubFacet, 4> out;
   const std::array<SurfaceMap::Child, 4> c = SurfaceMap::children(f);
-  for (int k = 0; k < 4; ++k) out[k] = subFacet(map, f.coarse, c[k].bary, c[k].depth, c[k].rim_edges);
+  for (int k = 0; k < 4; ++k) out[k] = subFacet(map, c[k].bary, c[k].depth, c[k].rim_edges);
   return out;
 }
 

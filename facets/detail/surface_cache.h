@@ -18,8 +18,8 @@ class SurfaceCache {
   /// Binds the cache to one target (any id unique to it); a different one clears it.
   void bind(std::uint64_t target_id);
 
-  /// map.at(bary), @p map being the surface map of coarse facet @p coarse.
-  SurfacePoint at(const SurfaceMap& map, std::uint32_t coarse, const Vec3& bary);
+  /// map.at(bary).
+  SurfacePoint at(const SurfaceMap& map, const Vec3& bary);
 
   /// patchGeometry(target, f, NormalModel::Surface) of a piece of the surface map.
   PatchGeometry geometry(const Target& target, const SubFacet& f);
@@ -28,8 +28,8 @@ class SurfaceCache {
   std::array<SubFacet, 4> split(const SurfaceMap& map, const SubFacet& f);
 
   /// map.subFacet(bary, depth, rim_edges), its corners from at().
-  SubFacet subFacet(const SurfaceMap& map, std::uint32_t coarse, const std::array<Vec3, 3>& bary,
-                    std::uint8_t depth, std::uint8_t rim_edges);
+  SubFacet subFacet(const SurfaceMap& map, const std::array<Vec3, 3>& bary, std::uint8_t depth,
+                    std::uint8_t rim_edges);
 
  private:
   // Each memo is cleared when it reaches this many entries: about 5 MB of points and 20 MB of

@@ -142,7 +142,7 @@ TEST(SurfaceCache, ReturnsBitForBitWhatItMemoisesAndForgetsOnAnotherTarget) {
           for (int j = 0; j < 3; ++j) {
             EXPECT_EQ(children[c].corner_m[j], want_children[c].corner_m[j])
                 << "facet " << i << " depth " << int(f.depth) << " child " << c;
-            EXPECT_TRUE(same_point(cache.at(map, i, children[c].bary[j]),
+            EXPECT_TRUE(same_point(cache.at(map, children[c].bary[j]),
                                    map.at(children[c].bary[j])));
           }
           pieces.push_back(children[c]);
@@ -153,12 +153,12 @@ TEST(SurfaceCache, ReturnsBitForBitWhatItMemoisesAndForgetsOnAnotherTarget) {
   // A point off the dyadic lattice is computed, not memoised under a neighbour's key.
   const SurfaceMap cyl0(cyl, 0), sphere0(sphere, 0);
   const Vec3 third(1.0 / 3.0);
-  EXPECT_TRUE(same_point(cache.at(cyl0, 0, third), cyl0.at(third)));
+  EXPECT_TRUE(same_point(cache.at(cyl0, third), cyl0.at(third)));
   // Bound to another target, the same facet index and node give that target's surface.
   const Vec3 node(0.5, 0.25, 0.25);
-  EXPECT_TRUE(same_point(cache.at(cyl0, 0, node), cyl0.at(node)));
+  EXPECT_TRUE(same_point(cache.at(cyl0, node), cyl0.at(node)));
   cache.bind(2);
-  EXPECT_TRUE(same_point(cache.at(sphere0, 0, node), sphere0.at(node)))
+  EXPECT_TRUE(same_point(cache.at(sphere0, node), sphere0.at(node)))
       << "a point of the cylinder was returned for the sphere";
   EXPECT_FALSE(same_point(cyl0.at(node), sphere0.at(node))) << "the test needs distinct surfaces";
 }
