@@ -4,11 +4,11 @@
 // the scene's MPE (the nominal hazard zone) in either field.
 //
 //   glint_field_bench SCENE.json [SCENE.json ...] [--voxel M] [--tolerance T[,T...]]
-//                     [--out results.csv]
+//                     [--scheme lobe|paper|cubature] [--out results.csv]
 //
 // Each scene needs an `observers` box; --voxel overrides its finest spacing (the coarsest
 // block keeps its size in metres, so the refinement gets one more level per halving) and
-// --tolerance its tolerance. The dense twin does not depend on the tolerance: it runs once per
+// --tolerance its tolerance; --scheme its accuracy.scheme (both fields use it). The dense twin does not depend on the tolerance: it runs once per
 // scene, then the adaptive field once per tolerance, one row each. Memory: the grids of each
 // field, and the peak resident set during the adaptive field, working memory included (the
 // peak is reset before each adaptive run through /proc/self/clear_refs).
@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 
 #include "observers/field_compare.h"
 #include "pipeline/input_error.h"
@@ -55,8 +56,10 @@ bool resetPeakRss() {
 }
 
 std::vector<Row> measure(const std::filesystem::path& path, double voxel_m,
-                         const std::vector<double>& tolerances) {
-  const Scene scene = loadScene(path);
+                         const std::vector<double>& tolerances,
+                         std::optional<IntegrationScheme> scheme) {
+  Scene scene = loadScene(path);
+  if (scheme) scene.accuracy.scheme = *scheme;
   FieldSpec spec = fieldSpec(scene);
   if (voxel_m > 0.0) {
     const double block_m = spec.voxel_m * spec.block_voxels;
@@ -96,13 +99,18 @@ int main(int argc, char** argv) {
   app.add_option("--tolerance", tolerances, "override the field's tolerance (a list: one row each)")
       ->delimiter(',')
       ->check(CLI::Range(1e-6, 0.5));
+  std::string scheme_name;
+  app.add_option("--scheme", scheme_name, "override the scenes' integration scheme")
+      ->check(CLI::IsMember(integrationSchemeNames()));
   app.add_option("--out", out_path, "write the rows as CSV");
   CLI11_PARSE(app, argc, argv);
+  std::optional<IntegrationScheme> scheme;
+  if (!scheme_name.empty()) scheme = integrationSchemeByName(scheme_name);
 
   std::vector<Row> rows;
   try {
     for (const std::string& s : scenes) {
-      for (Row& r : measure(s, voxel_m, tolerances)) rows.push_back(std::move(r));
+      for (Row& r : measure(s, voxel_m, tolerances, scheme)) rows.push_back(std::move(r));
     }
   } catch (const InputError& e) {
     std::cerr << "glint_field_bench: " << e.what() << "\n";

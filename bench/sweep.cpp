@@ -7,7 +7,7 @@
 //               [--levels 3,4,5,...] [--normals surface|flat] [--out results.csv]
 //               [--reference-tolerance 1e-7] [--lobe-tolerances 1e-2,1e-3,...]
 //
-// "adaptive" rows are the paper's scheme (accuracy.scheme = paper), "lobe" rows the lobe
+// "adaptive" rows are the paper's scheme (whatever the scene's accuracy.scheme), "lobe" rows the lobe
 // scheme (integrator.h), "uniform" rows the uniform twin; the reference is always computed
 // with the paper's scheme or the uniform twin, never with the lobe scheme it judges.
 //
@@ -135,6 +135,7 @@ int main(int argc, char** argv) {
   const Scene scene = loadScene(scene_path);
   const std::vector<Vec3> points = loadPoints(points_path);
   IntegratorOptions options = integratorOptions(scene);
+  options.scheme = IntegrationScheme::Paper;  // the "adaptive" rows and the reference
   options.normals = normals == "flat" ? NormalModel::Flat : NormalModel::Surface;
   std::vector<double> ref;
   if (reference_tolerance > 0.0) {

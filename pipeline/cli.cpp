@@ -117,15 +117,17 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
   CLI::Option* normals_opt =
       points_cmd
           ->add_option("--normals", normals,
-                       "Facet normals for the BRDF: surface (default) or flat (the paper's)")
+                       "Facet normals for the BRDF: surface (default) or flat (the paper's; "
+                       "implies --scheme paper)")
           ->check(CLI::IsMember({"surface", "flat"}));
   std::string scheme;
   CLI::Option* scheme_opt =
       points_cmd
           ->add_option("--scheme", scheme,
-                       "Integration scheme: paper (1→4 one-point, the default), cubature "
-                       "(a degree-7 rule on the exact surface) or lobe (the specular lobe in "
-                       "closed form about each piece's specular point); overrides the scene")
+                       "Integration scheme: paper (the paper's 1→4 one-point refinement, the "
+                       "default), cubature (a degree-7 rule on the exact surface) or lobe (the "
+                       "specular lobe in closed form about each piece's specular point); "
+                       "overrides the scene")
           ->check(CLI::IsMember(integrationSchemeNames()));
   points_cmd->add_option("--threads", points.threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(1, 4096));

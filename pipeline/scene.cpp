@@ -216,7 +216,13 @@ AccuracySpec readAccuracy(ObjectReader r) {
   if (a.max_evaluations < 1) r.fail("max_evaluations", "must be an integer ≥ 1");
   a.normals =
       r.choice("normals", {"surface", "flat"}, 0) == 0 ? NormalModel::Surface : NormalModel::Flat;
-  a.scheme = static_cast<IntegrationScheme>(r.choice("scheme", integrationSchemeNames(), 0));
+  if (r.has("scheme")) {
+    a.scheme = static_cast<IntegrationScheme>(r.choice("scheme", integrationSchemeNames(), 0));
+    if (a.normals == NormalModel::Flat && a.scheme != IntegrationScheme::Paper)
+      r.fail("scheme", "flat normals (normals: flat) are the paper scheme's only; use scheme: paper");
+  } else if (a.normals == NormalModel::Flat) {
+    a.scheme = IntegrationScheme::Paper;
+  }
   if (r.has("occlusion")) {
     const json& v = r.require("occlusion");
     if (!v.is_boolean()) r.fail("occlusion", "must be true or false");

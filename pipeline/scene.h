@@ -87,7 +87,8 @@ struct AccuracySpec {
   std::int64_t max_evaluations = 4'000'000;  ///< per observer
   NormalModel normals = NormalModel::Surface;
   bool occlusion = true;  ///< occlusion rays where the target can shadow itself
-  /// "paper" (1→4 one-point refinement, the default) or "cubature" (integrator.h)
+  /// `paper` (the default), `cubature` or `lobe` (integrator.h); `paper` where `normals` is
+  /// `flat` and no scheme is named, since flat facets are the paper scheme's model only.
   IntegrationScheme scheme = IntegrationScheme::Paper;
 };
 

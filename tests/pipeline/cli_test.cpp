@@ -85,6 +85,12 @@ TEST_F(CliTest, UsageErrorsExitWithStatusTwo) {
                 .status,
             2)
       << "unknown normal model";
+  // Flat facets are the paper scheme's model only: with another scheme they would be ignored.
+  const Outcome flat_lobe =
+      glint({"points", example("cylinder.json"), "--points", example("cylinder_186.csv"),
+             "--normals", "flat", "--scheme", "lobe", "--quiet"});
+  EXPECT_EQ(flat_lobe.status, 2) << flat_lobe.err;
+  EXPECT_NE(flat_lobe.err.find("--scheme paper"), std::string::npos) << flat_lobe.err;
 }
 
 TEST_F(CliTest, EveryOptionValueIsCheckedAtTheBoundaryAndNamed) {

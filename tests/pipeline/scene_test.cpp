@@ -49,6 +49,15 @@ TEST(Scene, MinimalSceneLoadsWithDefaults) {
   EXPECT_NEAR(integratorOptions(s).floor_w_m2, 1e-9 * 1000.0 / (kPi * 4.0), 1e-20);
 }
 
+TEST(Scene, FlatNormalsWithoutASchemeSelectThePaperScheme) {
+  json j = minimal();
+  j["accuracy"] = {{"normals", "flat"}};
+  EXPECT_EQ(parseScene(j.dump(), "scene.json").accuracy.scheme, IntegrationScheme::Paper)
+      << "flat facets are the paper scheme's model: asking for them asks for that scheme";
+  j["accuracy"] = {{"normals", "flat"}, {"scheme", "paper"}};
+  EXPECT_EQ(parseScene(j.dump(), "scene.json").accuracy.normals, NormalModel::Flat);
+}
+
 TEST(Scene, DirectionsAreNormalised) {
   json j = minimal();
   j["laser"]["direction"] = {3, 0, 4};
@@ -126,6 +135,10 @@ TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
          j["accuracy"] = {{"normals", "smooth"}};
        },
        "scene.json: /accuracy/normals: must be one of: surface, flat"},
+      {[](json& j) {
+         j["accuracy"] = {{"normals", "flat"}, {"scheme", "lobe"}};
+       },
+       "scene.json: /accuracy/scheme: flat normals (normals: flat) are the paper scheme's only"},
       {[](json& j) { j["materials"] = json::object(); },
        "scene.json: /materials: must define at least one material"},
       {[](json& j) { j["laser"]["wavelength_nm"] = 355.0; },
