@@ -8,10 +8,11 @@
 //
 // Each scene needs an `observers` box; --voxel overrides its finest spacing (the coarsest
 // block keeps its size in metres, so the refinement gets one more level per halving) and
-// --tolerance its tolerance; --scheme its accuracy.scheme (both fields use it). The dense twin does not depend on the tolerance: it runs once per
-// scene, then the adaptive field once per tolerance, one row each. Memory: the grids of each
-// field, and the peak resident set during the adaptive field, working memory included (the
-// peak is reset before each adaptive run through /proc/self/clear_refs).
+// --tolerance its tolerance; --scheme its accuracy.scheme (both fields use it). The dense twin does
+// not depend on the tolerance: it runs once per scene, then the adaptive field once per tolerance,
+// one row each. Memory: the grids of each field, and the peak resident set during the adaptive
+// field, working memory included (the peak is reset before each adaptive run through
+// /proc/self/clear_refs).
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>

@@ -7,8 +7,8 @@
 //               [--levels 3,4,5,...] [--normals surface|flat] [--out results.csv]
 //               [--reference-tolerance 1e-7] [--lobe-tolerances 1e-2,1e-3,...]
 //
-// "adaptive" rows are the paper's scheme (whatever the scene's accuracy.scheme), "lobe" rows the lobe
-// scheme (integrator.h), "uniform" rows the uniform twin; the reference is always computed
+// "adaptive" rows are the paper's scheme (whatever the scene's accuracy.scheme), "lobe" rows the
+// lobe scheme (integrator.h), "uniform" rows the uniform twin; the reference is always computed
 // with the paper's scheme or the uniform twin, never with the lobe scheme it judges.
 //
 // Where the uniform twin converges too slowly to serve (σ = 0.003: levels 7 and 8 still differ

@@ -180,7 +180,8 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
     if (app.got_subcommand(points_cmd)) {
       if (*tolerance_opt) points.tolerance = tolerance;
       if (*uniform_opt) points.uniform_level = level;
-      if (*normals_opt) points.normals = normals;
+      if (*normals_opt)
+        points.normals = normals == "flat" ? NormalModel::Flat : NormalModel::Surface;
       if (*scheme_opt) points.scheme = integrationSchemeByName(scheme);
       if (!points_memory.empty()) points.memory_bytes = *parseByteSize(points_memory);
       points.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;

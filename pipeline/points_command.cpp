@@ -13,7 +13,6 @@
 #include "export/atomic_file.h"
 #include "export/points_csv.h"
 #include "observers/point_set.h"
-#include "pipeline/input_error.h"
 #include "pipeline/memory_budget.h"
 #include "pipeline/points_file.h"
 #include "pipeline/progress.h"
@@ -77,7 +76,8 @@ void printSummary(std::ostream& err, const PointsArgs& args, const FacetIntegrat
 }  // namespace
 
 void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
-  const Scene scene = loadScene(args.scene_path);
+  Scene scene = loadScene(args.scene_path);
+  overrideAccuracy(scene.accuracy, args.normals, args.scheme, scene.source);
   // The text, its points (24 bytes each) and their results (about 40) take about three times
   // the file's size at ~30 bytes a row: a quarter of the budget for the file keeps them in it.
   const std::uint64_t budget =
@@ -88,15 +88,6 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
                       "split the points file or raise --memory");
   IntegratorOptions options = integratorOptions(scene);
   if (args.tolerance) options.tolerance = *args.tolerance;
-  if (args.normals) {
-    options.normals = *args.normals == "flat" ? NormalModel::Flat : NormalModel::Surface;
-    // Flat facets are the paper scheme's model only: asking for them asks for that scheme.
-    if (options.normals == NormalModel::Flat && !args.scheme) options.scheme = IntegrationScheme::Paper;
-  }
-  if (args.scheme) options.scheme = *args.scheme;
-  if (options.normals == NormalModel::Flat && options.scheme != IntegrationScheme::Paper) {
-    throw InputError("--normals flat: flat facets are the paper scheme's only; add --scheme paper");
-  }
 
   // Open the output first: a missing folder should stop the run before the work, not after.
   std::unique_ptr<AtomicFile> file;

@@ -18,7 +18,7 @@ struct PointsArgs {
   std::string out_path = "-";          ///< "-" writes the table to standard output
   std::optional<double> tolerance;     ///< overrides the scene's accuracy.tolerance
   std::optional<int> uniform_level;    ///< the uniform twin instead of adaptive refinement
-  std::optional<std::string> normals;  ///< "surface" or "flat", overrides the scene
+  std::optional<NormalModel> normals;  ///< overrides the scene's accuracy.normals
   std::optional<IntegrationScheme> scheme;  ///< overrides the scene's accuracy.scheme
   int threads = 0;                     ///< 0: all cores
   bool quiet = false;                  ///< no progress, no summary

@@ -405,13 +405,7 @@ RunInfo runInfo(const Scene& scene, const std::string& scene_file, std::string_v
 
 void runField(const RunArgs& args, std::ostream& err) {
   Scene scene = loadScene(args.scene_path);
-  if (args.scheme) scene.accuracy.scheme = *args.scheme;
-  if (scene.accuracy.normals == NormalModel::Flat &&
-      scene.accuracy.scheme != IntegrationScheme::Paper) {
-    throw InputError(scene.source +
-                     ": /accuracy/normals: flat facets are the paper scheme's only; drop --scheme "
-                     "or pass --scheme paper");
-  }
+  overrideAccuracy(scene.accuracy, std::nullopt, args.scheme, scene.source);
   if (!scene.observers && scene.planes.empty()) {
     throw InputError(scene.source +
                      ": /observers: missing (glint run needs an observer box or `planes`)");

@@ -219,7 +219,8 @@ AccuracySpec readAccuracy(ObjectReader r) {
   if (r.has("scheme")) {
     a.scheme = static_cast<IntegrationScheme>(r.choice("scheme", integrationSchemeNames(), 0));
     if (a.normals == NormalModel::Flat && a.scheme != IntegrationScheme::Paper)
-      r.fail("scheme", "flat normals (normals: flat) are the paper scheme's only; use scheme: paper");
+      r.fail("scheme",
+             "flat normals (normals: flat) are the paper scheme's only; use scheme: paper");
   } else if (a.normals == NormalModel::Flat) {
     a.scheme = IntegrationScheme::Paper;
   }
@@ -394,6 +395,20 @@ std::string fnv1a64Hex(std::string_view bytes) {
 
 Scene loadScene(const std::filesystem::path& path) {
   return parseScene(readUserFile(path, "scene file"), path.string(), path.parent_path());
+}
+
+void overrideAccuracy(AccuracySpec& accuracy, std::optional<NormalModel> normals,
+                      std::optional<IntegrationScheme> scheme, const std::string& source) {
+  if (normals) {
+    accuracy.normals = *normals;
+    if (*normals == NormalModel::Flat && !scheme) accuracy.scheme = IntegrationScheme::Paper;
+  }
+  if (scheme) accuracy.scheme = *scheme;
+  if (accuracy.normals == NormalModel::Flat && accuracy.scheme != IntegrationScheme::Paper) {
+    throw InputError(source +
+                     ": flat normals (--normals flat or accuracy.normals) are the paper scheme's "
+                     "only; pass --scheme paper");
+  }
 }
 
 glm::dquat yawPitchRoll(double yaw_deg, double pitch_deg, double roll_deg) {

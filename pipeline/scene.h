@@ -151,6 +151,13 @@ Scene parseScene(std::string_view json_text, const std::string& source,
                  const std::optional<std::filesystem::path>& folder = std::nullopt,
                  const GltfLimits& mesh_limits = {});
 
+/// @brief Applies the command line's overrides of @p accuracy (`--normals`, `--scheme`) under the
+/// scene file's rule: flat normals are the paper scheme's model only, so flat normals without a
+/// named scheme select it, and flat normals with another scheme are refused.
+/// @throw InputError naming @p source and `--scheme paper`.
+void overrideAccuracy(AccuracySpec& accuracy, std::optional<NormalModel> normals,
+                      std::optional<IntegrationScheme> scheme, const std::string& source);
+
 /// @brief The rotation R = Rz(yaw) Ry(pitch) Rx(roll), angles in degrees (the convention of
 /// studies and of a mesh's `yaw_pitch_roll_deg`).
 glm::dquat yawPitchRoll(double yaw_deg, double pitch_deg, double roll_deg);
