@@ -431,7 +431,7 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
       if (lit.facet.depth > 0) {
         leaf.facet = maps_[lit.facet.coarse].subFacet(lit.facet.bary, lit.facet.depth,
                                                       lit.facet.rim_edges);
-        g = patchGeometry(target_, leaf.facet, NormalModel::Surface);
+        g = maps_[lit.facet.coarse].geometry(target_, leaf.facet);
       }
       leaf.sampled = false;
     } else {
@@ -503,7 +503,7 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
         const Leaf parent = leaf;
         ws.free_slots.push_back(slot);
         for (const SubFacet& child : maps_[parent.facet.coarse].split(parent.facet)) {
-          const PatchGeometry g = patchGeometry(target_, child, NormalModel::Surface);
+          const PatchGeometry g = maps_[parent.facet.coarse].geometry(target_, child);
           const ContributionBound b = contributionBound(g, x, beam, material, limits);
           if (b.upper_w_m2 == 0.0) continue;  // provably dark
           Leaf c;
@@ -632,9 +632,8 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
     ws.bounded.push(0, stored.error, slot);
     account(stored, 1);
   };
-  auto bounded = [&](const SubFacet& f, const Vec3& x, const Beam& beam,
-                     const Material& material) {
-    const PatchGeometry g = ws.surfaces.geometry(target_, f);
+  auto bounded = [&](const SubFacet& f, const Vec3& x, const Beam& beam, const Material& material) {
+    const PatchGeometry g = ws.surfaces.geometry(target_, maps_[f.coarse], f);
     const ContributionBound b =
         contributionBound(g, x, beam, material, lobeLimits(material.lobe.sigma));
     LobePiece p;

@@ -1,8 +1,45 @@
 #include "facets/surface_map.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace glint {
+namespace {
+
+// D(t) = arc(t) − chord(t), t ∈ [0, 1], of an arc of radius R and angle Δ = 2h ≤ π, and its
+// t-derivatives, in the frame of the arc's middle (w radial, τ tangent). With z = 2t − 1:
+//   D   = R (cos zh − cos h) w + R (sin zh − z sin h) τ
+//   D'  = −2Rh sin(zh) w + 2R (h cos zh − sin h) τ
+//   D'' = −4Rh² (cos zh w + sin zh τ)
+// The radial part is the sagitta, the tangential part a third-order term; bounding them apart
+// keeps the small one small.
+struct ArcDeviation {
+  double d_w, d_tau, d1_w, d1_tau, d2_w, d2_tau;  // |·| bounds over the interval, metres
+};
+
+ArcDeviation arcDeviation(double radius_m, double angle_rad, double t0, double t1) {
+  const double h = 0.5 * angle_rad;
+  const double z0 = 2.0 * t0 - 1.0, z1 = 2.0 * t1 - 1.0;
+  // |z| over [z0, z1]: every term is monotone in |z| for |zh| ≤ h ≤ π/2.
+  const double lo = z0 <= 0.0 && z1 >= 0.0 ? 0.0 : std::min(std::abs(z0), std::abs(z1));
+  const double hi = std::max(std::abs(z0), std::abs(z1));
+  // sin zh − z sin h is odd, vanishes at z = 0 and ±1 and has |second derivative| ≤ h² sin h,
+  // so on [0, 1] it is at most ½ |z| (1 − |z|) h² sin h.
+  const double q = lo <= 0.5 && hi >= 0.5 ? 0.25 : std::max(lo * (1.0 - lo), hi * (1.0 - hi));
+  ArcDeviation d;
+  d.d_w = radius_m * (std::cos(lo * h) - std::cos(h));
+  d.d_tau = radius_m * 0.5 * q * h * h * std::sin(h);
+  d.d1_w = 2.0 * radius_m * h * std::sin(hi * h);
+  d.d1_tau = 2.0 * radius_m *
+             std::max(std::abs(h * std::cos(lo * h) - std::sin(h)),
+                      std::abs(h * std::cos(hi * h) - std::sin(h)));
+  d.d2_w = 4.0 * radius_m * h * h * std::cos(lo * h);
+  d.d2_tau = 4.0 * radius_m * h * h * std::sin(hi * h);
+  return d;
+}
+
+}  // namespace
 
 SurfaceMap::SurfaceMap(const Target& target, std::uint32_t facet)
     : model_(target.model[facet]), facet_(facet), corner_m_(target.corners_m[facet]) {
@@ -154,6 +191,74 @@ std::array<SurfaceMap::Child, 4> SurfaceMap::children(const SubFacet& f) {
           Child{{m[0], b[1], m[1]}, d, static_cast<std::uint8_t>(r & 0b011)},
           Child{{m[2], m[1], b[2]}, d, static_cast<std::uint8_t>(r & 0b110)},
           Child{{m[0], m[1], m[2]}, d, 0}};
+}
+
+SurfaceMap::Bend SurfaceMap::bend(const std::array<Vec3, 3>& bary,
+                                  const std::array<Vec3, 3>& corner_m,
+                                  std::uint8_t rim_edges) const {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  Bend out;
+  if (!any_rim_) return out;
+  // Rims bound disks: the blend stays in their plane, which the projection leaves as it is.
+  // On a curved quadric it would move bent points by more than their offset: no bound here.
+  if (quadric_ == nullptr || quadric_->gradientLipschitz() != 0.0) return {kInf, kInf};
+  for (int k = 0; k < 3; ++k) {
+    if (rim_edges >> k & 1u) continue;
+    // Along the edge b(λ) = p + λ (q − p), the blend of rim edge e is G(λ) = s² D(t) with
+    // s = b_e + b_f linear in λ and s² dt/dλ = c constant, so
+    //   G'' = 2 (ds/dλ)² D + 4 (ds/dλ) (c/s) D' + (c/s)² D''.
+    const Vec3& p = bary[k];
+    const Vec3& q = bary[(k + 1) % 3];
+    double curvature_m = 0.0;  // |G''| over λ ∈ [0, 1], summed over the rim edges
+    for (int e = 0; e < 3; ++e) {
+      const RimArc& arc = rim_[e];
+      if (!arc.present) continue;
+      const int f = (e + 1) % 3;
+      const double s0 = p[e] + p[f], s1 = q[e] + q[f];
+      const double ds = s1 - s0;
+      const double c = p[e] * (q[f] - p[f]) - p[f] * (q[e] - p[e]);
+      // t is monotone along a line, so its range is its ends'; an end at the corner opposite
+      // the rim (s = 0) puts the edge on a line of constant t (c = 0) through the other end.
+      double t0 = 0.0, t1 = 0.0;
+      if (s0 > 0.0 && s1 > 0.0) {
+        t0 = p[f] / s0;
+        t1 = q[f] / s1;
+      } else if (s0 > 0.0 || s1 > 0.0) {
+        t0 = t1 = s0 > 0.0 ? p[f] / s0 : q[f] / s1;
+      } else {
+        continue;  // both ends at the opposite corner: no edge
+      }
+      const ArcDeviation d =
+          arcDeviation(arc.radius_m, arc.angle_rad, std::clamp(std::min(t0, t1), 0.0, 1.0),
+                       std::clamp(std::max(t0, t1), 0.0, 1.0));
+      double k_w = 2.0 * ds * ds * d.d_w, k_tau = 2.0 * ds * ds * d.d_tau;
+      if (c != 0.0) {
+        const double s_min = std::min(s0, s1);
+        if (!(s_min > 0.0)) return {kInf, kInf};
+        const double r = std::abs(c) / s_min;  // |s dt/dλ| at most
+        k_w += 4.0 * std::abs(ds) * r * d.d1_w + r * r * d.d2_w;
+        k_tau += 4.0 * std::abs(ds) * r * d.d1_tau + r * r * d.d2_tau;
+      }
+      curvature_m += std::hypot(k_w, k_tau);
+    }
+    // The bent edge leaves its chord by g(λ), g(0) = g(1) = 0, |g''| ≤ K: |g| ≤ K λ(1 − λ)/2
+    // ≤ K/8 and |g'| ≤ K. The area it adds is ∫ g × chord dλ + ½ ∫ g × g' dλ, at most
+    // L K/12 + K²/24; the piece, bounded by such edges, lies within K/8 of its chord triangle.
+    const double chord_m = glm::length(corner_m[(k + 1) % 3] - corner_m[k]);
+    out.offset_m = std::max(out.offset_m, curvature_m / 8.0);
+    out.area_m2 += chord_m * curvature_m / 12.0 + curvature_m * curvature_m / 24.0;
+  }
+  if (!std::isfinite(out.offset_m) || !std::isfinite(out.area_m2)) return {kInf, kInf};
+  return out;
+}
+
+PatchGeometry SurfaceMap::geometry(const Target& target, const SubFacet& f) const {
+  PatchGeometry g = patchGeometry(target, f, NormalModel::Surface);
+  if (!any_rim_) return g;
+  const Bend b = bend(f.bary, f.corner_m, f.rim_edges);
+  g.radius_m += b.offset_m;
+  g.area_bound_m2 += b.area_m2;  // on the plane bend() asks for, area is the flat area
+  return g;
 }
 
 std::array<SubFacet, 4> SurfaceMap::split(const SubFacet& f) const {

@@ -68,6 +68,22 @@ class SurfaceMap {
   };
   [[nodiscard]] static std::array<Child, 4> children(const SubFacet& f);
 
+  /// @brief patchGeometry(target, f, NormalModel::Surface) for a piece @p f of this map (the
+  /// target the map was built on), its bounds widened to hold the piece as the map places it.
+  /// The rim blend bends a rim facet's inner piece edges too, which patchGeometry, built for
+  /// 1→4 subdivision's straight inner edges, does not see.
+  [[nodiscard]] PatchGeometry geometry(const Target& target, const SubFacet& f) const;
+
+  /// @brief How far the rim blend bends the edges of the piece with barycentric corners
+  /// @p bary, placed at @p corner_m, off their chords: edges on the rim (bits of @p rim_edges)
+  /// are exact arcs, which patchGeometry counts, and are left out. Zero without a rim.
+  struct Bend {
+    double offset_m = 0.0;  ///< the piece lies within this of its chord triangle
+    double area_m2 = 0.0;   ///< it exceeds the chord triangle's area by at most this
+  };
+  [[nodiscard]] Bend bend(const std::array<Vec3, 3>& bary, const std::array<Vec3, 3>& corner_m,
+                          std::uint8_t rim_edges) const;
+
  private:
   struct RimArc {
     bool present = false;

@@ -57,12 +57,13 @@ SurfacePoint SurfaceCache::at(const SurfaceMap& map, const Vec3& bary) {
   return points_.emplace(*key, map.at(bary)).first->second;
 }
 
-PatchGeometry SurfaceCache::geometry(const Target& target, const SubFacet& f) {
+PatchGeometry SurfaceCache::geometry(const Target& target, const SurfaceMap& map,
+                                     const SubFacet& f) {
   const auto key = pieceKey(f);
-  if (!key) return patchGeometry(target, f, NormalModel::Surface);
+  if (!key) return map.geometry(target, f);
   if (const auto it = pieces_.find(*key); it != pieces_.end()) return it->second;
   if (pieces_.size() >= kMaxEntries) pieces_.clear();
-  return pieces_.emplace(*key, patchGeometry(target, f, NormalModel::Surface)).first->second;
+  return pieces_.emplace(*key, map.geometry(target, f)).first->second;
 }
 
 SubFacet SurfaceCache::subFacet(const SurfaceMap& map, const std::array<Vec3, 3>& bary,

@@ -21,8 +21,8 @@ class SurfaceCache {
   /// map.at(bary).
   SurfacePoint at(const SurfaceMap& map, const Vec3& bary);
 
-  /// patchGeometry(target, f, NormalModel::Surface) of a piece of the surface map.
-  PatchGeometry geometry(const Target& target, const SubFacet& f);
+  /// map.geometry(target, f): the bound geometry of a piece of the surface map.
+  PatchGeometry geometry(const Target& target, const SurfaceMap& map, const SubFacet& f);
 
   /// map.split(f), its corners from at().
   std::array<SubFacet, 4> split(const SurfaceMap& map, const SubFacet& f);
