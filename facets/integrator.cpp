@@ -737,11 +737,11 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
           ok = ok && e.ok;
           piece.child_estimate[k] = e.irradiance_w_m2;
           piece.refined += e.irradiance_w_m2;
-          rule_error += e.rule_error_w_m2;
+          rule_error += e.hidden_error_w_m2;
         }
         if (ok) {
           // The change under splitting, plus what the children's rule may miss that splitting
-          // does not show (where the lobe is narrower than both levels' pieces).
+          // does not show (where a child holds its lobe, parent and child sample it alike).
           piece.refined_ok = true;
           piece.children_known = true;
           piece.error = std::abs(piece.refined - piece.estimate) + rule_error;

@@ -199,7 +199,8 @@ class GaussianLobe {
     r1_ = std::sqrt(l1_);
     r2_ = std::sqrt(l2_);
     centre_ = c + u_star;
-    std::array<Vec2, 8> y{};
+    std::array<Vec2, 8>& y = whitened_;
+    whitened_n_ = part.n;
     for (int i = 0; i < part.n; ++i) y[i] = whiten(part.v[i]);
     // A convex part at distance d from the Gaussian's centre lies in a half plane that far
     // out: its mass is at most Q(d), which needs no Owen's T.
@@ -239,6 +240,35 @@ class GaussianLobe {
     return {unwhiten(ym), unwhiten(ym + a1), unwhiten(ym - a1), unwhiten(ym + a2),
             unwhiten(ym - a2)};
   }
+  // How evenly the lobe covers the part (requires mass() > 0): the determinant of the
+  // Gaussian's covariance as restricted to the part over that of the part's uniform measure,
+  // in [0, 1] (a ratio of determinants, the same in any affine coordinates). Near 1 the lobe
+  // is flat over the part; near 0 it sits in a corner of it, or in a spot within it.
+  [[nodiscard]] double evenness() const {
+    const std::array<Vec2, 8>& y = whitened_;
+    double area = 0.0, ixx = 0.0, ixy = 0.0, iyy = 0.0;
+    Vec2 first{0.0};
+    for (int i = 0; i < whitened_n_; ++i) {
+      const Vec2& a = y[i];
+      const Vec2& b = y[(i + 1) % whitened_n_];
+      const double w = cross2(a, b);
+      area += 0.5 * w;
+      first += (a + b) * (w / 6.0);
+      ixx += (a.x * a.x + a.x * b.x + b.x * b.x) * w / 12.0;
+      iyy += (a.y * a.y + a.y * b.y + b.y * b.y) * w / 12.0;
+      ixy += (a.x * b.y + 2.0 * a.x * a.y + 2.0 * b.x * b.y + b.x * a.y) * w / 24.0;
+    }
+    if (!(area > 0.0) || !(mom_.mass > 0.0)) return 0.0;
+    const Vec2 cu = first / area;
+    const double uxx = ixx / area - cu.x * cu.x, uxy = ixy / area - cu.x * cu.y,
+                 uyy = iyy / area - cu.y * cu.y;
+    const Vec2 cg = mom_.first / mom_.mass;
+    const double gxx = mom_.second_xx / mom_.mass - cg.x * cg.x,
+                 gxy = mom_.second_xy / mom_.mass - cg.x * cg.y,
+                 gyy = mom_.second_yy / mom_.mass - cg.y * cg.y;
+    const double ratio = (gxx * gyy - gxy * gxy) / (uxx * uyy - uxy * uxy);
+    return ratio >= 0.0 ? std::min(1.0, ratio) : 0.0;  // NaN: 0, all hidden
+  }
   // ln(f / (h · Gaussian)) at x for the true slope q there: what the linearisation missed.
   [[nodiscard]] double logRatio(const Vec2& x, const Vec3& q) const {
     const Vec2 u = x - c_;
@@ -261,6 +291,8 @@ class GaussianLobe {
   double s2_ = 1.0, kappa_ = 0.0, least_ = 0.0, l1_ = 1.0, l2_ = 1.0, r1_ = 1.0, r2_ = 1.0;
   double cs_ = 1.0, sn_ = 0.0;
   NormalMoments mom_{};
+  std::array<Vec2, 8> whitened_{};  // the part's vertices in the whitened coordinates
+  int whitened_n_ = 0;
   double upper_log_ = 0.0;
   bool skipped_ = false;
 };
@@ -367,6 +399,7 @@ namespace {
 struct SpecularPart {
   double value = 0.0;
   double error = 0.0;
+  double hidden_error = 0.0;  // see LobeEstimate::hidden_error_w_m2
   int evaluations = 0;
 };
 
@@ -412,6 +445,7 @@ bool integrateLobe(const LobeSampler& sampler, const std::array<const LobeNode*,
   if (!lobe.linearise(model.at(c), c, sigma, poly, skip_below)) return false;
   if (lobe.skipped()) {  // negligible even at its bound: kept as 0, the bound as its error
     part.error = factor_bound * std::exp(lobe.upperLogIntegral() + kMaxLogRatio);
+    part.hidden_error = part.error;
     return true;
   }
   // Where the specular point lies outside the piece (or the part is clipped), the mass sits
@@ -436,6 +470,7 @@ bool integrateLobe(const LobeSampler& sampler, const std::array<const LobeNode*,
     if (std::exp(kMaxLogRatio) * value < negligible) {
       part.value = value;
       part.error = std::exp(kMaxLogRatio) * value;
+      part.hidden_error = part.error;
       return true;
     }
   }
@@ -491,6 +526,7 @@ bool integrateLobe(const LobeSampler& sampler, const std::array<const LobeNode*,
       part.error = poor_model
                        ? part.value
                        : std::abs(average - factor[0] * std::exp(log_r[0] - log_max)) * scale;
+      part.hidden_error = poor_model ? part.error : (1.0 - lobe.evenness()) * part.error;
     }
   }
   return true;
@@ -566,11 +602,12 @@ LobeEstimate lobeRule(const LobeSampler& sampler, const std::array<const LobeNod
   if (!std::isfinite(value) || !std::isfinite(error)) return result;
   result.irradiance_w_m2 = value;
   result.rule_error_w_m2 = error;
-  result.specular_w_m2 = 2.0 * area_uv * (std::abs(specular.value) + specular.error);
+  // (A NaN share leaves the whole error hidden.)
+  result.hidden_error_w_m2 = std::min(error, 2.0 * area_uv * specular.hidden_error);
   if (embedded && unclipped) {
     result.diffuse_error_w_m2 = has_diffuse ? 2.0 * area_uv * std::abs(diffuse - diffuse_low) : 0.0;
   }
-  if (!std::isfinite(result.specular_w_m2) || !(result.diffuse_error_w_m2 >= 0.0)) {
+  if (!(result.diffuse_error_w_m2 >= 0.0)) {
     result.diffuse_error_w_m2 = std::numeric_limits<double>::infinity();
   }
   result.ok = true;

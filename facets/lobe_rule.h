@@ -105,10 +105,16 @@ struct LobeEstimate {
   /// What the rule itself may miss beyond the Gaussian and R quadratic (see lobeRule()); the
   /// change under 1→4 splitting does not see it where the lobe is narrower than the pieces.
   double rule_error_w_m2 = 0.0;
+  /// The part of rule_error_w_m2 that comparing this piece's estimate with its parent's cannot
+  /// show. Where the lobe sits within the piece (a spot inside it, or its tail at one edge),
+  /// parent and child sample it at the same points and agree whatever their error; where the
+  /// lobe is flat over the piece, the rule is an ordinary one of degree two whose error falls
+  /// with the piece's size, which the change under splitting shows. So the sigma points' term
+  /// counts by 1 − (the determinant of the lobe's covariance over the piece / that of the
+  /// piece's uniform measure). A lobe skipped as negligible, or modelled poorly, counts whole.
+  double hidden_error_w_m2 = 0.0;
   int evaluations = 0;  ///< integrand evaluations beyond the six nodes
   bool ok = false;      ///< false when a node is invalid or the estimate is not finite
-  /// The specular part of irradiance_w_m2 plus its rule error (W/m²).
-  double specular_w_m2 = 0.0;
   /// With `embedded`: the diffuse part's error estimated within the piece, |degree 5 − degree 3|
   /// on the same part (W/m²); +∞ when the piece is clipped anywhere its six nodes can see, since
   /// the straight edges of the clipped part then err by more than the rules show.

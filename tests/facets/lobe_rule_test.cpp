@@ -167,13 +167,47 @@ TEST(LobeRule, CurvedSlopeIsWithinTheErrorEstimateOfOneSplit) {
       const LobeEstimate e = child.rule();
       ASSERT_TRUE(e.ok);
       refined += e.irradiance_w_m2;
-      rule_error += e.rule_error_w_m2;
+      rule_error += e.hidden_error_w_m2;
     }
     const double truth = piece->brute();
     const double estimate = std::abs(refined - parent.irradiance_w_m2) + rule_error;
     EXPECT_LE(std::abs(refined - truth), estimate + 1e-7 * truth)
         << "split once: " << refined << " against " << truth;
     EXPECT_NEAR(parent.irradiance_w_m2 / truth, 1.0, 2e-3) << "one piece";
+  }
+}
+
+TEST(LobeRule, HiddenErrorIsWholeForALobeInsideThePieceAndSmallForAFlatOne) {
+  // The same smooth non-quadratic factor under three lobes: a spot well inside the piece
+  // (σ = 0.003 against a piece 0.1 wide in q), the tail of a narrow lobe beyond an edge, and a
+  // lobe 30 times wider than the piece. Splitting cannot show the rule's error in the first two
+  // (the child that holds the lobe samples it where the parent did), so all of it is hidden;
+  // over a flat lobe the sigma points spread like an ordinary rule's, and at most a tenth is
+  // (the determinant ratio of a Gaussian 30 times wider than the piece is 1 − O(1/30)).
+  Synthetic piece;
+  piece.spec = [](const Vec2& x) { return std::exp(0.8 * x.x - 0.5 * x.y * x.y); };
+  struct Case {
+    const char* name;
+    Vec2 peak;
+    double sigma;
+    bool hidden;
+  };
+  for (const Case& c : {Case{"spot inside", Vec2(0.3, 0.3), 0.003, true},
+                        Case{"tail beyond an edge", Vec2(-0.05, 0.4), 0.003, true},
+                        Case{"flat over the piece", Vec2(0.3, 0.3), 3.0, false}}) {
+    piece.sigma = c.sigma;
+    piece.q = [&c](const Vec2& x) {
+      return Vec3(0.1 * (x.x - c.peak.x), 0.1 * (x.y - c.peak.y), 0.0);
+    };
+    const LobeEstimate e = piece.rule();
+    ASSERT_TRUE(e.ok) << c.name;
+    ASSERT_GT(e.rule_error_w_m2, 0.0) << c.name;
+    if (c.hidden) {
+      EXPECT_GT(e.hidden_error_w_m2, 0.9 * e.rule_error_w_m2) << c.name;
+    } else {
+      EXPECT_LT(e.hidden_error_w_m2, 0.1 * e.rule_error_w_m2) << c.name;
+    }
+    EXPECT_LE(e.hidden_error_w_m2, e.rule_error_w_m2) << c.name;
   }
 }
 
@@ -198,7 +232,7 @@ TEST(LobeRule, EmbeddedDiffuseErrorBoundsTheDegreeFiveRuleAndIsRefusedWhenClippe
     if (h >= 0.5) {
       EXPECT_LT(e.diffuse_error_w_m2, 0.05 * truth) << "h = " << h;
     }
-    EXPECT_EQ(e.specular_w_m2, 0.0);
+    EXPECT_EQ(e.rule_error_w_m2, 0.0) << "no specular term, no lobe error";
     EXPECT_EQ(piece.rule().diffuse_error_w_m2, std::numeric_limits<double>::infinity())
         << "not asked for";
     // A terminator across the piece's far corner: the straight cut errs by more than the

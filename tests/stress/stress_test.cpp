@@ -260,31 +260,43 @@ TEST(StressGrazing, LaserAlongTheCylinderAxisLightsNothing) {
 TEST(StressDistance, SphereBackscatterFromAMicrometreToAThousandKilometres) {
   // On the beam axis, the glint of a convex mirror of focal length R/2:
   // E(d) = ρs E0 (R/2)² / (d + R/2)², which tends to ρs E0 at the surface (a flat mirror) and
-  // to ρs E0 R² / (4 d²) far away. Near the surface the light that reaches the observer comes
-  // from a spot about 2σd wide, so the facets must shrink with d: depth ≈ log2(facet / σd).
-  // The default depth (16) reaches d ≈ 3 cm for σ = 1e-3 on 0.2 m facets; the scene's largest
-  // (24) reaches 0.1 mm; a micrometre needs ~28. Below its reach an observer must say it did
-  // not converge, never return a value that looks converged.
+  // to ρs E0 R² / (4 d²) far away. Below its reach an observer must say it did not converge,
+  // never return a value that looks converged. The reaches differ by scheme:
+  // - paper: near the surface the light that reaches the observer comes from a spot about 2σd
+  //   wide, which its one-point pieces must resolve: depth ≈ log2(facet / σd). The default depth
+  //   (16) reaches d ≈ 3 cm for σ = 1e-3 on 0.2 m facets; the scene's largest (24) 0.1 mm.
+  // - lobe: its rule integrates the lobe in closed form, so only the near field limits it: a
+  //   piece's ball must be within half its distance to the observer. Pieces at depth k have
+  //   radii of about 0.2 m · 2^-k, so the reach is d ≈ 0.4 m · 2^-(max_depth − 1): 1.2e-5 m
+  //   at 16 and 5e-8 m at 24 (a factor 2 either side leaves every test distance on one side).
   const double radius = 0.5, sigma = 1e-3, tol = 1e-3;
-  for (int max_depth : {16, 24}) {
-    IntegratorOptions options = accuracy(tol, 1e-30);
-    options.max_depth = max_depth;
-    const FacetIntegrator fi = sphere(sigma, radius, options);
-    IntegratorWorkspace ws;
-    for (double d : {1e-6, 1e-4, 1e-2, 3e-2, 1.0, 1e2, 1e4, 1e6}) {
-      const ObserverResult r = fi.adaptive(Vec3(0, 0, radius + d), ws);
-      const double f = 0.5 * radius;
-      const double expected = 0.9 * 100.0 * f * f / ((d + f) * (d + f));
-      ASSERT_TRUE(std::isfinite(r.irradiance_w_m2) && r.irradiance_w_m2 >= 0.0) << d;
-      const bool within_reach = d >= (max_depth == 16 ? 3e-2 : 1e-4);
-      EXPECT_EQ(r.converged, within_reach) << d << " m, depth " << max_depth;
-      if (r.converged) {
-        // The tolerance, plus the lobe's O(σ²) blur of the pencil.
-        EXPECT_NEAR(r.irradiance_w_m2 / expected, 1.0, 3.0 * tol + 2.0 * sigma * sigma)
-            << d << " m from the surface, depth " << max_depth;
-      } else {
-        EXPECT_TRUE(r.depth_limited || r.evaluations >= options.max_evaluations) << d;
-        EXPECT_GT(r.error_estimate_w_m2, tol * r.irradiance_w_m2) << "its estimate says so too";
+  for (IntegrationScheme scheme : {IntegrationScheme::Paper, IntegrationScheme::Lobe}) {
+    for (int max_depth : {16, 24}) {
+      IntegratorOptions options = accuracy(tol, 1e-30);
+      options.max_depth = max_depth;
+      options.scheme = scheme;
+      const FacetIntegrator fi = sphere(sigma, radius, options);
+      IntegratorWorkspace ws;
+      const double reach = scheme == IntegrationScheme::Paper
+                               ? (max_depth == 16 ? 3e-2 : 1e-4)
+                               : 0.4 * std::ldexp(1.0, -(max_depth - 1));
+      for (double d : {1e-6, 1e-4, 1e-2, 3e-2, 1.0, 1e2, 1e4, 1e6}) {
+        const std::string where = std::to_string(d) + " m, depth " + std::to_string(max_depth) +
+                                  ", scheme " +
+                                  integrationSchemeNames()[static_cast<std::size_t>(scheme)];
+        const ObserverResult r = fi.adaptive(Vec3(0, 0, radius + d), ws);
+        const double f = 0.5 * radius;
+        const double expected = 0.9 * 100.0 * f * f / ((d + f) * (d + f));
+        ASSERT_TRUE(std::isfinite(r.irradiance_w_m2) && r.irradiance_w_m2 >= 0.0) << where;
+        EXPECT_EQ(r.converged, d >= reach) << where;
+        if (r.converged) {
+          // The tolerance, plus the lobe's O(σ²) blur of the pencil.
+          EXPECT_NEAR(r.irradiance_w_m2 / expected, 1.0, 3.0 * tol + 2.0 * sigma * sigma) << where;
+        } else {
+          EXPECT_TRUE(r.depth_limited || r.evaluations >= options.max_evaluations) << where;
+          EXPECT_GT(r.error_estimate_w_m2, tol * r.irradiance_w_m2)
+              << "its estimate says so too: " << where;
+        }
       }
     }
   }
