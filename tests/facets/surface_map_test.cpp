@@ -48,30 +48,45 @@ TEST(TriangleRule, ConicalProductIsExactToDegreeTwoNMinusOne) {
   }
 }
 
+// The pieces that `level` 1→4 splits of `pieces` make, placed by the map.
+std::vector<SubFacet> splitTimes(const SurfaceMap& map, std::vector<SubFacet> pieces, int level) {
+  for (int k = 0; k < level; ++k) {
+    std::vector<SubFacet> next;
+    for (const SubFacet& f : pieces) {
+      for (const SubFacet& c : map.split(f)) next.push_back(c);
+    }
+    pieces = std::move(next);
+  }
+  return pieces;
+}
+
+// ∫ dA over the piece `f` by the n × n conical product rule in the map's parameters; `visit`
+// sees the surface at each node.
+template <class Visit>
+double ruleArea(const SurfaceMap& map, const SubFacet& f, int n, Visit&& visit) {
+  const Vec3 e1 = f.bary[1] - f.bary[0], e2 = f.bary[2] - f.bary[0];
+  const double area_uv = 0.5 * std::abs(e1[1] * e2[2] - e1[2] * e2[1]);
+  double area = 0.0;
+  for (const TriangleNode& node : conicalProductRule(n)) {
+    const SurfacePoint p =
+        map.at(node.bary[0] * f.bary[0] + node.bary[1] * f.bary[1] + node.bary[2] * f.bary[2]);
+    visit(p);
+    area += area_uv * node.weight * p.jacobian_m2;
+  }
+  return area;
+}
+
 // The area of every facet of a shape, by the rule over its surface map on the pieces of
 // `level` 1→4 splits, summed.
 double mappedArea(const Target& t, int n, int level) {
   double area = 0.0;
   for (std::uint32_t i = 0; i < t.facetCount(); ++i) {
     const SurfaceMap map(t, i);
-    std::vector<SubFacet> pieces{map.subFacet({Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)}, 0,
-                                              t.rim_edges[i])};
-    for (int k = 0; k < level; ++k) {
-      std::vector<SubFacet> next;
-      for (const SubFacet& f : pieces) {
-        for (const SubFacet& c : map.split(f)) next.push_back(c);
-      }
-      pieces = std::move(next);
-    }
-    for (const SubFacet& f : pieces) {
-      const Vec3 e1 = f.bary[1] - f.bary[0], e2 = f.bary[2] - f.bary[0];
-      const double area_uv = 0.5 * std::abs(e1[1] * e2[2] - e1[2] * e2[1]);
-      for (const TriangleNode& node : conicalProductRule(n)) {
-        const SurfacePoint p = map.at(node.bary[0] * f.bary[0] + node.bary[1] * f.bary[1] +
-                                      node.bary[2] * f.bary[2]);
-        EXPECT_TRUE(p.valid) << "facet " << i;
-        area += area_uv * node.weight * p.jacobian_m2;
-      }
+    const SubFacet whole =
+        map.subFacet({Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)}, 0, t.rim_edges[i]);
+    for (const SubFacet& f : splitTimes(map, {whole}, level)) {
+      area += ruleArea(map, f, n,
+                       [&](const SurfacePoint& p) { EXPECT_TRUE(p.valid) << "facet " << i; });
     }
   }
   return area;
@@ -122,24 +137,11 @@ TEST(SurfaceMap, PieceBoundsHoldTheRimFacetsPiecesAsTheMapPlacesThem) {
         const SubFacet f = pieces[k];
         const PatchGeometry g = map.geometry(t, f);
         double area = 0.0;
-        std::vector<SubFacet> sub{f};
-        for (int level = 0; level < 2; ++level) {
-          std::vector<SubFacet> next;
-          for (const SubFacet& s : sub) {
-            for (const SubFacet& child : map.split(s)) next.push_back(child);
-          }
-          sub = std::move(next);
-        }
-        for (const SubFacet& s : sub) {
-          const Vec3 e1 = s.bary[1] - s.bary[0], e2 = s.bary[2] - s.bary[0];
-          const double area_uv = 0.5 * std::abs(e1[1] * e2[2] - e1[2] * e2[1]);
-          for (const TriangleNode& node : conicalProductRule(8)) {
-            const SurfacePoint p = map.at(node.bary[0] * s.bary[0] + node.bary[1] * s.bary[1] +
-                                          node.bary[2] * s.bary[2]);
+        for (const SubFacet& s : splitTimes(map, {f}, 2)) {
+          area += ruleArea(map, s, 8, [&](const SurfacePoint& p) {
             ASSERT_TRUE(p.valid) << "facet " << i;
-            area += area_uv * node.weight * p.jacobian_m2;
             worst_ball = std::max(worst_ball, glm::length(p.position_m - g.centre_m) / g.radius_m);
-          }
+          });
         }
         worst_area = std::max(worst_area, area / g.area_bound_m2);
         EXPECT_LE(area, g.area_bound_m2 * (1.0 + 1e-7))
