@@ -102,8 +102,8 @@ class PieceSampler final : public LobeSampler {
 /// @brief The lobe rule's estimate of ∫ E dA over one piece (W/m²).
 struct LobeEstimate {
   double irradiance_w_m2 = 0.0;
-  /// What the rule itself may miss beyond the Gaussian and R quadratic (see lobeRule()); the
-  /// change under 1→4 splitting does not see it where the lobe is narrower than the pieces.
+  /// What the rule itself may miss beyond the Gaussian and R quadratic (see lobeRule());
+  /// hidden_error_w_m2 is the share of it that the change under 1→4 splitting cannot show.
   double rule_error_w_m2 = 0.0;
   /// The part of rule_error_w_m2 that comparing this piece's estimate with its parent's cannot
   /// show. Where the lobe sits within the piece (a spot inside it, or its tail at one edge),
