@@ -46,6 +46,48 @@ void unregisterTemporary(int slot) {
   if (slot >= 0) g_slots[static_cast<std::size_t>(slot)].state.store(0, std::memory_order_release);
 }
 
+// A signal may reach any thread, also while another creates a temporary. The handler raises
+// g_interrupted and then waits for every creation in flight, and a creation starts only when
+// the flag is down: so each file either is created and registered before the handler reads the
+// registry, or never created. Sequentially consistent, as the argument needs.
+std::atomic<bool> g_interrupted{false};
+std::atomic<int> g_creating{0};
+
+// The handler is removing the temporaries and will exit: an error caused by its work (a
+// temporary gone before its rename) must not race its exit status and message with one of our
+// own. Returns if there is no interrupt.
+void awaitInterruptExit() {
+  if (!g_interrupted.load()) return;
+  for (;;) ::pause();
+}
+
+// open(2) with O_CREAT | O_EXCL of a temporary, registered for the handler. Returns the file
+// descriptor, or -1 with errno set (the slot is then -1).
+int createRegistered(const std::filesystem::path& path, int& slot) {
+  // The handler must not run on this thread inside the window, where it would wait for itself.
+  sigset_t interrupts;
+  sigset_t previous;
+  sigemptyset(&interrupts);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&interrupts, sig);
+  ::pthread_sigmask(SIG_BLOCK, &interrupts, &previous);
+  g_creating.fetch_add(1);
+  if (g_interrupted.load()) {
+    g_creating.fetch_sub(1);
+    awaitInterruptExit();  // create nothing now
+  }
+  slot = registerTemporary(path.string());
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+  const int error = errno;
+  if (fd < 0) {
+    unregisterTemporary(slot);
+    slot = -1;
+  }
+  g_creating.fetch_sub(1);
+  ::pthread_sigmask(SIG_SETMASK, &previous, nullptr);
+  errno = error;
+  return fd;
+}
+
 // write(2) of a C string and of a small number: all a signal handler may use.
 void say(const char* s) {
   const std::size_t n = std::strlen(s);
@@ -66,6 +108,10 @@ void sayNumber(int n) {
 }
 
 extern "C" void onInterrupt(int sig) {
+  g_interrupted.store(true);
+  while (g_creating.load() > 0) {
+    // A creation in flight: one open(2) on another thread, soon registered.
+  }
   int removed = 0;
   for (Slot& s : g_slots) {
     if (s.state.load(std::memory_order_acquire) == 2 && ::unlink(s.path) == 0) ++removed;
@@ -169,13 +215,13 @@ AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)
   int fd = -1;
   for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
     temporary_ = folder / (stem + randomSuffix());
-    fd = ::open(temporary_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+    fd = createRegistered(temporary_, slot_);
     if (fd < 0 && errno != EEXIST) break;
   }
   if (fd < 0) {
+    awaitInterruptExit();
     throw OutputError("cannot create " + target_.string() + " (is the folder there and writable?)");
   }
-  slot_ = registerTemporary(temporary_.string());
   out_ = std::make_unique<Stream>(fd);
 }
 
@@ -195,6 +241,7 @@ void AtomicFile::commit() {
   const bool closed = ::close(out_->fd) == 0;
   out_->fd = -1;
   if (!written || !closed) {
+    awaitInterruptExit();
     std::error_code ignored;
     std::filesystem::remove(temporary_, ignored);
     unregisterTemporary(slot_);
@@ -204,6 +251,7 @@ void AtomicFile::commit() {
   std::error_code ec;
   std::filesystem::rename(temporary_, target_, ec);
   if (ec) {
+    awaitInterruptExit();
     std::error_code ignored;
     std::filesystem::remove(temporary_, ignored);
     unregisterTemporary(slot_);

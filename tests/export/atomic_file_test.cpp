@@ -8,10 +8,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <csignal>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
+#include <vector>
 
 namespace glint {
 namespace {
@@ -117,6 +121,67 @@ TEST(AtomicFile, StaleTemporariesOfDeadProcessesAreSweptNeverFollowed) {
   EXPECT_TRUE(fs::exists(dir / "notes.txt"));
   EXPECT_EQ(contents(outside), "keep me") << "a link is unlinked, its target untouched";
   EXPECT_FALSE(fs::exists(dir / ("irradiance.vdb.tmp." + dead)));
+}
+
+// Temporaries left in @p dir: `.<name>.glint-<pid>-<random>`.
+std::vector<std::string> temporariesIn(const fs::path& dir) {
+  std::vector<std::string> found;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name.find(".glint-") != std::string::npos) found.push_back(name);
+  }
+  return found;
+}
+
+// The interrupt handler runs on whichever thread the signal reaches, possibly while another
+// thread is between creating a temporary and registering it. Writers on three threads create
+// and commit files without pause; each trial signals them after a different delay, so the
+// signal lands at every point of a creation over the trials (a file is some 20 µs of work).
+TEST(AtomicFile, ASignalOnAnyThreadDuringCreationLeavesNoTemporary) {
+  const fs::path dir = freshFolder("signal");
+  constexpr int kTrials = 150;
+  int interrupted = 0;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    int ready[2];
+    ASSERT_EQ(::pipe(ready), 0);
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      installInterruptCleanup();
+      const char byte = 1;
+      if (::write(ready[1], &byte, 1) != 1) ::_exit(4);
+      auto writer = [&dir](int id) {
+        try {
+          for (long k = 0;; ++k) {
+            AtomicFile f(dir / ("out" + std::to_string(id) + ".txt"));
+            f.stream() << k;
+            f.commit();
+          }
+        } catch (const std::exception& e) {
+          std::fprintf(stderr, "writer %d: %s\n", id, e.what());
+          ::_exit(3);
+        }
+      };
+      std::thread a(writer, 1);
+      std::thread b(writer, 2);
+      writer(0);
+    }
+    char byte = 0;
+    ASSERT_EQ(::read(ready[0], &byte, 1), 1) << "the child has its handler in place";
+    ::close(ready[0]);
+    ::close(ready[1]);
+    ::usleep(static_cast<useconds_t>(500 + 37 * trial));  // past the first files, then spread
+    ::kill(child, SIGTERM);
+    int status = 0;
+    ::waitpid(child, &status, 0);
+    ASSERT_TRUE(WIFEXITED(status)) << "trial " << trial << ": the handler exits, status " << status;
+    ASSERT_EQ(WEXITSTATUS(status), 128 + SIGTERM) << "trial " << trial;
+    ++interrupted;
+    const std::vector<std::string> left = temporariesIn(dir);
+    ASSERT_TRUE(left.empty()) << "trial " << trial << " left " << left.size()
+                              << " temporaries, the first " << left.front();
+  }
+  EXPECT_EQ(interrupted, kTrials);
 }
 
 }  // namespace
