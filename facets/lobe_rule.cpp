@@ -223,15 +223,15 @@ class GaussianLobe {
     return -least_ / (2.0 * s2_) + std::log(2.0 * kPi * mom_.mass) - 0.5 * std::log(l1_ * l2_);
   }
   // The centroid of the Gaussian over the part (requires mass() > 0).
-  [[nodiscard]] Vec2 mean() const { return unwhiten(mom_.first / mom_.mass); }
+  [[nodiscard]] Vec2 mean() const { return unwhiten(mom_.mean); }
   // The mean and ±√3 standard deviations along the principal axes of the Gaussian as
   // restricted to the part.
   [[nodiscard]] std::array<Vec2, 5> sigmaPoints() const {
-    const Vec2 ym = mom_.first / mom_.mass;
-    const double cxx = std::max(0.0, mom_.second_xx / mom_.mass - ym.x * ym.x);
-    const double cyy = std::max(0.0, mom_.second_yy / mom_.mass - ym.y * ym.y);
+    const Vec2 ym = mom_.mean;
+    const double cxx = std::max(0.0, mom_.cov_xx);
+    const double cyy = std::max(0.0, mom_.cov_yy);
     const double bound = std::sqrt(cxx * cyy);
-    const double cxy = std::clamp(mom_.second_xy / mom_.mass - ym.x * ym.y, -bound, bound);
+    const double cxy = std::clamp(mom_.cov_xy, -bound, bound);
     const double phi = 0.5 * std::atan2(2.0 * cxy, cxx - cyy);
     const double pc = std::cos(phi), ps = std::sin(phi);
     const double c1 = std::max(0.0, cxx * pc * pc + 2.0 * cxy * ps * pc + cyy * ps * ps);
@@ -262,11 +262,8 @@ class GaussianLobe {
     const Vec2 cu = first / area;
     const double uxx = ixx / area - cu.x * cu.x, uxy = ixy / area - cu.x * cu.y,
                  uyy = iyy / area - cu.y * cu.y;
-    const Vec2 cg = mom_.first / mom_.mass;
-    const double gxx = mom_.second_xx / mom_.mass - cg.x * cg.x,
-                 gxy = mom_.second_xy / mom_.mass - cg.x * cg.y,
-                 gyy = mom_.second_yy / mom_.mass - cg.y * cg.y;
-    const double ratio = (gxx * gyy - gxy * gxy) / (uxx * uyy - uxy * uxy);
+    const double ratio =
+        (mom_.cov_xx * mom_.cov_yy - mom_.cov_xy * mom_.cov_xy) / (uxx * uyy - uxy * uxy);
     return ratio >= 0.0 ? std::min(1.0, ratio) : 0.0;  // NaN: 0, all hidden
   }
   // ln(f / (h · Gaussian)) at x for the true slope q there: what the linearisation missed.
@@ -299,10 +296,74 @@ class GaussianLobe {
 
 }  // namespace
 
-NormalMoments standardNormalOverPolygon(std::span<const Vec2> ccw) {
+namespace {
+
+// Within this range of |y|²/2 over a polygon its moments are taken by quadrature (see
+// standardNormalOverPolygon()), beyond it in closed form.
+constexpr double kQuadratureRange = 8.0;
+// The quadrature's triangles are split until |y|²/2 varies by at most this over each: the
+// degree-11 rule then errs by about 1e-9 of their mass (the Taylor remainder of e^{-range/2...}).
+constexpr double kTriangleRange = 2.0;
+
+// The moments by a degree-11 rule, weighted relative to the density at the polygon's nearest
+// point (distance @p near) and taken about the vertices' average, so that nothing cancels.
+NormalMoments quadratureMoments(std::span<const Vec2> ccw, double near) {
   NormalMoments m;
   const std::size_t n = ccw.size();
-  if (n < 3 || n > 16) return m;
+  Vec2 ref{0.0};
+  for (const Vec2& v : ccw) ref += v;
+  ref /= static_cast<double>(n);
+  struct Triangle {
+    Vec2 a, b, c;
+  };
+  std::array<Triangle, 64> stack{};
+  std::size_t top = 0;
+  for (std::size_t i = 1; i + 1 < n; ++i) stack[top++] = {ccw[0], ccw[i], ccw[i + 1]};
+  static const std::span<const TriangleNode> kRule = conicalProductRule(6);
+  double m0 = 0.0, sxx = 0.0, sxy = 0.0, syy = 0.0;
+  Vec2 m1{0.0};
+  while (top > 0) {
+    const Triangle t = stack[--top];
+    const double far2 = std::max({glm::dot(t.a, t.a), glm::dot(t.b, t.b), glm::dot(t.c, t.c)});
+    const double own_near = distanceToOrigin(std::array<Vec2, 3>{t.a, t.b, t.c});
+    if (0.5 * (far2 - own_near * own_near) > kTriangleRange && top + 4 <= stack.size()) {
+      const Vec2 ab = 0.5 * (t.a + t.b), bc = 0.5 * (t.b + t.c), ca = 0.5 * (t.c + t.a);
+      stack[top++] = {t.a, ab, ca};
+      stack[top++] = {ab, t.b, bc};
+      stack[top++] = {ca, bc, t.c};
+      stack[top++] = {ab, bc, ca};
+      continue;
+    }
+    const double area = 0.5 * cross2(t.b - t.a, t.c - t.a);
+    if (!(area > 0.0)) continue;
+    for (const TriangleNode& node : kRule) {
+      const Vec2 x = node.bary[0] * t.a + node.bary[1] * t.b + node.bary[2] * t.c;
+      const double w = node.weight * area * std::exp(-0.5 * (glm::dot(x, x) - near * near));
+      const Vec2 z = x - ref;
+      m0 += w;
+      m1 += w * z;
+      sxx += w * z.x * z.x;
+      sxy += w * z.x * z.y;
+      syy += w * z.y * z.y;
+    }
+  }
+  m.mass = m0 * std::exp(-0.5 * near * near) / (2.0 * kPi);
+  if (!(m.mass > 0.0) || !std::isfinite(m.mass)) return NormalMoments{};
+  const Vec2 shift = m1 / m0;
+  m.mean = ref + shift;
+  m.cov_xx = sxx / m0 - shift.x * shift.x;
+  m.cov_xy = sxy / m0 - shift.x * shift.y;
+  m.cov_yy = syy / m0 - shift.y * shift.y;
+  m.first = m.mass * m.mean;
+  m.second_xx = m.mass * (m.cov_xx + m.mean.x * m.mean.x);
+  m.second_xy = m.mass * (m.cov_xy + m.mean.x * m.mean.y);
+  m.second_yy = m.mass * (m.cov_yy + m.mean.y * m.mean.y);
+  return m;
+}
+
+NormalMoments closedFormMoments(std::span<const Vec2> ccw) {
+  NormalMoments m;
+  const std::size_t n = ccw.size();
   double winding = 0.0, tails = 0.0;
   bool on_boundary = false;  // the origin lies exactly on an edge (a symmetric glint does)
   Vec2 boundary{0.0};
@@ -355,7 +416,26 @@ NormalMoments standardNormalOverPolygon(std::span<const Vec2> ccw) {
   m.second_xx = m.mass - sxx;
   m.second_xy = -sxy;
   m.second_yy = m.mass - syy;
+  if (m.mass > 0.0) {
+    m.mean = m.first / m.mass;
+    m.cov_xx = m.second_xx / m.mass - m.mean.x * m.mean.x;
+    m.cov_xy = m.second_xy / m.mass - m.mean.x * m.mean.y;
+    m.cov_yy = m.second_yy / m.mass - m.mean.y * m.mean.y;
+  }
   return m;
+}
+
+}  // namespace
+
+NormalMoments standardNormalOverPolygon(std::span<const Vec2> ccw) {
+  const std::size_t n = ccw.size();
+  if (n < 3 || n > 16) return NormalMoments{};
+  const double near = distanceToOrigin(ccw);
+  double far2 = 0.0;
+  for (const Vec2& v : ccw) far2 = std::max(far2, glm::dot(v, v));
+  // (A NaN vertex fails the test and goes to the closed form, which returns a NaN mass.)
+  if (0.5 * (far2 - near * near) <= kQuadratureRange) return quadratureMoments(ccw, near);
+  return closedFormMoments(ccw);
 }
 
 LobeNode lobeNode(const SurfaceMap& map, const Vec3& bary, const Vec3& observer_m,

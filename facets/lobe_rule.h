@@ -29,18 +29,28 @@ namespace glint {
 using Vec2 = glm::dvec2;
 
 /// @brief ∫ φ₂(y) dy, ∫ y φ₂(y) dy and ∫ y yᵀ φ₂(y) dy over a polygon, φ₂ the standard bivariate
-/// normal density e^{−|y|²/2} / 2π.
+/// normal density e^{−|y|²/2} / 2π; and the mean and covariance of φ₂ restricted to it, which
+/// a small polygon far from the origin cannot get from the raw moments (its covariance is the
+/// difference of two numbers larger by the squared ratio of its distance to its size).
 struct NormalMoments {
   double mass = 0.0;
   Vec2 first{0.0};
   double second_xx = 0.0, second_xy = 0.0, second_yy = 0.0;
+  Vec2 mean{0.0};                                   ///< first / mass (0 without mass)
+  double cov_xx = 0.0, cov_xy = 0.0, cov_yy = 0.0;  ///< about the mean, per unit mass
 };
 
 /// @brief The moments of the standard bivariate normal over the convex polygon with
-/// counter-clockwise vertices @p ccw (at most 16): the mass by Owen's T over its edges (the
-/// winding number less each edge's tail beyond it, so there is no cancellation however far the
-/// polygon lies in the tail), the first and second moments by the divergence theorem
-/// (∫ y φ₂ = −∮ φ₂ n ds, ∫ yᵢ yⱼ φ₂ = δᵢⱼ mass − ∮ yⱼ φ₂ nᵢ ds), all in closed form.
+/// counter-clockwise vertices @p ccw (at most 16).
+///
+/// - A polygon over which the density varies by at most e⁸ (small, or far out in the tail,
+///   where the closed form's edge terms cancel to far below their own rounding): by a degree-11
+///   rule on triangles over each of which it varies by at most e², in a frame at the polygon,
+///   so that the mean and covariance keep their precision however far out the polygon is.
+/// - Any other: in closed form, the mass by Owen's T over its edges (the winding number less
+///   each edge's tail beyond it), the first and second moments by the divergence theorem
+///   (∫ y φ₂ = −∮ φ₂ n ds, ∫ yᵢ yⱼ φ₂ = δᵢⱼ mass − ∮ yⱼ φ₂ nᵢ ds).
+///
 /// Never throws; an empty or degenerate polygon gives zeros.
 NormalMoments standardNormalOverPolygon(std::span<const Vec2> ccw);
 

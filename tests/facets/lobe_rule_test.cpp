@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace glint {
@@ -51,6 +52,49 @@ TEST(StandardNormalOverPolygon, MomentsMatchQuadratureInsideAcrossAndFarOutside)
         << "triangle from " << t[0].x << "," << t[0].y;
     EXPECT_NEAR(m.second_yy / m.mass, myy / mass, 1e-5 * (1.0 + std::abs(myy / mass)))
         << "triangle from " << t[0].x << "," << t[0].y;
+  }
+}
+
+TEST(StandardNormalOverPolygon, SmallPolygonsFarInTheTailKeepMassMeanAndCovariance) {
+  // A piece of surface far in a narrow lobe's tail is a small polygon far from the origin: its
+  // covariance is ~w² against a second moment ~D², and its mass is ~w² φ(D) against edge terms
+  // ~Q(D). The reference integrates in a frame at the polygon, relative to the density at its
+  // first vertex, by the centroid rule on 500² sub-triangles: the density varies by at most
+  // e^4.6 over each polygon, so that rule errs by ~(4.6/500)²/24 ≈ 4e-6 of each moment.
+  const Vec2 dir = glm::normalize(Vec2(1.0, 0.3)), perp(-dir.y, dir.x);
+  for (double far : {3.0, 7.5, 15.0, 30.0}) {
+    for (double w : {0.3, 0.01, 1e-4}) {
+      if (far * w > 4.5) continue;
+      const Vec2 a = far * dir, b = (far + w) * dir + 0.3 * w * perp, c = far * dir + w * perp;
+      const NormalMoments m = standardNormalOverPolygon(std::array<Vec2, 3>{a, b, c});
+      auto relative = [&](const Vec2& z) {  // the density at a + z over that at a
+        return std::exp(-glm::dot(a, z) - 0.5 * glm::dot(z, z));
+      };
+      const Vec2 o(0.0), ab = b - a, ac = c - a;
+      const int n = 500;
+      const double m0 = bruteTriangle(o, ab, ac, n, relative);
+      const Vec2 shift(
+          bruteTriangle(o, ab, ac, n, [&](const Vec2& z) { return z.x * relative(z); }),
+          bruteTriangle(o, ab, ac, n, [&](const Vec2& z) { return z.y * relative(z); }));
+      const Vec2 mean_z = shift / m0;
+      const double cxx = bruteTriangle(o, ab, ac, n,
+                                       [&](const Vec2& z) {
+                                         return (z.x - mean_z.x) * (z.x - mean_z.x) * relative(z);
+                                       }) /
+                         m0;
+      const double cyy = bruteTriangle(o, ab, ac, n,
+                                       [&](const Vec2& z) {
+                                         return (z.y - mean_z.y) * (z.y - mean_z.y) * relative(z);
+                                       }) /
+                         m0;
+      const double log_mass = std::log(m0 / (2.0 * kPi)) - 0.5 * glm::dot(a, a);
+      const std::string at = "D = " + std::to_string(far) + ", w = " + std::to_string(w);
+      ASSERT_GT(m.mass, 0.0) << at;
+      EXPECT_NEAR(std::log(m.mass), log_mass, 1e-4) << at;
+      EXPECT_NEAR(glm::length(m.mean - (a + mean_z)), 0.0, 1e-4 * w) << at;
+      EXPECT_NEAR(m.cov_xx / cxx, 1.0, 1e-4) << at;
+      EXPECT_NEAR(m.cov_yy / cyy, 1.0, 1e-4) << at;
+    }
   }
 }
 
