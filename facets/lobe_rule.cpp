@@ -124,11 +124,11 @@ Vec2 projectIntoTriangle(const Vec2& x) {
   return best;
 }
 
-// The distance from the origin to a convex counter-clockwise polygon (0 inside it).
-double distanceToOrigin(std::span<const Vec2> ccw) {
+// The point of a convex counter-clockwise polygon nearest the origin (the origin inside it).
+Vec2 nearestToOrigin(std::span<const Vec2> ccw) {
   const std::size_t n = ccw.size();
   bool inside = n >= 3;
-  double d2 = std::numeric_limits<double>::infinity();
+  Vec2 nearest = n > 0 ? ccw[0] : Vec2(0.0);
   for (std::size_t i = 0; i < n; ++i) {
     const Vec2& a = ccw[i];
     const Vec2& b = ccw[(i + 1) % n];
@@ -137,9 +137,20 @@ double distanceToOrigin(std::span<const Vec2> ccw) {
     const double len2 = glm::dot(e, e);
     const double w = len2 > 0.0 ? std::clamp(-glm::dot(a, e) / len2, 0.0, 1.0) : 0.0;
     const Vec2 p = a + w * e;
-    d2 = std::min(d2, glm::dot(p, p));
+    if (glm::dot(p, p) < glm::dot(nearest, nearest)) nearest = p;
   }
-  return inside ? 0.0 : std::sqrt(d2);
+  return inside ? Vec2(0.0) : nearest;
+}
+
+// The distance from the origin to a convex counter-clockwise polygon (0 inside it).
+double distanceToOrigin(std::span<const Vec2> ccw) { return glm::length(nearestToOrigin(ccw)); }
+
+// How much |y|²/2 grows over a polygon from its point @p nearest the origin: (|v|² − |p|²)/2 as
+// (v − p)·(v + p)/2, which keeps its precision however far out the polygon lies.
+double exponentRange(std::span<const Vec2> ccw, const Vec2& nearest) {
+  double range = 0.0;
+  for (const Vec2& v : ccw) range = std::max(range, 0.5 * glm::dot(v - nearest, v + nearest));
+  return range;
 }
 
 // The quadratic interpolant of q over the piece, and its derivatives.
@@ -305,9 +316,10 @@ constexpr double kQuadratureRange = 8.0;
 // degree-11 rule then errs by about 1e-9 of their mass (the Taylor remainder of e^{-range/2...}).
 constexpr double kTriangleRange = 2.0;
 
-// The moments by a degree-11 rule, weighted relative to the density at the polygon's nearest
-// point (distance @p near) and taken about the vertices' average, so that nothing cancels.
-NormalMoments quadratureMoments(std::span<const Vec2> ccw, double near) {
+// The moments by a degree-11 rule, weighted relative to the density at the polygon's point
+// @p near_point nearest the origin and taken about the vertices' average, so that nothing
+// cancels.
+NormalMoments quadratureMoments(std::span<const Vec2> ccw, const Vec2& near_point) {
   NormalMoments m;
   const std::size_t n = ccw.size();
   Vec2 ref{0.0};
@@ -315,30 +327,35 @@ NormalMoments quadratureMoments(std::span<const Vec2> ccw, double near) {
   ref /= static_cast<double>(n);
   struct Triangle {
     Vec2 a, b, c;
+    int depth;
   };
-  std::array<Triangle, 64> stack{};
+  // Depth-first, each triangle at most kMaxSplits times: the polygon's range is at most
+  // kQuadratureRange, and each split about halves a triangle's, so two or three suffice.
+  constexpr int kMaxSplits = 4;
+  std::array<Triangle, 16 + 3 * kMaxSplits> stack{};
   std::size_t top = 0;
-  for (std::size_t i = 1; i + 1 < n; ++i) stack[top++] = {ccw[0], ccw[i], ccw[i + 1]};
+  for (std::size_t i = 1; i + 1 < n; ++i) stack[top++] = {ccw[0], ccw[i], ccw[i + 1], 0};
   static const std::span<const TriangleNode> kRule = conicalProductRule(6);
   double m0 = 0.0, sxx = 0.0, sxy = 0.0, syy = 0.0;
   Vec2 m1{0.0};
   while (top > 0) {
     const Triangle t = stack[--top];
-    const double far2 = std::max({glm::dot(t.a, t.a), glm::dot(t.b, t.b), glm::dot(t.c, t.c)});
-    const double own_near = distanceToOrigin(std::array<Vec2, 3>{t.a, t.b, t.c});
-    if (0.5 * (far2 - own_near * own_near) > kTriangleRange && top + 4 <= stack.size()) {
+    const std::array<Vec2, 3> corners{t.a, t.b, t.c};
+    if (t.depth < kMaxSplits && exponentRange(corners, nearestToOrigin(corners)) > kTriangleRange) {
       const Vec2 ab = 0.5 * (t.a + t.b), bc = 0.5 * (t.b + t.c), ca = 0.5 * (t.c + t.a);
-      stack[top++] = {t.a, ab, ca};
-      stack[top++] = {ab, t.b, bc};
-      stack[top++] = {ca, bc, t.c};
-      stack[top++] = {ab, bc, ca};
+      const int depth = t.depth + 1;
+      stack[top++] = {t.a, ab, ca, depth};
+      stack[top++] = {ab, t.b, bc, depth};
+      stack[top++] = {ca, bc, t.c, depth};
+      stack[top++] = {ab, bc, ca, depth};
       continue;
     }
     const double area = 0.5 * cross2(t.b - t.a, t.c - t.a);
     if (!(area > 0.0)) continue;
     for (const TriangleNode& node : kRule) {
       const Vec2 x = node.bary[0] * t.a + node.bary[1] * t.b + node.bary[2] * t.c;
-      const double w = node.weight * area * std::exp(-0.5 * (glm::dot(x, x) - near * near));
+      const double w =
+          node.weight * area * std::exp(-0.5 * glm::dot(x - near_point, x + near_point));
       const Vec2 z = x - ref;
       m0 += w;
       m1 += w * z;
@@ -347,7 +364,7 @@ NormalMoments quadratureMoments(std::span<const Vec2> ccw, double near) {
       syy += w * z.y * z.y;
     }
   }
-  m.mass = m0 * std::exp(-0.5 * near * near) / (2.0 * kPi);
+  m.mass = m0 * std::exp(-0.5 * glm::dot(near_point, near_point)) / (2.0 * kPi);
   if (!(m.mass > 0.0) || !std::isfinite(m.mass)) return NormalMoments{};
   const Vec2 shift = m1 / m0;
   m.mean = ref + shift;
@@ -430,11 +447,9 @@ NormalMoments closedFormMoments(std::span<const Vec2> ccw) {
 NormalMoments standardNormalOverPolygon(std::span<const Vec2> ccw) {
   const std::size_t n = ccw.size();
   if (n < 3 || n > 16) return NormalMoments{};
-  const double near = distanceToOrigin(ccw);
-  double far2 = 0.0;
-  for (const Vec2& v : ccw) far2 = std::max(far2, glm::dot(v, v));
+  const Vec2 near_point = nearestToOrigin(ccw);
   // (A NaN vertex fails the test and goes to the closed form, which returns a NaN mass.)
-  if (0.5 * (far2 - near * near) <= kQuadratureRange) return quadratureMoments(ccw, near);
+  if (exponentRange(ccw, near_point) <= kQuadratureRange) return quadratureMoments(ccw, near_point);
   return closedFormMoments(ccw);
 }
 
@@ -488,9 +503,30 @@ bool integrateLobe(const LobeSampler& sampler, const std::array<const LobeNode*,
                    const Polygon& poly, double sigma, double negligible, SpecularPart& part) {
   // A node past θN = 90° leaves q without a model. The piece's normals spread less than 0.3 rad
   // (the lobe scheme's resolution), so all of it then lies beyond θN = 73°, where for σ < 0.2
-  // the lobe is below e^-130 of its peak: nothing. Wider lobes must be split further.
+  // the lobe is below e^-130 of its peak: nothing.
   if (std::any_of(nodes.begin(), nodes.end(), [](const LobeNode* n) { return !n->has_slope; })) {
-    return sigma < 0.2;
+    if (sigma < 0.2) return true;
+    // A wide lobe there is smooth over the piece and falls to 0 with all its derivatives at
+    // θN = 90° (e^{−1/(2σ² cos²θN)} / cos⁴θN): no lobe to model, an ordinary degree-5 rule
+    // on the part does, its error shown by the change under splitting. (Splitting until every
+    // node had a slope would never end: the pieces along θN = 90° double with each level.)
+    static const std::span<const TriangleNode> kRule = conicalProductRule(3);
+    for (int i = 1; i + 1 < poly.n; ++i) {
+      const Vec2 &a = poly.v[0], &b = poly.v[i], &c = poly.v[i + 1];
+      const double area = 0.5 * cross2(b - a, c - a);
+      double sum = 0.0;
+      for (const TriangleNode& node : kRule) {
+        const Vec2 x = node.bary[0] * a + node.bary[1] * b + node.bary[2] * c;
+        const LobeNode at = sampler.at(x.x, x.y);
+        ++part.evaluations;
+        if (!at.valid) return false;
+        if (!at.has_slope) continue;
+        sum += node.weight * at.specular *
+               std::exp(-glm::dot(at.slope, at.slope) / (2.0 * sigma * sigma));
+      }
+      part.value += area * sum;
+    }
+    return std::isfinite(part.value);
   }
   const SlopeModel model(nodes);
   // The specular point: least |q|² over the piece, by projected Gauss–Newton on the
