@@ -48,20 +48,30 @@ double upperTail(double x) { return 0.5 * std::erfc(x / kSqrt2); }  // Q(x) = 1 
 // origin but whose ends lie far along it (both T ≈ Q(h)/2) loses nothing to cancellation:
 // for s ≥ h, T(h, a) = Q(h)/2 + Q(ah)/2 − Q(h) Q(ah) − T(ah, 1/a) (Owen 1956), whose last three
 // terms are all small where s is large.
-double wedgeTailExcess(double h, double s) {
-  if (s <= h) return boost::math::owens_t(h, s / h, OwensPolicy()) - 0.5 * upperTail(h);
+// @p terms accumulates the magnitudes of what is summed, for the caller's conditioning.
+double wedgeTailExcess(double h, double s, double& terms) {
+  if (s <= h) {
+    const double t = boost::math::owens_t(h, s / h, OwensPolicy()), q = 0.5 * upperTail(h);
+    terms += t + q;
+    return t - q;
+  }
   if (s > kFarTail) return 0.0;
   const double qs = upperTail(s);
-  return 0.5 * qs - upperTail(h) * qs - boost::math::owens_t(s, h / s, OwensPolicy());
+  const double t = boost::math::owens_t(s, h / s, OwensPolicy()), qq = upperTail(h) * qs;
+  terms += 0.5 * qs + qq + t;
+  return 0.5 * qs - qq - t;
 }
 
 // Σ of that mass between the points sa < sb along an edge at distance h > 0 (signed along s).
-double edgeTail(double h, double sa, double sb) {
+double edgeTail(double h, double sa, double sb, double& terms) {
   if (h > kFarTail) return 0.0;
-  auto excess = [&](double s) { return s < 0.0 ? -wedgeTailExcess(h, -s) : wedgeTailExcess(h, s); };
+  auto excess = [&](double s) {
+    return s < 0.0 ? -wedgeTailExcess(h, -s, terms) : wedgeTailExcess(h, s, terms);
+  };
   // The Q(h)/2 parts cancel where sa and sb lie on the same side of the foot (V(0) = −Q(h)/2
   // makes s = 0 either side).
   const double straddle = sa < 0.0 && sb >= 0.0 ? upperTail(h) : 0.0;
+  terms += straddle;
   return straddle + excess(sb) - excess(sa);
 }
 
@@ -378,10 +388,12 @@ NormalMoments quadratureMoments(std::span<const Vec2> ccw, const Vec2& near_poin
   return m;
 }
 
-NormalMoments closedFormMoments(std::span<const Vec2> ccw) {
+// @p terms receives the sum of the magnitudes the mass is the difference of: its conditioning.
+NormalMoments closedFormMoments(std::span<const Vec2> ccw, double& terms) {
   NormalMoments m;
   const std::size_t n = ccw.size();
   double winding = 0.0, tails = 0.0;
+  terms = 0.0;
   bool on_boundary = false;  // the origin lies exactly on an edge (a symmetric glint does)
   Vec2 boundary{0.0};
   double sxx = 0.0, sxy = 0.0, syy = 0.0;  // ∮ yⱼ φ₂ nᵢ ds, symmetrised
@@ -404,7 +416,7 @@ NormalMoments closedFormMoments(std::span<const Vec2> ccw) {
     if (ah > kFarTail) continue;
     // Signed mass of the triangle (origin, a, b) is sign(h)·[wedge − tail] between sa and sb;
     // the wedges add up to the winding number, the tails are subtracted here.
-    if (ah > 0.0) tails += (h > 0.0 ? 1.0 : -1.0) * edgeTail(ah, sa, sb);
+    if (ah > 0.0) tails += (h > 0.0 ? 1.0 : -1.0) * edgeTail(ah, sa, sb, terms);
     // ∫ y φ₂ = −∮ φ₂ n ds, and φ₂ along the edge is φ(h) φ(s).
     // Along the edge y = h·out + s·dir and φ₂ = φ(h) φ(s).
     const double phi_h = kInvSqrt2Pi * std::exp(-0.5 * h * h);
@@ -429,6 +441,7 @@ NormalMoments closedFormMoments(std::span<const Vec2> ccw) {
     }
   }
   m.mass = std::max(0.0, inside - tails);
+  terms += std::abs(inside);
   m.first = -boundary;
   m.second_xx = m.mass - sxx;
   m.second_xy = -sxy;
@@ -447,10 +460,24 @@ NormalMoments closedFormMoments(std::span<const Vec2> ccw) {
 NormalMoments standardNormalOverPolygon(std::span<const Vec2> ccw) {
   const std::size_t n = ccw.size();
   if (n < 3 || n > 16) return NormalMoments{};
+  double terms = 0.0;
+  const NormalMoments closed = closedFormMoments(ccw, terms);
+  // The closed form is taken where it is well conditioned: its mass not a small difference of
+  // its terms, its covariance not a small difference of second moment and squared mean. (Its
+  // terms carry errors up to about 1e-10 of their size, which these ratios multiply; both pass
+  // for a polygon that holds much of the lobe or is not small against it.)
+  const double spread = closed.cov_xx + closed.cov_yy;
+  const double thinnest =
+      0.5 * spread - std::hypot(0.5 * (closed.cov_xx - closed.cov_yy), closed.cov_xy);
+  const bool conditioned =
+      closed.mass > 1e-4 * terms && thinnest > 1e-7 * (glm::dot(closed.mean, closed.mean) + spread);
+  if (conditioned) return closed;
+  // Otherwise the polygon is small against the lobe or far out in its tail, where the density
+  // varies little over it: by quadrature, if it varies by at most e⁸. (A NaN vertex fails the
+  // test and keeps the closed form's NaN mass.)
   const Vec2 near_point = nearestToOrigin(ccw);
-  // (A NaN vertex fails the test and goes to the closed form, which returns a NaN mass.)
   if (exponentRange(ccw, near_point) <= kQuadratureRange) return quadratureMoments(ccw, near_point);
-  return closedFormMoments(ccw);
+  return closed;
 }
 
 LobeNode lobeNode(const SurfaceMap& map, const Vec3& bary, const Vec3& observer_m,
