@@ -23,7 +23,8 @@ namespace glint {
 /// @brief How each observer's integral over a lit facet is computed.
 enum class IntegrationScheme : std::uint8_t {
   /// The paper's: a one-point rule per sub-facet (the curved patch's area at its centroid), split
-  /// 1→4 while the estimate changes. The pieces must resolve the lobe to about one σ each.
+  /// 1→4 while the estimate changes. The pieces must resolve the lobe to about one σ each. Kept
+  /// so that the paper's Figure 4 stays reproducible, and for flat facets (NormalModel::Flat).
   Paper,
   /// A 16-point product Gauss rule (degree 7, triangle_rule.h) per piece over the exact surface
   /// map of the coarse facet (surface_map.h), its error estimated by the 9-point rule. Pieces are
@@ -35,7 +36,7 @@ enum class IntegrationScheme : std::uint8_t {
   /// lobe integrated in closed form about the piece's specular point, the piece clipped at the
   /// terminator, the horizon and the beam's edge. A piece's error is the change of its estimate
   /// when it is split 1→4 (the four children reuse its nodes: nine new ones). Pieces are split
-  /// on their bounds alone until their normals spread less than 0.3 rad.
+  /// on their bounds alone until their normals spread less than 0.3 rad. The default.
   Lobe,
 };
 
@@ -62,7 +63,7 @@ struct IntegratorOptions {
   /// Trace occlusion rays (Occluder) where the target can shadow itself: a facet counts only
   /// if its centre sees the laser and the observer. Off: every facet sees everything.
   bool occlusion = true;
-  IntegrationScheme scheme = IntegrationScheme::Paper;
+  IntegrationScheme scheme = IntegrationScheme::Lobe;
 };
 
 /// @brief The irradiance at one observer and how it was obtained.

@@ -124,9 +124,9 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
   CLI::Option* scheme_opt =
       points_cmd
           ->add_option("--scheme", scheme,
-                       "Integration scheme: paper (the paper's 1→4 one-point refinement, the "
-                       "default), cubature (a degree-7 rule on the exact surface) or lobe (the "
-                       "specular lobe in closed form about each piece's specular point); "
+                       "Integration scheme: lobe (the specular lobe in closed form about each "
+                       "piece's specular point, the default), cubature (a degree-7 rule on the "
+                       "exact surface) or paper (the paper's 1→4 one-point refinement); "
                        "overrides the scene")
           ->check(CLI::IsMember(integrationSchemeNames()));
   points_cmd->add_option("--threads", points.threads, "Worker threads (default: all cores)")

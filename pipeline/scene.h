@@ -87,9 +87,9 @@ struct AccuracySpec {
   std::int64_t max_evaluations = 4'000'000;  ///< per observer
   NormalModel normals = NormalModel::Surface;
   bool occlusion = true;  ///< occlusion rays where the target can shadow itself
-  /// `paper` (the default), `cubature` or `lobe` (integrator.h); `paper` where `normals` is
+  /// `lobe` (the default), `cubature` or `paper` (integrator.h); `paper` where `normals` is
   /// `flat` and no scheme is named, since flat facets are the paper scheme's model only.
-  IntegrationScheme scheme = IntegrationScheme::Paper;
+  IntegrationScheme scheme = IntegrationScheme::Lobe;
 };
 
 /// @brief The observer box of `glint run` (key `observers`; see FieldSpec for the meaning).
