@@ -323,7 +323,8 @@ namespace {
 // standardNormalOverPolygon()), beyond it in closed form.
 constexpr double kQuadratureRange = 8.0;
 // The quadrature's triangles are split until |y|²/2 varies by at most this over each: the
-// degree-11 rule then errs by about 1e-9 of their mass (the Taylor remainder of e^{-range/2...}).
+// degree-11 rule then errs by about 1e-9 of their mass (the exponential's Taylor remainder
+// about the middle, (range/2)¹² / 12!).
 constexpr double kTriangleRange = 2.0;
 
 // The moments by a degree-11 rule, weighted relative to the density at the polygon's point

@@ -43,13 +43,14 @@ struct NormalMoments {
 /// @brief The moments of the standard bivariate normal over the convex polygon with
 /// counter-clockwise vertices @p ccw (at most 16).
 ///
-/// - A polygon over which the density varies by at most e⁸ (small, or far out in the tail,
-///   where the closed form's edge terms cancel to far below their own rounding): by a degree-11
-///   rule on triangles over each of which it varies by at most e², in a frame at the polygon,
-///   so that the mean and covariance keep their precision however far out the polygon is.
-/// - Any other: in closed form, the mass by Owen's T over its edges (the winding number less
-///   each edge's tail beyond it), the first and second moments by the divergence theorem
-///   (∫ y φ₂ = −∮ φ₂ n ds, ∫ yᵢ yⱼ φ₂ = δᵢⱼ mass − ∮ yⱼ φ₂ nᵢ ds).
+/// - In closed form where that is well conditioned: the mass by Owen's T over its edges (the
+///   winding number less each edge's tail beyond it), the first and second moments by the
+///   divergence theorem (∫ y φ₂ = −∮ φ₂ n ds, ∫ yᵢ yⱼ φ₂ = δᵢⱼ mass − ∮ yⱼ φ₂ nᵢ ds).
+/// - Otherwise (a polygon small against the density's scale, or far out in its tail, where the
+///   edge terms cancel to below their own rounding), if the density varies by at most e⁸ over
+///   it: by a degree-11 rule on triangles over each of which it varies by at most e², in a
+///   frame at the polygon, so that mass, mean and covariance keep their precision however far
+///   out the polygon is.
 ///
 /// Never throws; an empty or degenerate polygon gives zeros.
 NormalMoments standardNormalOverPolygon(std::span<const Vec2> ccw);
