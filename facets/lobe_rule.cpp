@@ -518,6 +518,29 @@ LobeNode lobeNode(const SurfacePoint& p, const Vec3& observer_m, const Beam& bea
 
 namespace {
 
+// ∫ value(integrand) ds dt over the part, by @p rule on each triangle of a fan from its first
+// vertex, sampled from @p sampler (continued smoothly past the part's clipped edges). Adds to
+// @p out and @p evaluations; false where a sample is invalid.
+template <class Value>
+bool integrateOverPart(const LobeSampler& sampler, const Polygon& part,
+                       std::span<const TriangleNode> rule, const Value& value, double& out,
+                       int& evaluations) {
+  for (int i = 1; i + 1 < part.n; ++i) {
+    const Vec2 &a = part.v[0], &b = part.v[i], &c = part.v[i + 1];
+    const double area = 0.5 * cross2(b - a, c - a);
+    double sum = 0.0;
+    for (const TriangleNode& node : rule) {
+      const Vec2 x = node.bary[0] * a + node.bary[1] * b + node.bary[2] * c;
+      const LobeNode at = sampler.at(x.x, x.y);
+      ++evaluations;
+      if (!at.valid) return false;
+      sum += node.weight * value(at);
+    }
+    out += area * sum;
+  }
+  return true;
+}
+
 // The specular term over the part: ∫ f ds dt in the piece's coordinates, with its error.
 struct SpecularPart {
   double value = 0.0;
@@ -539,22 +562,13 @@ bool integrateLobe(const LobeSampler& sampler, const std::array<const LobeNode*,
     // on the part does, its error shown by the change under splitting. (Splitting until every
     // node had a slope would never end: the pieces along θN = 90° double with each level.)
     static const std::span<const TriangleNode> kRule = conicalProductRule(3);
-    for (int i = 1; i + 1 < poly.n; ++i) {
-      const Vec2 &a = poly.v[0], &b = poly.v[i], &c = poly.v[i + 1];
-      const double area = 0.5 * cross2(b - a, c - a);
-      double sum = 0.0;
-      for (const TriangleNode& node : kRule) {
-        const Vec2 x = node.bary[0] * a + node.bary[1] * b + node.bary[2] * c;
-        const LobeNode at = sampler.at(x.x, x.y);
-        ++part.evaluations;
-        if (!at.valid) return false;
-        if (!at.has_slope) continue;
-        sum += node.weight * at.specular *
-               std::exp(-glm::dot(at.slope, at.slope) / (2.0 * sigma * sigma));
-      }
-      part.value += area * sum;
-    }
-    return std::isfinite(part.value);
+    const auto whole = [sigma](const LobeNode& at) {
+      return at.has_slope
+                 ? at.specular * std::exp(-glm::dot(at.slope, at.slope) / (2.0 * sigma * sigma))
+                 : 0.0;
+    };
+    return integrateOverPart(sampler, poly, kRule, whole, part.value, part.evaluations) &&
+           std::isfinite(part.value);
   }
   const SlopeModel model(nodes);
   // The specular point: least |q|² over the piece, by projected Gauss–Newton on the
@@ -710,20 +724,9 @@ LobeEstimate lobeRule(const LobeSampler& sampler, const std::array<const LobeNod
     return std::all_of(n->clip.begin(), n->clip.end(), [](double f) { return f > 0.0; });
   });
   auto integrate = [&](std::span<const TriangleNode> rule, double& out) {
-    for (int i = 1; i + 1 < poly.n; ++i) {
-      const Vec2 &a = poly.v[0], &b = poly.v[i], &c = poly.v[i + 1];
-      const double area = 0.5 * cross2(b - a, c - a);
-      double sum = 0.0;
-      for (const TriangleNode& node : rule) {
-        const Vec2 x = node.bary[0] * a + node.bary[1] * b + node.bary[2] * c;
-        const LobeNode at = sampler.at(x.x, x.y);
-        ++result.evaluations;
-        if (!at.valid) return false;
-        sum += node.weight * at.diffuse;
-      }
-      out += area * sum;
-    }
-    return true;
+    return integrateOverPart(
+        sampler, poly, rule, [](const LobeNode& at) { return at.diffuse; }, out,
+        result.evaluations);
   };
   if (has_diffuse) {
     static const std::span<const TriangleNode> kRule = conicalProductRule(3);
