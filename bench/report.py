@@ -174,6 +174,22 @@ def facet_sections(out):
     return lines
 
 
+def hard_section(out):
+    data = rows(os.path.join(out, "hard.csv"))
+    if not data:
+        return ["No hard-observer results."]
+    lines = table_head("observers", "scheme", "converged", "evaluations: median, p99, max (mean)",
+                       "time (s)", "worst error / allowed (converged)", "max error / peak",
+                       "own estimate below the achieved error")
+    for r in data:
+        lines.append(f"| {r['scene']} | {r['scheme']} | {r['converged']} of {r['observers']} | "
+                     f"{r['evaluations_median']}, {r['evaluations_p99']}, {r['evaluations_max']} "
+                     f"({float(r['evaluations_mean']):.0f}) | {g(r['seconds'])} | "
+                     f"{g(r['worst_error_over_allowed'])} | {g(r['max_rel_error'])} | "
+                     f"{r['estimate_below_error']} |")
+    return lines
+
+
 def field_section(out, name="field.csv", plot=True):
     data = rows(os.path.join(out, name))
     if not data:
@@ -240,6 +256,13 @@ def main():
              "equal achieved max error: the cheapest uniform level at least as accurate as the "
              "adaptive run; where none is, a lower bound and an extrapolation, both labelled.", ""]
     text += facet_sections(out)
+    text += ["## Hard observers (`glint_hard_bench`, bench/scenes/hard/)", "",
+             "Each class at its scene's tolerance (1e-3, floor 1e-9 x the beam's peak "
+             "irradiance), each scheme against the tests' brute force (nested adaptive "
+             "Gauss-Kronrod in the shape's own parametrisation, tests/support/brute_force.h). "
+             "Allowed error: tolerance x reference + floor + the reference's own error. "
+             "What each class is: the `description` of its scene.", ""]
+    text += hard_section(out) + [""]
     text += ["## Observer side: adaptive field against its dense twin (`glint_field_bench`)", "",
              "Same lattice, same integrator; the dense twin runs once per scene and voxel size. "
              "Allowed error: tolerance x peak + floor. Peak RSS is the process's resident set "

@@ -27,6 +27,14 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
   }
   const double e_max = beam.maxIrradianceInBall(g.centre_m, g.radius_m);
   if (e_max == 0.0 || g.area_bound_m2 == 0.0) return {0.0, 0.0, 0.0};
+  // The kernel is cut at the terminator and the horizon: a patch none of whose normals can
+  // see both the laser and the observer sends nothing. Without this, pieces along a line
+  // where the lobe peaks at grazing incidence (the silhouette seen in forward scatter) keep
+  // their whole lobe as their bound however thin they become, and are split to the depth limit.
+  if (!mayFaceObserver(g, observer_m, observer_radius_m) ||
+      lightVerdict(g, beam) != LightVerdict::MayBeLit) {
+    return {0.0, 0.0, 0.0};
+  }
 
   // Half-vector spread: ωo turns by at most asin(r/d) over the ball, ωi by the beam's spread;
   // their sum moves by at most the two chords.

@@ -101,8 +101,9 @@ struct ContributionBound {
 /// @brief Bounds the irradiance at @p observer_m from every point of the curved patch @p g:
 /// the beam's maximum over the patch's ball, its largest possible lobe value (the smallest θN
 /// any normal of the cone can make with any half vector the ball allows), its area bound and
-/// its nearest distance, for the specular and diffuse terms separately. Requires the bound
-/// fields of @p g.
+/// its nearest distance, for the specular and diffuse terms separately; 0 where no normal of
+/// the patch can both face the laser and be seen (lightVerdict(), mayFaceObserver()). Requires
+/// the bound fields of @p g.
 ///
 /// With @p observer_radius_m > 0 the bound holds for every observer in the ball of that radius
 /// around @p observer_m (a block of the observer field): the half vector may then also turn by

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
 #include "facets/tessellate.h"
 #include "support/quadrature.h"
@@ -364,6 +365,33 @@ TEST(Integrator, ObserverBehindTheTargetCostsNothingFromFacetsFacingAway) {
   EXPECT_EQ(r.evaluations, 0);
   EXPECT_EQ(r.irradiance_w_m2, 0.0);
   EXPECT_TRUE(r.converged);
+}
+
+TEST(Integrator, ObserversInTheShadowBehindTheSilhouetteConverge) {
+  // 3 m behind the cylinder, 0.4625-0.4875 m off the beam's axis (the silhouette is at 0.5 m):
+  // the lit side ends at the terminator (90° from the beam) before the side these observers
+  // see begins (at their horizon, 0.7-0.2° further round), so nothing reaches them, and
+  // in forward scatter the lobe peaks on that very line. Every piece along it is split on its
+  // bound; only a bound that knows a piece cannot see both the laser and the observer lets
+  // them end. Before it did, they stopped at the depth limit with a bound 4x the floor.
+  // At y = 0.5 they see grazing light from the silhouette itself.
+  for (const IntegrationScheme scheme : {IntegrationScheme::Lobe, IntegrationScheme::Paper}) {
+    IntegratorOptions o = accuracy(1e-3, 1e-9 * 100.0);
+    o.scheme = scheme;
+    const FacetIntegrator fi = paperCylinder(0.03, o);
+    IntegratorWorkspace ws;
+    for (const double y : {0.4625, 0.475, 0.4875, 0.5}) {
+      const ObserverResult r = fi.adaptive(Vec3(3.0, y, 0.5), ws);
+      const std::string what = integrationSchemeNames()[static_cast<std::size_t>(scheme)] +
+                               " at y = " + std::to_string(y);
+      EXPECT_TRUE(r.converged) << what << ": " << r.irradiance_w_m2 << " ± "
+                               << r.error_estimate_w_m2 << " W/m² after " << r.evaluations;
+      EXPECT_FALSE(r.depth_limited) << what;
+      if (y < 0.5) {
+        EXPECT_EQ(r.irradiance_w_m2, 0.0) << what;
+      }
+    }
+  }
 }
 
 TEST(Integrator, DepthLimitIsReportedNotHidden) {
