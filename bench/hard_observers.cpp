@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
       o.scheme = name == "lobe"    ? IntegrationScheme::Lobe
                  : name == "paper" ? IntegrationScheme::Paper
                                    : IntegrationScheme::Cubature;
-      const FacetIntegrator fi(buildTarget(scene), beam, o);
+      const FacetIntegrator fi(target, beam, o);
       const auto t0 = std::chrono::steady_clock::now();
       const std::vector<ObserverResult> r = evaluatePoints(fi, points, PointScheme{});
       Row row;

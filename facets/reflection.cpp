@@ -11,6 +11,22 @@ namespace {
 // vector of length `len` (for the sum ωi + ωo, whose parts each turn by known angles).
 double turnAngle(double e, double len) { return e < len ? std::asin(e / len) : kPi; }
 
+// The two culls of a patch whose normals lie within cone_rad of its axis, each from the axis's
+// angle to a direction, shared by contributionBound() (which has the angles at hand) and
+// lightVerdict() / mayFaceObserver(). Both are written so that a NaN answers "not culled":
+// culling must be proven.
+//
+// No normal has cos θi > 0 when ωi itself turns by at most spread_rad over the patch.
+bool facesAwayFromLaser(double angle_to_wi_rad, double cone_rad, double spread_rad) {
+  return angle_to_wi_rad - cone_rad - spread_rad >= 0.5 * kPi;
+}
+// No point of the patch's ball faces any observer of theirs: max over both balls and the cone
+// of n·(x_O − x) ≤ d cos(max(0, θ − cone)) + reach ≤ 0, d the centres' distance.
+bool hiddenFromObserver(double angle_to_v_rad, double cone_rad, double d_m, double reach_m) {
+  const double excess = angle_to_v_rad - cone_rad;
+  return excess >= 0.5 * kPi && d_m * std::cos(excess) + reach_m <= 0.0;
+}
+
 }  // namespace
 
 ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer_m,
@@ -27,20 +43,21 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
   }
   const double e_max = beam.maxIrradianceInBall(g.centre_m, g.radius_m);
   if (e_max == 0.0 || g.area_bound_m2 == 0.0) return {0.0, 0.0, 0.0};
+  const double eps_i = beam.directionSpreadInBall(g.radius_m);
+  const Vec3 wi = beam.at(g.centre_m).toward_laser;
+  const double angle_i = angleBetween(g.normal, wi), angle_o = angleBetween(g.normal, v);
   // The kernel is cut at the terminator and the horizon: a patch none of whose normals can
   // see both the laser and the observer sends nothing. Without this, pieces along a line
   // where the lobe peaks at grazing incidence (the silhouette seen in forward scatter) keep
   // their whole lobe as their bound however thin they become, and are split to the depth limit.
-  if (!mayFaceObserver(g, observer_m, observer_radius_m) ||
-      lightVerdict(g, beam) != LightVerdict::MayBeLit) {
+  if (facesAwayFromLaser(angle_i, g.cone_rad, eps_i) ||
+      hiddenFromObserver(angle_o, g.cone_rad, d, reach)) {
     return {0.0, 0.0, 0.0};
   }
 
   // Half-vector spread: ωo turns by at most asin(r/d) over the ball, ωi by the beam's spread;
   // their sum moves by at most the two chords.
   const double eps_o = std::asin(reach / d);
-  const double eps_i = beam.directionSpreadInBall(g.radius_m);
-  const Vec3 wi = beam.at(g.centre_m).toward_laser;
   const Vec3 h = wi + v / d;
   const double chord = 2.0 * std::sin(0.5 * eps_o) + 2.0 * std::sin(0.5 * eps_i);
   const double h_turn = turnAngle(chord, glm::length(h));
@@ -68,9 +85,8 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
   const bool smooth =
       reach <= limits.near_field * d &&
       (limits.clips_beam_edges || !beam.edgeMayCrossBall(g.centre_m, g.radius_m));
-  const bool may_be_clipped =
-      std::abs(angleBetween(g.normal, wi) - 0.5 * kPi) <= g.cone_rad + eps_i ||
-      std::abs(angleBetween(g.normal, v) - 0.5 * kPi) <= g.cone_rad + eps_o;
+  const bool may_be_clipped = std::abs(angle_i - 0.5 * kPi) <= g.cone_rad + eps_i ||
+                              std::abs(angle_o - 0.5 * kPi) <= g.cone_rad + eps_o;
   const bool specular_smooth =
       smooth && spread <= limits.lobe * material.lobe.sigma &&
       (!may_be_clipped ||
@@ -132,23 +148,19 @@ ClippedTriangle clipTriangle(const std::array<double, 3>& a, const std::array<do
 }
 
 bool mayFaceObserver(const PatchGeometry& g, const Vec3& observer_m, double observer_radius_m) {
-  // max over both balls and the cone of n·(x_O − x) ≤ d cos(max(0, θ − cone)) + r + r_O.
   const Vec3 v = observer_m - g.centre_m;
   const double d = glm::length(v);
   const double reach = g.radius_m + observer_radius_m;
   if (!(d > reach)) return true;
-  const double excess = angleBetween(g.normal, v) - g.cone_rad;
-  // Written so that a NaN anywhere answers "may face": culling must be proven.
-  if (!(excess >= 0.5 * kPi)) return true;
-  return !(d * std::cos(excess) + reach <= 0.0);
+  return !hiddenFromObserver(angleBetween(g.normal, v), g.cone_rad, d, reach);
 }
 
 LightVerdict lightVerdict(const PatchGeometry& g, const Beam& beam) {
   if (beam.maxIrradianceInBall(g.centre_m, g.radius_m) == 0.0) return LightVerdict::OutsideBeam;
-  const Vec3 wi = beam.at(g.centre_m).toward_laser;
-  const double excess =
-      angleBetween(g.normal, wi) - g.cone_rad - beam.directionSpreadInBall(g.radius_m);
-  return excess >= 0.5 * kPi ? LightVerdict::FacesAway : LightVerdict::MayBeLit;  // NaN: lit
+  const double angle_i = angleBetween(g.normal, beam.at(g.centre_m).toward_laser);
+  return facesAwayFromLaser(angle_i, g.cone_rad, beam.directionSpreadInBall(g.radius_m))
+             ? LightVerdict::FacesAway
+             : LightVerdict::MayBeLit;
 }
 
 }  // namespace glint
