@@ -30,6 +30,11 @@ constexpr double kMaxLogRatio = 2.0;
 // deviations past the part's edge.
 constexpr double kSigmaPointReach = 0.5;
 
+// The skewness along a principal axis of the lobe as restricted to a part above which the
+// skewed sigma rule places its points differently from the symmetric one along it (a
+// half-normal's is 0.995; below 0.1 the third-order term is a tenth of it).
+constexpr double kSkewRuleThreshold = 0.1;
+
 // Beyond this distance from the origin the normal density (e^{-h²/2} < 1e-322) is nothing.
 constexpr double kFarTail = 38.5;
 
@@ -187,6 +192,11 @@ class SlopeModel {
   std::array<Vec3, 6> slope_{};
 };
 
+struct SigmaRule {
+  std::array<Vec2, 5> points{};
+  std::array<double, 5> weights{};
+};
+
 // The lobe with q linearised at c, L(u) = q + J u for u = x − c: the Gaussian
 // exp(−(|L|² + κ|u|²)/2σ²) in the piece's coordinates, and its moments over the part.
 // κ = 1e-7 σ² changes it by at most 1e-7 over the piece and keeps it integrable where J is
@@ -245,21 +255,36 @@ class GaussianLobe {
   }
   // The centroid of the Gaussian over the part (requires mass() > 0).
   [[nodiscard]] Vec2 mean() const { return unwhiten(mom_.mean); }
-  // The mean and ±√3 standard deviations along the principal axes of the Gaussian as
-  // restricted to the part.
-  [[nodiscard]] std::array<Vec2, 5> sigmaPoints() const {
+  // Five points and weights that average a function over the Gaussian as restricted to the
+  // part: its mean (weight 1/3) and two points along each principal axis (1/3 between them),
+  // placed so that the rule has the Gaussian's mean and covariance, exact for quadratics.
+  // Symmetric (±√3 standard deviations, 1/6 each), or @p skewed: with the third moment along
+  // each axis too, exact for cubics along the axes (a truncation skews the Gaussian; its
+  // sigma points then err by the third-order term, which this rule does not).
+  [[nodiscard]] SigmaRule sigmaRule(bool skewed) const {
+    const Axes axes = principalAxes();
     const Vec2 ym = mom_.mean;
-    const double cxx = std::max(0.0, mom_.cov_xx);
-    const double cyy = std::max(0.0, mom_.cov_yy);
-    const double bound = std::sqrt(cxx * cyy);
-    const double cxy = std::clamp(mom_.cov_xy, -bound, bound);
-    const double phi = 0.5 * std::atan2(2.0 * cxy, cxx - cyy);
-    const double pc = std::cos(phi), ps = std::sin(phi);
-    const double c1 = std::max(0.0, cxx * pc * pc + 2.0 * cxy * ps * pc + cyy * ps * ps);
-    const double c2 = std::max(0.0, cxx * ps * ps - 2.0 * cxy * ps * pc + cyy * pc * pc);
-    const Vec2 a1 = std::sqrt(3.0 * c1) * Vec2(pc, ps), a2 = std::sqrt(3.0 * c2) * Vec2(-ps, pc);
-    return {unwhiten(ym), unwhiten(ym + a1), unwhiten(ym - a1), unwhiten(ym + a2),
-            unwhiten(ym - a2)};
+    SigmaRule rule;
+    rule.points[0] = unwhiten(ym);
+    rule.weights[0] = 1.0 / 3.0;
+    for (int k = 0; k < 2; ++k) {
+      // Weights W p and W (1 − p) at +a and −b standard deviations (W = 1/3): mean 0 and
+      // variance 1 give W p a = W (1 − p) b = m, m² = W p (1 − p); the third moment γ then
+      // gives 1 − 2p = g / √(1 + g²) with g = γ √W / 2 (p = 1/2, a = b = √3 for γ = 0).
+      constexpr double kW = 1.0 / 3.0;
+      const double gamma = axes.skewness[k];
+      const double g =
+          skewed && std::abs(gamma) > kSkewRuleThreshold ? 0.5 * gamma * std::sqrt(kW) : 0.0;
+      const double p = 0.5 * (1.0 - g / std::sqrt(1.0 + g * g));
+      const double wa = kW * p, wb = kW * (1.0 - p);
+      const double m = std::sqrt(kW * p * (1.0 - p));
+      const Vec2 step = axes.sd[k] * axes.dir[k];
+      rule.points[1 + 2 * k] = unwhiten(ym + (m / wa) * step);
+      rule.points[2 + 2 * k] = unwhiten(ym - (m / wb) * step);
+      rule.weights[1 + 2 * k] = wa;
+      rule.weights[2 + 2 * k] = wb;
+    }
+    return rule;
   }
   // How evenly the lobe covers the part (requires mass() > 0): the determinant of the
   // Gaussian's covariance as restricted to the part over that of the part's uniform measure,
@@ -295,6 +320,34 @@ class GaussianLobe {
   }
 
  private:
+  // The principal axes of the Gaussian as restricted to the part (whitened coordinates):
+  // directions, standard deviations and skewness γ = μ₃(e, e, e) / sd³ along each.
+  struct Axes {
+    std::array<Vec2, 2> dir{};
+    std::array<double, 2> sd{}, skewness{};
+  };
+  [[nodiscard]] Axes principalAxes() const {
+    const double cxx = std::max(0.0, mom_.cov_xx);
+    const double cyy = std::max(0.0, mom_.cov_yy);
+    const double bound = std::sqrt(cxx * cyy);
+    const double cxy = std::clamp(mom_.cov_xy, -bound, bound);
+    const double phi = 0.5 * std::atan2(2.0 * cxy, cxx - cyy);
+    const double pc = std::cos(phi), ps = std::sin(phi);
+    Axes a;
+    a.dir = {Vec2(pc, ps), Vec2(-ps, pc)};
+    const std::array<double, 2> var{
+        std::max(0.0, cxx * pc * pc + 2.0 * cxy * ps * pc + cyy * ps * ps),
+        std::max(0.0, cxx * ps * ps - 2.0 * cxy * ps * pc + cyy * pc * pc)};
+    for (int k = 0; k < 2; ++k) {
+      a.sd[k] = std::sqrt(var[k]);
+      const Vec2& e = a.dir[k];
+      const double mu3 = e.x * e.x * e.x * mom_.skew_xxx + 3.0 * e.x * e.x * e.y * mom_.skew_xxy +
+                         3.0 * e.x * e.y * e.y * mom_.skew_xyy + e.y * e.y * e.y * mom_.skew_yyy;
+      const double gamma = a.sd[k] > 0.0 ? mu3 / (var[k] * a.sd[k]) : 0.0;
+      a.skewness[k] = std::isfinite(gamma) ? gamma : 0.0;
+    }
+    return a;
+  }
   [[nodiscard]] Vec2 whiten(const Vec2& x) const {
     const Vec2 w = x - centre_;
     return {r1_ * (cs_ * w.x + sn_ * w.y), r2_ * (-sn_ * w.x + cs_ * w.y)};
@@ -326,6 +379,21 @@ constexpr double kQuadratureRange = 8.0;
 // degree-11 rule then errs by about 1e-9 of their mass (the exponential's Taylor remainder
 // about the middle, (range/2)¹² / 12!).
 constexpr double kTriangleRange = 2.0;
+// (|mean|² + spread) / spread within which the closed form's third moments about the mean
+// keep about 1e-5 of their size: its terms err by about 1e-10 of theirs, which the cancellation
+// of E[y³] against the mean's cube multiplies by this ratio to the power 3/2.
+constexpr double kSkewConditioning = 400.0;
+
+// The third moments about the mean @p mean from those about some origin: the second
+// (@p xx, @p xy, @p yy) and third ({xxx, xxy, xyy, yyy}) per unit mass.
+void centralThirdMoments(const Vec2& mean, double xx, double xy, double yy,
+                         const std::array<double, 4>& third, NormalMoments& m) {
+  const double mx = mean.x, my = mean.y;
+  m.skew_xxx = third[0] - 3.0 * mx * xx + 2.0 * mx * mx * mx;
+  m.skew_xxy = third[1] - my * xx - 2.0 * mx * xy + 2.0 * mx * mx * my;
+  m.skew_xyy = third[2] - mx * yy - 2.0 * my * xy + 2.0 * mx * my * my;
+  m.skew_yyy = third[3] - 3.0 * my * yy + 2.0 * my * my * my;
+}
 
 // The moments by a degree-11 rule, weighted relative to the density at the polygon's point
 // @p near_point nearest the origin and taken about the vertices' average, so that nothing
@@ -347,7 +415,7 @@ NormalMoments quadratureMoments(std::span<const Vec2> ccw, const Vec2& near_poin
   std::size_t top = 0;
   for (std::size_t i = 1; i + 1 < n; ++i) stack[top++] = {ccw[0], ccw[i], ccw[i + 1], 0};
   static const std::span<const TriangleNode> kRule = conicalProductRule(6);
-  double m0 = 0.0, sxx = 0.0, sxy = 0.0, syy = 0.0;
+  double m0 = 0.0, sxx = 0.0, sxy = 0.0, syy = 0.0, sxxx = 0.0, sxxy = 0.0, sxyy = 0.0, syyy = 0.0;
   Vec2 m1{0.0};
   while (top > 0) {
     const Triangle t = stack[--top];
@@ -373,6 +441,10 @@ NormalMoments quadratureMoments(std::span<const Vec2> ccw, const Vec2& near_poin
       sxx += w * z.x * z.x;
       sxy += w * z.x * z.y;
       syy += w * z.y * z.y;
+      sxxx += w * z.x * z.x * z.x;
+      sxxy += w * z.x * z.x * z.y;
+      sxyy += w * z.x * z.y * z.y;
+      syyy += w * z.y * z.y * z.y;
     }
   }
   m.mass = m0 * std::exp(-0.5 * glm::dot(near_point, near_point)) / (2.0 * kPi);
@@ -386,6 +458,9 @@ NormalMoments quadratureMoments(std::span<const Vec2> ccw, const Vec2& near_poin
   m.second_xx = m.mass * (m.cov_xx + m.mean.x * m.mean.x);
   m.second_xy = m.mass * (m.cov_xy + m.mean.x * m.mean.y);
   m.second_yy = m.mass * (m.cov_yy + m.mean.y * m.mean.y);
+  centralThirdMoments(shift, sxx / m0, sxy / m0, syy / m0,
+                      {sxxx / m0, sxxy / m0, sxyy / m0, syyy / m0}, m);
+  m.skew_known = true;
   return m;
 }
 
@@ -398,6 +473,7 @@ NormalMoments closedFormMoments(std::span<const Vec2> ccw, double& terms) {
   bool on_boundary = false;  // the origin lies exactly on an edge (a symmetric glint does)
   Vec2 boundary{0.0};
   double sxx = 0.0, sxy = 0.0, syy = 0.0;  // ∮ yⱼ φ₂ nᵢ ds, symmetrised
+  Vec2 xx_n{0.0}, yy_n{0.0};               // ∮ x² φ₂ n ds, ∮ y² φ₂ n ds
   for (std::size_t i = 0; i < n; ++i) {
     const Vec2& a = ccw[i];
     const Vec2& b = ccw[(i + 1) % n];
@@ -428,6 +504,14 @@ NormalMoments closedFormMoments(std::span<const Vec2> ccw, double& terms) {
     sxx += out.x * y_along.x;
     sxy += 0.5 * (out.x * y_along.y + out.y * y_along.x);
     syy += out.y * y_along.y;
+    // ∫ yⱼ² φ₂ ds, with ∫ s² φ(s) ds = ∫ φ(s) ds + [−s φ(s)] between sa and sb.
+    const double s2_along =
+        along + kInvSqrt2Pi * (sa * std::exp(-0.5 * sa * sa) - sb * std::exp(-0.5 * sb * sb));
+    const auto squared = [&](double o, double d) {
+      return phi_h * (h * h * o * o * along + 2.0 * h * o * d * s_along + d * d * s2_along);
+    };
+    xx_n += out * squared(out.x, dir.x);
+    yy_n += out * squared(out.y, dir.y);
   }
   // The winding number is 0 or 1: rounding removes the atan2 noise. On an edge (atan2 of ±0
   // would say ±π for it) the origin has half of its neighbourhood inside, at a corner the
@@ -452,6 +536,10 @@ NormalMoments closedFormMoments(std::span<const Vec2> ccw, double& terms) {
     m.cov_xx = m.second_xx / m.mass - m.mean.x * m.mean.x;
     m.cov_xy = m.second_xy / m.mass - m.mean.x * m.mean.y;
     m.cov_yy = m.second_yy / m.mass - m.mean.y * m.mean.y;
+    const std::array<double, 4> third{(2.0 * m.first.x - xx_n.x) / m.mass, -xx_n.y / m.mass,
+                                      -yy_n.x / m.mass, (2.0 * m.first.y - yy_n.y) / m.mass};
+    centralThirdMoments(m.mean, m.second_xx / m.mass, m.second_xy / m.mass, m.second_yy / m.mass,
+                        third, m);
   }
   return m;
 }
@@ -472,13 +560,23 @@ NormalMoments standardNormalOverPolygon(std::span<const Vec2> ccw) {
       0.5 * spread - std::hypot(0.5 * (closed.cov_xx - closed.cov_yy), closed.cov_xy);
   const bool conditioned =
       closed.mass > 1e-4 * terms && thinnest > 1e-7 * (glm::dot(closed.mean, closed.mean) + spread);
-  if (conditioned) return closed;
+  // The third moments about the mean cancel as the cube of the mean against the spread's:
+  // resolved within kSkewConditioning.
+  const bool skew_conditioned =
+      glm::dot(closed.mean, closed.mean) + spread <= kSkewConditioning * spread;
+  if (conditioned && skew_conditioned) {
+    NormalMoments m = closed;
+    m.skew_known = true;
+    return m;
+  }
   // Otherwise the polygon is small against the lobe or far out in its tail, where the density
   // varies little over it: by quadrature, if it varies by at most e⁸. (A NaN vertex fails the
   // test and keeps the closed form's NaN mass.)
   const Vec2 near_point = nearestToOrigin(ccw);
   if (exponentRange(ccw, near_point) <= kQuadratureRange) return quadratureMoments(ccw, near_point);
-  return closed;
+  NormalMoments m = closed;
+  m.skew_xxx = m.skew_xxy = m.skew_xyy = m.skew_yyy = 0.0;  // unresolved: skew_known false
+  return m;
 }
 
 LobeNode lobeNode(const SurfaceMap& map, const Vec3& bary, const Vec3& observer_m,
@@ -638,13 +736,26 @@ bool integrateLobe(const LobeSampler& sampler, const std::array<const LobeNode*,
     // (weights 1/3 at the mean, 1/6 at ±√3 standard deviations along each principal axis),
     // exact for R quadratic. R is sampled from the integrand itself, continued smoothly past
     // the part's edges where a sigma point falls outside it.
-    std::array<Vec2, 5> points = lobe.sigmaPoints();
-    constexpr std::array<double, 5> kWeight{1.0 / 3.0, 1.0 / 6.0, 1.0 / 6.0, 1.0 / 6.0,
-                                            1.0 / 6.0};
-    std::array<double, 5> log_r{}, factor{};
+    // Where the part cuts the Gaussian (a glint on a piece's edge), the sigma points also
+    // take its skew: the skewed rule is the estimate, its difference from the symmetric one
+    // (the symmetric rule's third-order error) part of the error.
+    const SigmaRule symmetric = lobe.sigmaRule(false);
+    const SigmaRule skew = lobe.sigmaRule(true);
+    // The mean, the symmetric rule's four points, then those of the skewed rule that differ
+    // (along an axis whose skew is below kSkewRuleThreshold the two rules agree).
+    std::array<Vec2, 9> points{};
+    std::array<int, 5> skew_index{0, 1, 2, 3, 4};
+    int count = 5;
+    for (int i = 0; i < 5; ++i) points[i] = symmetric.points[i];
+    for (int i = 1; i < 5; ++i) {
+      if (skew.points[i] == symmetric.points[i]) continue;
+      skew_index[i] = count;
+      points[count++] = skew.points[i];
+    }
+    std::array<double, 9> log_r{}, factor{};
     double log_max = -std::numeric_limits<double>::infinity();
     bool poor_model = false;
-    for (int i = 0; i < 5; ++i) {
+    for (int i = 0; i < count; ++i) {
       // A sigma point far outside the piece (the moments of a part deep in the lobe's tail
       // are not resolved in double precision) is brought back onto it, and the estimate is
       // then only an order of magnitude.
@@ -669,21 +780,26 @@ bool integrateLobe(const LobeSampler& sampler, const std::array<const LobeNode*,
       factor[i] = at.specular;
       if (factor[i] > 0.0) log_max = std::max(log_max, log_r[i]);
     }
-    double average = 0.0;
+    // R at point i relative to e^{log_max}.
+    const auto r = [&](int i) {
+      return factor[i] > 0.0 ? factor[i] * std::exp(log_r[i] - log_max) : 0.0;
+    };
+    double average_symmetric = 0.0, average = 0.0;
     for (int i = 0; i < 5; ++i) {
-      if (factor[i] > 0.0) average += kWeight[i] * factor[i] * std::exp(log_r[i] - log_max);
+      average_symmetric += symmetric.weights[i] * r(i);
+      average += skew.weights[i] * r(skew_index[i]);
     }
     if (average > 0.0) {
       const double log_value = lobe.logIntegral() + log_max;
       if (!(log_value < 700.0)) return false;  // not finite
       const double scale = std::exp(log_value);
       part.value = average * scale;
-      // The sigma points are exact for R quadratic over the part; beyond that, their error
-      // is taken to be no larger than the whole second-order term they add to the centre
-      // value (the truncated Gaussian is skewed, so the third-order term does not vanish).
-      part.error = poor_model
-                       ? part.value
-                       : std::abs(average - factor[0] * std::exp(log_r[0] - log_max)) * scale;
+      // The sigma points are exact for R quadratic over the part (and, skewed, cubic along
+      // its axes); beyond that, their error is taken to be no larger than the whole
+      // second-order term they add to the centre value, nor than the change the skew made.
+      const double second_order = std::abs(average - r(0));
+      const double third_order = std::abs(average - average_symmetric);
+      part.error = poor_model ? part.value : std::max(second_order, third_order) * scale;
       part.hidden_error = poor_model ? part.error : (1.0 - lobe.evenness()) * part.error;
     }
   }

@@ -38,14 +38,21 @@ struct NormalMoments {
   double second_xx = 0.0, second_xy = 0.0, second_yy = 0.0;
   Vec2 mean{0.0};                                   ///< first / mass (0 without mass)
   double cov_xx = 0.0, cov_xy = 0.0, cov_yy = 0.0;  ///< about the mean, per unit mass
+  /// The third moments about the mean, per unit mass: the skew that cutting the density
+  /// gives it (0 for the whole plane; a half-normal's 0.218 across its edge).
+  double skew_xxx = 0.0, skew_xxy = 0.0, skew_xyy = 0.0, skew_yyy = 0.0;
+  /// False where the skew is not resolved in double precision (a polygon far out in the
+  /// density's tail, not small enough for the quadrature): the skew_ fields are then 0.
+  bool skew_known = false;
 };
 
 /// @brief The moments of the standard bivariate normal over the convex polygon with
 /// counter-clockwise vertices @p ccw (at most 16).
 ///
 /// - In closed form where that is well conditioned: the mass by Owen's T over its edges (the
-///   winding number less each edge's tail beyond it), the first and second moments by the
-///   divergence theorem (∫ y φ₂ = −∮ φ₂ n ds, ∫ yᵢ yⱼ φ₂ = δᵢⱼ mass − ∮ yⱼ φ₂ nᵢ ds).
+///   winding number less each edge's tail beyond it), the higher moments by the divergence
+///   theorem (∫ y φ₂ = −∮ φ₂ n ds, ∫ yᵢ yⱼ φ₂ = δᵢⱼ mass − ∮ yⱼ φ₂ nᵢ ds,
+///   ∫ yᵢ yⱼ yₖ φ₂ = δᵢⱼ ∫ yₖ φ₂ + δᵢₖ ∫ yⱼ φ₂ − ∮ yⱼ yₖ φ₂ nᵢ ds).
 /// - Otherwise (a polygon small against the density's scale, or far out in its tail, where the
 ///   edge terms cancel to below their own rounding), if the density varies by at most e⁸ over
 ///   it: by a degree-11 rule on triangles over each of which it varies by at most e², in a
