@@ -4,7 +4,8 @@
 // (tests/support/brute_force.h: the integrand written out again, nested adaptive Gauss–Kronrod
 // in the shape's exact parametrisation; nothing of facets/ is evaluated by it).
 //
-//   glint_hard_bench SCENE.json... [--schemes lobe,paper] [--out hard.csv]
+//   glint_hard_bench SCENE.json... [--schemes lobe,paper] [--out hard.csv] (the table on
+//   standard output; the CSV only with --out)
 //
 // Each scene (one cylinder, sphere or disk; see bench/scenes/hard/) comes with its observers in
 // the CSV file of the same name. Per scene and scheme: how many observers converged, the
@@ -78,12 +79,12 @@ int main(int argc, char** argv) {
   CLI::App app{"glint_hard_bench: hard observers, each scheme against a brute-force reference"};
   std::vector<std::string> scene_paths;
   std::vector<std::string> schemes{"lobe", "paper"};
-  std::string out_path = "hard.csv";
+  std::string out_path;  // no CSV unless asked for
   app.add_option("scenes", scene_paths, "Scene files; observers in <scene>.csv")->required();
   app.add_option("--schemes", schemes)
       ->delimiter(',')
       ->check(CLI::IsMember({"lobe", "paper", "cubature"}));
-  app.add_option("--out", out_path);
+  app.add_option("--out", out_path, "Also write the table as CSV here");
   CLI11_PARSE(app, argc, argv);
 
   std::vector<Row> rows;
@@ -143,7 +144,8 @@ int main(int argc, char** argv) {
     }
   }
 
-  std::ofstream out(out_path);
+  std::ofstream out;
+  if (!out_path.empty()) out.open(out_path);
   out << "scene,scheme,observers,converged,evaluations_median,evaluations_p99,evaluations_max,"
          "evaluations_mean,seconds,worst_error_over_allowed,max_rel_error,estimate_below_error\n";
   std::printf("%-18s %-6s %9s %8s %8s %8s %9s %12s %12s %s\n", "scene", "scheme", "converged",
