@@ -213,7 +213,7 @@ def field_section(out, name="field.csv", plot=True):
                if r.get("volume_ratio_mpe") else "not measured |"))
     if not plot:
         return lines
-    lines += ["", "How cost grows as the finest voxel halves (tolerance 0.01; dense grows about 8x):", ""]
+    growth = []
     for scene in sorted({r["scene"] for r in data}):
         pts = sorted(((float(r["voxel_m"]), float(r["adaptive_evaluations"]),
                        float(r["dense_evaluations"])) for r in data
@@ -221,7 +221,10 @@ def field_section(out, name="field.csv", plot=True):
         steps = [f"{a[0]:g} to {b[0]:g} m: dense {b[2] / a[2]:.1f}x, adaptive {b[1] / a[1]:.1f}x"
                  for a, b in zip(pts, pts[1:]) if a[1] > 0 and a[2] > 0]
         if steps:
-            lines.append(f"- {scene}: " + "; ".join(steps))
+            growth.append(f"- {scene}: " + "; ".join(steps))
+    if growth:  # only where a scene ran at more than one voxel size
+        lines += ["", "How cost grows as the finest voxel halves (tolerance 0.01; dense grows about "
+                  "8x):", ""] + growth
     fig, ax = plt.subplots(figsize=(7, 5))
     for i, scene in enumerate(sorted({r["scene"] for r in data})):
         pts = sorted((float(r["voxel_m"]), float(r["adaptive_evaluations"]), float(r["dense_evaluations"]))
