@@ -10,7 +10,7 @@
 # --quick runs two tolerances and the coarsest voxel size per scene (about 15 minutes on two
 # cores); the full run takes about two hours. --field-one runs the facet side in full but the
 # observer side at one scene, voxel and tolerance only (the cylinder quarter at 0.1 m and 0.01,
-# with each scheme: the figures issue 16 asks for), about 70 minutes. Run it on an otherwise
+# with each scheme: the figures issue 16 asks for), about 30 minutes. Run it on an otherwise
 # idle machine: it measures time.
 set -euo pipefail
 cd "$(dirname "$0")/.."
