@@ -9,13 +9,18 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <unordered_map>
 
+#include "observers/block_check.h"
 #include "observers/field_grids.h"
 
 namespace glint {
 namespace {
+
+using field::Decision;
+using field::Verdict;
 
 using Index3 = std::array<int, 3>;
 constexpr std::uint32_t kNoParent = std::numeric_limits<std::uint32_t>::max();
@@ -23,21 +28,8 @@ constexpr std::uint32_t kNoParent = std::numeric_limits<std::uint32_t>::max();
 // Share of the floor that pruning may drop from a block's candidates: what every observer in
 // it may miss, on top of the integrator's own error.
 constexpr double kDropShareOfFloor = 0.25;
-// Interpolation from a block's corners must match its finer samples, and the fill from those
-// must match the octant centres, to this share of the block's budget (tolerance × largest
-// sample + floor). The fill is octant by octant from the finer samples: where the field is
-// smooth its error is about a quarter of what the corner check measured (trilinear
-// interpolation is second order), and the octant centres measure it where it is largest.
-constexpr double kCheckShare = 1.0;
 // Candidates are split to tighten block bounds down to this subdivision depth.
 constexpr int kMaxBoundSplitDepth = 6;
-// Far from the target the field falls off as a power of the distance r from it: 1/r² from a
-// compact glint, about 1/r where a cylinder's line of glints spreads it in one plane only.
-// Trilinear interpolation of such a field errs by about 0.75 (h/r)² per power, so a 1 % check
-// would keep blocks under a tenth of their distance. A block may instead interpolate E·r^p for
-// the first of these powers whose interpolation passes the same checks against the same
-// samples; E·r² is then nearly constant and a block may be as large as the field is smooth.
-constexpr std::array<int, 3> kInterpolationPowers = {0, 2, 1};
 
 struct Lattice {
   Index3 n;  // points per axis
@@ -70,13 +62,6 @@ struct Block {
   std::uint32_t parent;  // index into the previous level's blocks
 };
 
-enum class Verdict : std::uint8_t { Skip, Accept, Refine, Finest };
-
-struct Decision {
-  Verdict verdict = Verdict::Refine;
-  int power = 0;  // an accepted block interpolates E·r^power (see kInterpolationPowers)
-};
-
 struct PointValue {
   double irradiance_w_m2 = 0.0;
   double error_w_m2 = 0.0;  // the integrator's error estimate
@@ -100,25 +85,6 @@ void noteUnconverged(FieldStats& stats, const Vec3& x, double irradiance_w_m2, d
 
 void noteNonFinite(FieldStats& stats, const Vec3& x) {
   if (stats.non_finite_points++ == 0) stats.non_finite_at_m = x;
-}
-
-// Calls fn(di, dj, dk) for every sample of a block of edge `size`, as offsets from its origin:
-// the 3×3×3 lattice 0, size/2, size per axis (0, 1 for a unit block) and, for size ≥ 4, the
-// centres of its eight octants. The octant centres check the fill itself: a step centred on
-// the middle sample plane (a lobe edge on a round coordinate) looks linear to the 3×3×3
-// lattice, but not to the points a quarter of the way in.
-template <class Fn>
-void forEachSample(int size, Fn&& fn) {
-  const int m = size >= 2 ? 3 : 2;
-  const auto offset = [&](int a) { return size >= 2 ? a * size / 2 : a; };
-  for (int a = 0; a < m; ++a)
-    for (int c = 0; c < m; ++c)
-      for (int e = 0; e < m; ++e) fn(offset(a), offset(c), offset(e));
-  if (size < 4) return;
-  const int q = size / 4;
-  for (int oct = 0; oct < 8; ++oct) {
-    fn(q * (1 + 2 * (oct >> 2)), q * (1 + 2 * ((oct >> 1) & 1)), q * (1 + 2 * (oct & 1)));
-  }
 }
 
 std::unique_ptr<FieldGrids> makeGrids(const FieldSpec& spec) {
@@ -169,13 +135,6 @@ struct ThreadGrids {
         level(grids->level->getAccessor()),
         status(grids->status->getAccessor()) {}
 };
-
-double trilinear(const std::array<double, 8>& c, double u, double v, double w) {
-  const double x00 = c[0] + u * (c[4] - c[0]), x01 = c[1] + u * (c[5] - c[1]);
-  const double x10 = c[2] + u * (c[6] - c[2]), x11 = c[3] + u * (c[7] - c[3]);
-  const double y0 = x00 + v * (x10 - x00), y1 = x01 + v * (x11 - x01);
-  return y0 + w * (y1 - y0);
-}
 
 // The computation of one adaptive field, level by level: every block of a level is bounded,
 // then the lattice points its survivors need are evaluated together (each once), then every
@@ -388,7 +347,7 @@ class FieldBuilder {
     for (std::size_t i = 0; i < blocks.size(); ++i) {
       if (skipped(bounds[i])) continue;
       const Block& b = blocks[i];
-      forEachSample(b.size, [&](int di, int dj, int dk) {
+      field::forEachSample(b.size, [&](int di, int dj, int dk) {
         const std::uint64_t key = keyAt(b, di, dj, dk);
         if (!values_.contains(key)) wanted.emplace_back(key, static_cast<std::uint32_t>(i));
       });
@@ -453,74 +412,24 @@ class FieldBuilder {
   }
 
   [[nodiscard]] Decision decideBlock(const Block& b, const RegionBound& bound) const {
-    if (skipped(bound)) return {Verdict::Skip};
-    if (b.size <= 2) return {Verdict::Finest};  // every lattice point of it is a sample
-    // The block's ball reaches a lit facet: a glint may leave the target anywhere between the
-    // samples (a small mirror inside the block sends a pencil no sample meets), and no bound
-    // says how bright it is. Only finer blocks can tell, down to integrating every point.
-    if (!bound.bounded()) return {Verdict::Refine};
-    // The 3×3×3 lattice (v[9a + 3c + e]) and the octant centres, in forEachSample's order.
-    std::array<double, 35> v{};
-    std::array<Index3, 35> where{};
-    std::size_t n = 0;
-    bool excluded = false;
-    forEachSample(b.size, [&](int di, int dj, int dk) {
-      where[n] = at(b, di, dj, dk);
-      const PointValue& p = values_.at(lattice_.key(where[n][0], where[n][1], where[n][2]));
-      excluded = excluded || p.excluded;
-      v[n++] = p.irradiance_w_m2;
+    if (const std::optional<Decision> d = field::decideByBound(bound, b.size, spec_.floor_w_m2)) {
+      return *d;
+    }
+    field::BlockSamples samples;
+    samples.far_from_target = farFromTarget(b);
+    field::forEachSample(b.size, [&](int di, int dj, int dk) {
+      const Index3 p = at(b, di, dj, dk);
+      const PointValue& v = values_.at(lattice_.key(p[0], p[1], p[2]));
+      const std::size_t s = samples.count++;
+      samples.excluded = samples.excluded || v.excluded;
+      samples.irradiance_w_m2[s] = v.irradiance_w_m2;
+      for (std::size_t k = 0; k < field::kInterpolationPowers.size(); ++k) {
+        const int power = field::kInterpolationPowers[k];
+        samples.weight[k][s] =
+            power == 0 || samples.far_from_target ? spreadWeight(p[0], p[1], p[2], power) : 1.0;
+      }
     });
-    // The target is in the block: resolve it finely.
-    if (excluded) return {Verdict::Refine};
-    double largest = 0.0;
-    bool finite = true;
-    for (std::size_t s = 0; s < n; ++s) {
-      finite = finite && std::isfinite(v[s]);
-      largest = std::max(largest, std::abs(v[s]));
-    }
-    // A sample that is not a finite number gives no budget to check against: look closer.
-    if (!finite) return {Verdict::Refine};
-    const double allowed = kCheckShare * (spec_.tolerance * largest + spec_.floor_w_m2);
-    // A coarse facet whose light could pass between the samples leaves no trace in them:
-    // only the bound can say whether such a glint is too weak to matter.
-    if (!(bound.narrow_w_m2 <= allowed)) return {Verdict::Refine};
-    const bool far = farFromTarget(b);
-    for (const int power : kInterpolationPowers) {
-      if (power > 0 && !far) break;
-      std::array<double, 35> w{};  // the weights r^power
-      for (std::size_t s = 0; s < n; ++s) {
-        w[s] = spreadWeight(where[s][0], where[s][1], where[s][2], power);
-      }
-      if (interpolates(v, w, allowed)) return {Verdict::Accept, power};
-    }
-    return {Verdict::Refine};
-  }
-
-  // Whether E·w interpolated from the block's corners, divided by w, meets every sample of the
-  // 3×3×3 lattice, and the octant-by-octant fill from those meets every octant centre, within
-  // `allowed` (v and w in forEachSample's order).
-  static bool interpolates(const std::array<double, 35>& v, const std::array<double, 35>& w,
-                           double allowed) {
-    std::array<double, 27> u{};
-    for (std::size_t s = 0; s < 27; ++s) u[s] = v[s] * w[s];
-    const std::array<double, 8> corners = {u[0], u[2], u[6], u[8], u[18], u[20], u[24], u[26]};
-    for (int a = 0; a < 3; ++a)
-      for (int c = 0; c < 3; ++c)
-        for (int e = 0; e < 3; ++e) {
-          const auto s = static_cast<std::size_t>(9 * a + 3 * c + e);
-          const double interpolated = trilinear(corners, 0.5 * a, 0.5 * c, 0.5 * e) / w[s];
-          if (!(std::abs(interpolated - v[s]) <= allowed)) return false;
-        }
-    // The fill at each octant centre: the mean of the octant's eight corners.
-    for (std::size_t oct = 0; oct < 8; ++oct) {
-      double mean = 0.0;
-      for (std::size_t c = 0; c < 8; ++c) {
-        mean += u[9 * ((oct >> 2) + (c >> 2)) + 3 * (((oct >> 1) & 1) + ((c >> 1) & 1)) +
-                  ((oct & 1) + (c & 1))];
-      }
-      if (!(std::abs(0.125 * mean / w[27 + oct] - v[27 + oct]) <= allowed)) return false;
-    }
-    return true;
+    return field::decideBySamples(samples, bound, spec_.tolerance, spec_.floor_w_m2);
   }
 
   std::unique_ptr<FieldGrids> writeGrids() {
@@ -555,20 +464,15 @@ class FieldBuilder {
           // Each octant from its own corners: the finer samples the check compared against.
           for (auto it = box.begin(); it; ++it) {
             const openvdb::Coord& p = *it;
-            int oct[3];
-            double t3[3];
-            for (int a = 0; a < 3; ++a) {
-              const int local = p[a] - b.o[a];  // 0 along a plane's normal
+            std::array<int, 3> oct{};
+            std::array<double, 3> t3{};
+            for (std::size_t a = 0; a < 3; ++a) {
+              const int local = p[static_cast<int>(a)] - b.o[a];  // 0 along a plane's normal
               oct[a] = std::min(local / h, 1);
               t3[a] = static_cast<double>(local - oct[a] * h) / h;
             }
-            std::array<double, 8> corners;
-            for (int c = 0; c < 8; ++c) {
-              corners[static_cast<std::size_t>(c)] = v[static_cast<std::size_t>(
-                  9 * (oct[0] + (c >> 2)) + 3 * (oct[1] + ((c >> 1) & 1)) + (oct[2] + (c & 1)))];
-            }
-            const double value = trilinear(corners, t3[0], t3[1], t3[2]) /
-                                 spreadWeight(p[0], p[1], p[2], power);
+            const double value =
+                field::octantFill(v, oct, t3) / spreadWeight(p[0], p[1], p[2], power);
             t.irradiance.setValue(p, static_cast<float>(value));
             t.status.setValue(p, code(VoxelStatus::Interpolated));
             ++interpolated.local();

@@ -1,0 +1,95 @@
+#pragma once
+/// @file
+/// @brief The adaptive field's block check: whether a block of the observer lattice is
+/// skipped (its bound proves it dark), filled by interpolating its samples, or refined.
+///
+/// Pure functions of a block's bound and samples, used by the field builder
+/// (observers/field.cpp) and testable without a field. Every test that meets a NaN, an
+/// infinity, a sample inside the target or a glint narrower than the samples answers
+/// "refine", never "accept" or "skip".
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+
+#include "facets/integrator.h"
+
+namespace glint::field {
+
+/// Samples of a block: the 3×3×3 lattice at offsets 0, size/2 and size per axis (index
+/// 9a + 3c + e), then, for blocks of 4 voxels or more, the centres of its eight octants (index
+/// 27 + 4x + 2y + z). The octant centres check the fill itself: a step on the middle sample
+/// plane (a lobe edge on a round coordinate) looks linear to the 3×3×3 lattice, but not to
+/// the points a quarter of the way in.
+inline constexpr std::size_t kLatticeSamples = 27;
+inline constexpr std::size_t kBlockSamples = 35;
+using BlockValues = std::array<double, kBlockSamples>;
+
+/// @brief Calls fn(di, dj, dk) for every sample of a block of edge @p size (voxels), as
+/// offsets from its origin, in the order above (0, 1 per axis for a unit block).
+template <class Fn>
+void forEachSample(int size, Fn&& fn) {
+  const int m = size >= 2 ? 3 : 2;
+  const auto offset = [&](int a) { return size >= 2 ? a * size / 2 : a; };
+  for (int a = 0; a < m; ++a)
+    for (int c = 0; c < m; ++c)
+      for (int e = 0; e < m; ++e) fn(offset(a), offset(c), offset(e));
+  if (size < 4) return;
+  const int q = size / 4;
+  for (int oct = 0; oct < 8; ++oct) {
+    fn(q * (1 + 2 * (oct >> 2)), q * (1 + 2 * ((oct >> 1) & 1)), q * (1 + 2 * (oct & 1)));
+  }
+}
+
+/// Far from the target the field falls off as a power of the distance r from it: 1/r² from a
+/// compact glint, about 1/r where a cylinder's line of glints spreads it in one plane only.
+/// Trilinear interpolation of such a field errs by about 0.75 (h/r)² per power, so a 1 % check
+/// would keep blocks under a tenth of their distance. A block may instead interpolate E·r^p
+/// for the first of these powers whose interpolation passes the same checks against the same
+/// samples; E·r² is then nearly constant and a block may be as large as the field is smooth.
+inline constexpr std::array<int, 3> kInterpolationPowers = {0, 2, 1};
+
+enum class Verdict : std::uint8_t { Skip, Accept, Refine, Finest };
+
+struct Decision {
+  Verdict verdict = Verdict::Refine;
+  int power = 0;  ///< an accepted block interpolates E·r^power (see kInterpolationPowers)
+};
+
+/// @brief What a block's bound alone decides, before any of its samples is read: Skip where it
+/// proves every point at most @p floor_w_m2 (NaN never does), Finest for a block of at most 2
+/// voxels (every lattice point of it is a sample), Refine where the ball around the block
+/// reaches a lit facet (a small mirror inside it sends a pencil no sample meets, and no bound
+/// says how bright); nothing where the samples must decide.
+std::optional<Decision> decideByBound(const RegionBound& bound, int size, double floor_w_m2);
+
+/// @brief What one block's samples show.
+struct BlockSamples {
+  std::size_t count = 0;  ///< 27, or 35 with the octant centres (blocks of 4 voxels or more)
+  BlockValues irradiance_w_m2{};  ///< in forEachSample()'s order
+  /// r^p at each sample for each power of kInterpolationPowers (r: the distance from the lit
+  /// facets' centre); read only for p > 0 where far_from_target.
+  std::array<BlockValues, kInterpolationPowers.size()> weight{};
+  bool excluded = false;         ///< a sample lies inside the target
+  bool far_from_target = false;  ///< clear of the centre by the block's own diagonal
+};
+
+/// @brief The verdict of a block that decideByBound() left to its samples: Accept (with the
+/// first power of kInterpolationPowers whose interpolation passes) where the interpolation
+/// from the corners meets every lattice sample, and the octant-by-octant fill meets every
+/// octant centre, within tolerance × the largest sample + floor, and no glint narrower than
+/// the samples (the bound's narrow part) can exceed that; Refine otherwise, and wherever a
+/// sample is inside the target or not finite.
+Decision decideBySamples(const BlockSamples& samples, const RegionBound& bound, double tolerance,
+                         double floor_w_m2);
+
+/// @brief Trilinear interpolation between the corners @p c (index 4x + 2y + z) at (u, v, w).
+double trilinear(const std::array<double, 8>& c, double u, double v, double w);
+
+/// @brief The fill of an accepted block: from the 3×3×3 lattice of E·r^p (@p weighted), the
+/// trilinear value in octant @p octant (each 0 or 1) at local coordinates @p t ∈ [0, 1]³.
+double octantFill(const std::array<double, kLatticeSamples>& weighted,
+                  const std::array<int, 3>& octant, const std::array<double, 3>& t);
+
+}  // namespace glint::field

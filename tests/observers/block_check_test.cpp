@@ -1,0 +1,135 @@
+// The field's block check alone: which blocks it skips, fills by interpolation or refines,
+// on fields written out at the block's samples.
+#include "observers/block_check.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <limits>
+
+namespace glint::field {
+namespace {
+
+constexpr int kSize = 8;  // voxels per block edge: 35 samples
+
+// A bounded, wide-light bound (nothing narrower than the samples).
+RegionBound boundOf(double upper_w_m2, double narrow_w_m2 = 0.0) {
+  RegionBound b;
+  b.upper_w_m2 = upper_w_m2;
+  b.narrow_w_m2 = narrow_w_m2;
+  return b;
+}
+
+// The block's samples of E(x) with x ∈ [0, 1]³ across the block, and r^p weights from a
+// centre at @p centre (in block units).
+BlockSamples sample(const std::function<double(double, double, double)>& e, bool far = false,
+                    const std::array<double, 3>& centre = {0.0, 0.0, 0.0}) {
+  BlockSamples s;
+  s.far_from_target = far;
+  forEachSample(kSize, [&](int i, int j, int k) {
+    const double x = double(i) / kSize, y = double(j) / kSize, z = double(k) / kSize;
+    s.irradiance_w_m2[s.count] = e(x, y, z);
+    const double r = std::hypot(x - centre[0], y - centre[1], z - centre[2]);
+    for (std::size_t p = 0; p < kInterpolationPowers.size(); ++p) {
+      s.weight[p][s.count] = std::pow(r, kInterpolationPowers[p]);
+    }
+    ++s.count;
+  });
+  return s;
+}
+
+TEST(BlockCheck, TheBoundAloneSkipsDarkBlocksAndRefinesWhereItKnowsNothing) {
+  const double floor = 0.05;
+  EXPECT_EQ(decideByBound(boundOf(0.05), kSize, floor)->verdict, Verdict::Skip)
+      << "at most the floor everywhere: skipped";
+  EXPECT_FALSE(decideByBound(boundOf(0.06), kSize, floor).has_value())
+      << "above the floor: the samples decide";
+  EXPECT_EQ(decideByBound(boundOf(std::numeric_limits<double>::infinity()), kSize, floor)->verdict,
+            Verdict::Refine)
+      << "the ball reaches a lit facet";
+  EXPECT_EQ(decideByBound(boundOf(std::nan("")), kSize, floor)->verdict, Verdict::Refine)
+      << "a NaN bound never skips";
+  EXPECT_EQ(decideByBound(boundOf(1.0), 2, floor)->verdict, Verdict::Finest)
+      << "a 2-voxel block is all samples";
+}
+
+TEST(BlockCheck, AcceptsATrilinearFieldAndRefinesACurvedOne) {
+  // Trilinear fields are interpolated exactly. 10 x², interpolated from the corners, misses
+  // the middle sample by 2.5 (a quarter of its range; the octant fill misses by 0.625): a 1 %
+  // tolerance refuses it, 30 % (3.05 allowed) accepts it.
+  const auto trilinear = [](double x, double y, double z) { return 10.0 + 3 * x - 2 * y * z; };
+  const Decision d = decideBySamples(sample(trilinear), boundOf(20.0), 0.01, 0.05);
+  EXPECT_EQ(d.verdict, Verdict::Accept) << "exact for trilinear";
+  EXPECT_EQ(d.power, 0);
+  const auto curved = [](double x, double, double) { return 10.0 * x * x; };
+  EXPECT_EQ(decideBySamples(sample(curved), boundOf(20.0), 0.01, 0.05).verdict, Verdict::Refine)
+      << "x² is not trilinear to 1 %";
+  EXPECT_EQ(decideBySamples(sample(curved), boundOf(20.0), 0.3, 0.05).verdict, Verdict::Accept)
+      << "but it is to 30 %";
+}
+
+TEST(BlockCheck, OctantCentresCatchAStepOnTheMiddleSamplePlane) {
+  // A lobe edge exactly on the middle sample plane: 0, 0.5·E, E at x = 0, ½, 1 is linear to
+  // the 3×3×3 lattice, but the octant centres (x = ¼, ¾) see 0 and E where the fill says ¼ E
+  // and ¾ E.
+  const auto step = [](double x, double, double) { return x < 0.5 ? 0.0 : x > 0.5 ? 8.0 : 4.0; };
+  EXPECT_EQ(decideBySamples(sample(step), boundOf(10.0), 0.01, 0.05).verdict, Verdict::Refine);
+}
+
+TEST(BlockCheck, FarFromTheTargetEOverRSquaredIsInterpolatedAsERSquared) {
+  // E = 1/r² with the target a block's length away: E itself is not trilinear to 1 %, but E·r²
+  // is constant, accepted as power 2 only where the block is far from the target.
+  const std::array<double, 3> centre{-1.0, 0.5, 0.5};
+  const auto inverse_square = [&](double x, double y, double z) {
+    return 100.0 /
+           (std::pow(x - centre[0], 2) + std::pow(y - centre[1], 2) + std::pow(z - centre[2], 2));
+  };
+  const Decision far =
+      decideBySamples(sample(inverse_square, true, centre), boundOf(200.0), 0.01, 0.05);
+  EXPECT_EQ(far.verdict, Verdict::Accept) << "E·r² is constant";
+  EXPECT_EQ(far.power, 2);
+  EXPECT_EQ(
+      decideBySamples(sample(inverse_square, false, centre), boundOf(200.0), 0.01, 0.05).verdict,
+      Verdict::Refine)
+      << "near the target only E itself may be interpolated";
+}
+
+TEST(BlockCheck, RefinesWhereASampleIsNotFiniteInsideTheTargetOrAGlintMayPassBetween) {
+  const auto flat = [](double, double, double) { return 5.0; };
+  BlockSamples nan = sample(flat);
+  nan.irradiance_w_m2[13] = std::nan("");
+  EXPECT_EQ(decideBySamples(nan, boundOf(10.0), 0.01, 0.05).verdict, Verdict::Refine) << "NaN";
+  BlockSamples inf = sample(flat);
+  inf.irradiance_w_m2[30] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(decideBySamples(inf, boundOf(10.0), 0.01, 0.05).verdict, Verdict::Refine) << "+∞";
+  BlockSamples inside = sample(flat);
+  inside.excluded = true;
+  EXPECT_EQ(decideBySamples(inside, boundOf(10.0), 0.01, 0.05).verdict, Verdict::Refine)
+      << "a sample inside the target";
+  // Allowed: 0.01 × 5 + 0.05 = 0.1. A narrow glint bounded above that may pass between the
+  // samples of a block whose samples are all flat.
+  EXPECT_EQ(decideBySamples(sample(flat), boundOf(10.0, 0.11), 0.01, 0.05).verdict, Verdict::Refine)
+      << "a glint narrower than the samples may exceed the budget";
+  EXPECT_EQ(decideBySamples(sample(flat), boundOf(10.0, 0.09), 0.01, 0.05).verdict, Verdict::Accept)
+      << "one bounded within the budget may not";
+  EXPECT_EQ(decideBySamples(sample(flat), boundOf(10.0, std::nan("")), 0.01, 0.05).verdict,
+            Verdict::Refine)
+      << "a NaN narrow bound refines";
+}
+
+TEST(BlockCheck, OctantFillMatchesTheCornersAndIsTrilinearWithinEachOctant) {
+  std::array<double, kLatticeSamples> u{};
+  for (int a = 0; a < 3; ++a)
+    for (int c = 0; c < 3; ++c)
+      for (int e = 0; e < 3; ++e)
+        u[static_cast<std::size_t>(9 * a + 3 * c + e)] = a + 10 * c + 100 * e * e;
+  // At an octant's corners, the lattice values; inside, trilinear between them.
+  EXPECT_DOUBLE_EQ(octantFill(u, {1, 0, 1}, {0.0, 0.0, 0.0}), u[9 + 0 + 1]);
+  EXPECT_DOUBLE_EQ(octantFill(u, {1, 0, 1}, {1.0, 1.0, 1.0}), u[18 + 3 + 2]);
+  EXPECT_DOUBLE_EQ(octantFill(u, {0, 1, 1}, {0.5, 0.25, 0.5}), 0.5 + 10 * 1.25 + 100 * 2.5)
+      << "e² is linear between e = 1 and 2 (1 and 4)";
+}
+
+}  // namespace
+}  // namespace glint::field
