@@ -426,7 +426,7 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
     leaf.facet = lit.facet;
     PatchGeometry g = lit.geometry;
     if (cubature) {
-      // A candidate split by boundRegion() has its corners from 1→4 subdivision; the pieces
+      // A candidate split by boundBall() has its corners from 1→4 subdivision; the pieces
       // here are those of the surface map, over the same barycentric triangle.
       if (lit.facet.depth > 0) {
         leaf.facet = maps_[lit.facet.coarse].subFacet(lit.facet.bary, lit.facet.depth,
@@ -650,7 +650,7 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
     if (!mayFaceObserver(lit.geometry, x) || !visible(lit, observer_m)) continue;
     const Beam& beam = object_beams_[lit.object];
     const Material& material = target_.materials[target_.objects[lit.object].material];
-    // A candidate split by boundRegion() has its corners from 1→4 subdivision; the pieces
+    // A candidate split by boundBall() has its corners from 1→4 subdivision; the pieces
     // here are those of the surface map, over the same barycentric triangle.
     const SubFacet f = ws.surfaces.subFacet(maps_[lit.facet.coarse], lit.facet.bary,
                                             lit.facet.depth, lit.facet.rim_edges);
@@ -835,12 +835,11 @@ ObserverResult FacetIntegrator::uniform(const Vec3& observer_m, int level,
   return result;
 }
 
-RegionBound FacetIntegrator::boundRegion(const Vec3& centre_m, double radius_m,
-                                         std::span<const Candidate> inherited,
-                                         double inherited_dropped_w_m2,
-                                         const RegionOptions& options,
-                                         std::vector<Candidate>& kept) const {
-  RegionBound result;
+BallBound FacetIntegrator::boundBall(const Vec3& centre_m, double radius_m,
+                                     std::span<const Candidate> inherited,
+                                     double inherited_dropped_w_m2, const BallBoundOptions& options,
+                                     std::vector<Candidate>& kept) const {
+  BallBound result;
   kept.clear();
   // kept doubles as the work list: entries before i are final, with their bound in `bounds`;
   // a split candidate is replaced by its first child in place and the others at the end.

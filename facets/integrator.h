@@ -100,24 +100,24 @@ struct Candidate {
   double fan_radius_m = 0.0;
 };
 
-/// @brief How boundRegion() may trade candidates for work.
-struct RegionOptions {
+/// @brief How boundBall() may trade candidates for work.
+struct BallBoundOptions {
   /// Candidates whose bounds sum to at most this (with what the parents dropped) are dropped:
   /// every observer of the region may miss that much.
   double drop_allowance_w_m2 = 0.0;
   /// Distance between the region's samples: a coarse facet whose whole light could pass
-  /// between them is reported in RegionBound::narrow_w_m2.
+  /// between them is reported in BallBound::narrow_w_m2.
   double sample_spacing_m = 0.0;
   /// Splitting a candidate to tighten the bound stops at this depth.
   int max_split_depth = 8;
 };
 
-/// @brief The bound of what any observer in a ball can receive (see boundRegion()).
+/// @brief The bound of what any observer in a ball can receive (see boundBall()).
 ///
 /// The bounds are never NaN. +∞ means unbounded: the ball reaches a lit facet (an observer on
 /// the target sees unbounded irradiance in the point-source model), so nothing about the
 /// ball may be decided from the bound or from samples: callers refine it.
-struct RegionBound {
+struct BallBound {
   double upper_w_m2 = 0.0;    ///< no observer in the ball receives more (kept + dropped)
   double dropped_w_m2 = 0.0;  ///< bound of all dropped candidates, inherited ones included
   /// Bound of the kept candidates whose coarse facet's light is narrower than the sample
@@ -160,7 +160,7 @@ class FacetIntegrator {
   ObserverResult adaptive(const Vec3& observer_m, IntegratorWorkspace& ws) const;
 
   /// @brief Adaptive integration at @p observer_m over @p candidates only (from
-  /// boundRegion() of a region that contains the observer), starting from their sub-facets.
+  /// boundBall() of a region that contains the observer), starting from their sub-facets.
   ObserverResult adaptive(const Vec3& observer_m, std::span<const Candidate> candidates,
                           IntegratorWorkspace& ws) const;
 
@@ -170,12 +170,12 @@ class FacetIntegrator {
   /// @brief Bounds what any observer within @p radius_m of @p centre_m can receive from
   /// @p inherited, and writes to @p kept the candidates that bound cannot drop. A candidate
   /// whose bound exceeds the drop allowance and whose normal cone is wider than the region
-  /// looks from it is split 1→4 (up to RegionOptions::max_split_depth), which tightens the
+  /// looks from it is split 1→4 (up to BallBoundOptions::max_split_depth), which tightens the
   /// bound where the region sees only part of its light. @p inherited_dropped_w_m2 is what the
   /// parents already dropped. Never throws; allocates only when @p kept grows.
-  RegionBound boundRegion(const Vec3& centre_m, double radius_m,
-                          std::span<const Candidate> inherited, double inherited_dropped_w_m2,
-                          const RegionOptions& options, std::vector<Candidate>& kept) const;
+  BallBound boundBall(const Vec3& centre_m, double radius_m, std::span<const Candidate> inherited,
+                      double inherited_dropped_w_m2, const BallBoundOptions& options,
+                      std::vector<Candidate>& kept) const;
 
   /// @brief The uniform twin: every lit coarse facet split to @p level, each sub-facet
   /// evaluated once by the same kernel. Its error estimate is not computed (reported as 0).

@@ -45,14 +45,14 @@ bool interpolates(const BlockValues& v, const BlockValues& w, std::size_t count,
 
 }  // namespace
 
-std::optional<Decision> decideByBound(const RegionBound& bound, int size, double floor_w_m2) {
+std::optional<Decision> decideByBound(const BallBound& bound, int size, double floor_w_m2) {
   if (bound.upper_w_m2 <= floor_w_m2) return Decision{Verdict::Skip};
   if (size <= 2) return Decision{Verdict::Finest};
   if (!bound.bounded()) return Decision{Verdict::Refine};  // (NaN included)
   return std::nullopt;
 }
 
-Decision decideBySamples(const BlockSamples& samples, const RegionBound& bound, double tolerance,
+Decision decideBySamples(const BlockSamples& samples, const BallBound& bound, double tolerance,
                          double floor_w_m2) {
   // The target is in the block: resolve it finely.
   if (samples.excluded || samples.count < kLatticeSamples) return {Verdict::Refine};

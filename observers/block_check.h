@@ -62,7 +62,7 @@ struct Decision {
 /// voxels (every lattice point of it is a sample), Refine where the ball around the block
 /// reaches a lit facet (a small mirror inside it sends a pencil no sample meets, and no bound
 /// says how bright); nothing where the samples must decide.
-std::optional<Decision> decideByBound(const RegionBound& bound, int size, double floor_w_m2);
+std::optional<Decision> decideByBound(const BallBound& bound, int size, double floor_w_m2);
 
 /// @brief What one block's samples show.
 struct BlockSamples {
@@ -81,7 +81,7 @@ struct BlockSamples {
 /// octant centre, within tolerance × the largest sample + floor, and no glint narrower than
 /// the samples (the bound's narrow part) can exceed that; Refine otherwise, and wherever a
 /// sample is inside the target or not finite.
-Decision decideBySamples(const BlockSamples& samples, const RegionBound& bound, double tolerance,
+Decision decideBySamples(const BlockSamples& samples, const BallBound& bound, double tolerance,
                          double floor_w_m2);
 
 /// @brief Trilinear interpolation between the corners @p c (index 4x + 2y + z) at (u, v, w).

@@ -98,9 +98,9 @@ double ObserverField::volumeAbove(double threshold_w_m2) const {
   return static_cast<double>(count) * spec_.voxel_m * spec_.voxel_m * spec_.voxel_m;
 }
 
-ObserverField::Region ObserverField::regionAbove(double threshold_w_m2,
-                                                const Vec3& from_m) const {
-  Region r;
+ObserverField::Exceedance ObserverField::exceedance(double threshold_w_m2,
+                                                    const Vec3& from_m) const {
+  Exceedance r;
   r.min_m = Vec3(std::numeric_limits<double>::infinity());
   r.max_m = -r.min_m;
   const auto n = spec_.nodes();

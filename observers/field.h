@@ -140,7 +140,7 @@ class ObserverField {
   [[nodiscard]] double volumeAbove(double threshold_w_m2) const;
 
   /// @brief Where the irradiance is at least a threshold (at the MPE: the nominal hazard zone).
-  struct Region {
+  struct Exceedance {
     std::int64_t points = 0;  ///< lattice points, each standing for one voxel_m³
     double volume_m3 = 0.0;
     Vec3 min_m{0.0};  ///< box around those points (when points > 0)
@@ -153,7 +153,7 @@ class ObserverField {
   };
   /// @brief The lattice points whose irradiance is at least @p threshold_w_m2, with their
   /// box and the farthest of them from @p from_m.
-  [[nodiscard]] Region regionAbove(double threshold_w_m2, const Vec3& from_m) const;
+  [[nodiscard]] Exceedance exceedance(double threshold_w_m2, const Vec3& from_m) const;
 
  private:
   FieldSpec spec_;

@@ -96,7 +96,7 @@ class FieldBuilder {
     while (!blocks.empty()) {
       stats_.levels = blocks.front().level;
       std::vector<std::vector<Candidate>> lists(blocks.size());
-      std::vector<RegionBound> bounds(blocks.size());
+      std::vector<BallBound> bounds(blocks.size());
       boundBlocks(blocks, parent_lists, parent_dropped, lists, bounds);
       throwIfStopped();
       evaluateSamples(blocks, lists, bounds);
@@ -212,7 +212,7 @@ class FieldBuilder {
   void boundBlocks(const std::vector<Block>& blocks,
                    const std::vector<std::vector<Candidate>>& parent_lists,
                    const std::vector<double>& parent_dropped,
-                   std::vector<std::vector<Candidate>>& lists, std::vector<RegionBound>& bounds) {
+                   std::vector<std::vector<Candidate>>& lists, std::vector<BallBound>& bounds) {
     tbb::enumerable_thread_specific<std::int64_t> bound_evaluations(0);
     tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t i) {
       if (stopRequested()) return;
@@ -220,13 +220,13 @@ class FieldBuilder {
       const bool root = b.parent == kNoParent;
       const std::span<const Candidate> inherited =
           root ? integrator_.candidates() : std::span<const Candidate>(parent_lists[b.parent]);
-      RegionOptions options;
+      BallBoundOptions options;
       options.drop_allowance_w_m2 = kDropShareOfFloor * spec_.floor_w_m2;
       options.sample_spacing_m = spec_.voxel_m * std::max(1, b.size / 2);
       options.max_split_depth = kMaxBoundSplitDepth;
       const double radius = 0.5 * std::sqrt(flat() ? 2.0 : 3.0) * spec_.voxel_m * b.size;
-      bounds[i] = integrator_.boundRegion(centre(b), radius, inherited,
-                                          root ? 0.0 : parent_dropped[b.parent], options, lists[i]);
+      bounds[i] = integrator_.boundBall(centre(b), radius, inherited,
+                                        root ? 0.0 : parent_dropped[b.parent], options, lists[i]);
       bound_evaluations.local() += bounds[i].bound_evaluations;
     });
     for (std::int64_t n : bound_evaluations) stats_.bound_evaluations += n;
@@ -252,8 +252,8 @@ class FieldBuilder {
   }
 
   // Only a bound proven at most the floor skips a block; NaN never does (and cannot occur:
-  // RegionBound is never NaN).
-  [[nodiscard]] bool skipped(const RegionBound& bound) const {
+  // BallBound is never NaN).
+  [[nodiscard]] bool skipped(const BallBound& bound) const {
     return bound.upper_w_m2 <= spec_.floor_w_m2;
   }
 
@@ -261,7 +261,7 @@ class FieldBuilder {
   // evaluated; a point shared by several blocks takes the candidates of the first.
   void evaluateSamples(const std::vector<Block>& blocks,
                        const std::vector<std::vector<Candidate>>& lists,
-                       const std::vector<RegionBound>& bounds) {
+                       const std::vector<BallBound>& bounds) {
     std::vector<std::pair<std::uint64_t, std::uint32_t>> wanted;  // (point, block)
     for (std::size_t i = 0; i < blocks.size(); ++i) {
       if (skipped(bounds[i])) continue;
@@ -322,14 +322,14 @@ class FieldBuilder {
   }
 
   std::vector<Decision> decide(const std::vector<Block>& blocks,
-                               const std::vector<RegionBound>& bounds) const {
+                               const std::vector<BallBound>& bounds) const {
     std::vector<Decision> decisions(blocks.size());
     tbb::parallel_for(std::size_t{0}, blocks.size(),
                       [&](std::size_t i) { decisions[i] = decideBlock(blocks[i], bounds[i]); });
     return decisions;
   }
 
-  [[nodiscard]] Decision decideBlock(const Block& b, const RegionBound& bound) const {
+  [[nodiscard]] Decision decideBlock(const Block& b, const BallBound& bound) const {
     if (const std::optional<Decision> d = field::decideByBound(bound, b.size, spec_.floor_w_m2)) {
       return *d;
     }

@@ -30,9 +30,9 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-// One observer region of the study (the box or a plane): the same lattice in every scenario,
+// One observer lattice of the study (the box or a plane): the same in every scenario,
 // since poses move the target, never the observers.
-struct Region {
+struct StudyLattice {
   std::string name;  // "box" or the plane's name
   bool plane = false;
   std::size_t plane_index = 0;
@@ -47,26 +47,26 @@ struct Region {
   }
 };
 
-std::vector<Region> studyRegions(const Scene& base) {
-  std::vector<Region> regions;
-  auto add = [&](Region r) {
+std::vector<StudyLattice> studyLattices(const Scene& base) {
+  std::vector<StudyLattice> lattices;
+  auto add = [&](StudyLattice r) {
     const auto n = r.spec.nodes();
     const std::size_t points = static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]) *
                                static_cast<std::size_t>(n[2]);
     r.max_w_m2.assign(points, 0.0f);
     r.hazardous.assign(points, 0u);
-    regions.push_back(std::move(r));
+    lattices.push_back(std::move(r));
   };
   if (base.observers) add({"box", false, 0, fieldSpec(base), {}, {}});
   for (std::size_t p = 0; p < base.planes.size(); ++p)
     add({base.planes[p].name, true, p, planeFieldSpec(base, base.planes[p]), {}, {}});
-  return regions;
+  return lattices;
 }
 
 // Adds one scenario's irradiance to a region's maximum and hazard count, and returns how many
 // of its points reach the MPE. The count compares the stored float with the MPE, so a
 // scenario read back from its file counts as it did when fresh.
-std::int64_t accumulate(Region& r, const std::vector<float>& e_w_m2, double mpe_w_m2) {
+std::int64_t accumulate(StudyLattice& r, const std::vector<float>& e_w_m2, double mpe_w_m2) {
   if (e_w_m2.size() != r.max_w_m2.size())
     throw std::logic_error("batch: a scenario's map does not fit its region's lattice");
   std::int64_t hazardous = 0;
@@ -105,7 +105,7 @@ nlohmann::json parametersJson(const Scenario& s) {
 
 // Computes one scenario on this rank, writes its folder (result.json last: its presence means
 // the scenario is done) and adds it to the rank's aggregates. Returns result.json's text.
-std::string runScenario(const Study& study, const Scenario& s, std::vector<Region>& regions,
+std::string runScenario(const Study& study, const Scenario& s, std::vector<StudyLattice>& lattices,
                         const fs::path& out_dir, const MemoryWatch& watch) {
   const auto start = Clock::now();
   const std::string scene_json = scenarioSceneJson(study, s);
@@ -127,7 +127,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Regio
                            {"parameters", parametersJson(s)}};
   nlohmann::json results = nlohmann::json::array();
   std::int64_t evaluations = 0, unconverged = 0;
-  for (Region& r : regions) {
+  for (StudyLattice& r : lattices) {
     // The region's own lattice (the observers do not move with the target), so every
     // scenario's map adds point for point.
     const FieldProblem problem = fieldProblem(scene, r.spec);
@@ -182,8 +182,9 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Regio
 // A finished scenario of an earlier run: its record and maps, when they are whole and belong
 // to this study. Nothing when the scenario must be (re)computed.
 std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario& s,
-                                             std::vector<Region>& regions, const fs::path& out_dir,
-                                             bool fresh, std::ostream& err, bool quiet) {
+                                             std::vector<StudyLattice>& lattices,
+                                             const fs::path& out_dir, bool fresh, std::ostream& err,
+                                             bool quiet) {
   const fs::path dir = out_dir / "scenarios" / scenarioDirName(s.index);
   std::error_code ec;
   if (!fs::is_regular_file(dir / "result.json", ec)) return std::nullopt;
@@ -194,7 +195,7 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
     record = nlohmann::json::parse(readUserFile(dir / "result.json", "scenario result"));
     fnv = record.at("study_fnv1a64").get<std::string>();
     matches = record.at("scenario").get<std::size_t>() == s.index &&
-              record.at("regions").size() == regions.size();
+              record.at("regions").size() == lattices.size();
   } catch (const std::exception&) {
     if (!quiet) err << "glint batch: " << (dir / "result.json").string() << " unreadable: redone\n";
     return std::nullopt;
@@ -214,7 +215,7 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
   const double mpe = study.base.hazard.mpe.irradiance_w_m2;
   std::vector<std::vector<float>> maps;
   try {
-    for (const Region& r : regions) {
+    for (const StudyLattice& r : lattices) {
       const std::string path = (dir / r.scenarioFile()).string();
       if (r.plane) {
         int w = 0, h = 0;
@@ -229,7 +230,7 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
     if (!quiet) err << "glint batch: scenario " << s.index << " redone: " << e.what() << "\n";
     return std::nullopt;
   }
-  for (std::size_t i = 0; i < regions.size(); ++i) accumulate(regions[i], maps[i], mpe);
+  for (std::size_t i = 0; i < lattices.size(); ++i) accumulate(lattices[i], maps[i], mpe);
   return record;
 }
 
@@ -254,13 +255,13 @@ nlohmann::json quantilesJson(const std::vector<double>& v) {
 // %.10g: enough for every parameter a study file can hold, and the same text on every rank.
 std::string csvNumber(double x) { return formatNumber("%.10g", x); }
 
-std::string scenariosCsv(const std::vector<Region>& regions,
+std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
                          const std::map<std::size_t, nlohmann::json>& records) {
   std::string csv =
       "scenario,time_s,offset_x_m,offset_y_m,offset_z_m,pose_yaw_deg,pose_pitch_deg,"
       "pose_roll_deg,yaw_deg,pitch_deg,roll_deg,sigma,specular_reflectance,jitter_sample,"
       "jitter_u_rad,jitter_v_rad";
-  for (const Region& r : regions) {
+  for (const StudyLattice& r : lattices) {
     csv += "," + r.name + "_peak_hazard_ratio," + r.name +
            (r.plane ? "_hazardous_area_m2" : "_hazard_volume_m3");
   }
@@ -299,15 +300,15 @@ std::string scenariosCsv(const std::vector<Region>& regions,
 }
 
 // The coverage probability: the fraction of scenarios whose irradiance reaches the MPE here.
-std::vector<float> coverage(const Region& r, std::size_t scenarios) {
+std::vector<float> coverage(const StudyLattice& r, std::size_t scenarios) {
   std::vector<float> c(r.hazardous.size());
   for (std::size_t i = 0; i < c.size(); ++i)
     c[i] = static_cast<float>(static_cast<double>(r.hazardous[i]) / static_cast<double>(scenarios));
   return c;
 }
 
-void writeRegionMap(const fs::path& path, const Region& r, const Study& study,
-                    std::size_t scenarios) {
+void writeLatticeMap(const fs::path& path, const StudyLattice& r, const Study& study,
+                     std::size_t scenarios) {
   const HazardSpec& h = study.base.hazard;
   const std::vector<float> max_ratio = hazardRatio(r.max_w_m2, h.mpe.irradiance_w_m2);
   const std::vector<float> cover = coverage(r, scenarios);
@@ -350,7 +351,7 @@ void writeRegionMap(const fs::path& path, const Region& r, const Study& study,
   file.commit();
 }
 
-nlohmann::json summaryJson(const Study& study, const std::vector<Region>& regions,
+nlohmann::json summaryJson(const Study& study, const std::vector<StudyLattice>& lattices,
                            const std::map<std::size_t, nlohmann::json>& records,
                            std::size_t resumed, int ranks, double wall_s) {
   const HazardSpec& h = study.base.hazard;
@@ -375,8 +376,8 @@ nlohmann::json summaryJson(const Study& study, const std::vector<Region>& region
   j["evaluations"] = quantilesJson(evaluations);
   j["scenario_seconds"] = quantilesJson(seconds);
   nlohmann::json rs = nlohmann::json::array();
-  for (std::size_t k = 0; k < regions.size(); ++k) {
-    const Region& r = regions[k];
+  for (std::size_t k = 0; k < lattices.size(); ++k) {
+    const StudyLattice& r = lattices[k];
     std::vector<double> peak, extent;
     std::size_t with_hazard = 0;
     for (const auto& [index, rec] : records) {
@@ -427,20 +428,20 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
         tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(args.threads));
   }
 
-  std::vector<Region> regions = studyRegions(study.base);
+  std::vector<StudyLattice> lattices = studyLattices(study.base);
   // Each region keeps two dense maps over the scenarios (float maximum, uint32 count) besides
   // one scenario's field at a time.
   const std::uint64_t budget =
       args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
   std::uint64_t floor_bytes = 0;
-  for (const Region& r : regions) {
+  for (const StudyLattice& r : lattices) {
     const std::array<int, 3> n = r.spec.nodes();
     floor_bytes += 8 * static_cast<std::uint64_t>(n[0]) * static_cast<std::uint64_t>(n[1]) *
                        static_cast<std::uint64_t>(n[2]) +
                    fieldMemoryFloorBytes(r.spec, false);
   }
-  requireWithinBudget("the study's regions (" + std::to_string(regions.size()) + ")",
-                      floor_bytes, budget,
+  requireWithinBudget("the study's regions (" + std::to_string(lattices.size()) + ")", floor_bytes,
+                      budget,
                       "coarsen the base scene's voxel_m or pixel_m, shrink its regions, or "
                       "raise --memory");
   const MemoryWatch watch(budget);
@@ -453,7 +454,7 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
     fs::create_directories(out_dir / "scenarios", ec);
     if (ec) throw OutputError(out_dir.string() + ": cannot create the output folder: " + ec.message());
     for (const Scenario& s : study.scenarios) {
-      if (auto rec = resumeScenario(study, s, regions, out_dir, args.fresh, err, args.quiet)) {
+      if (auto rec = resumeScenario(study, s, lattices, out_dir, args.fresh, err, args.quiet)) {
         records[s.index] = std::move(*rec);
         ++resumed;
       } else {
@@ -474,7 +475,7 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   cluster.shareOut(
       todo,
       [&](std::size_t index) {
-        return runScenario(study, study.scenarios[index], regions, out_dir, watch);
+        return runScenario(study, study.scenarios[index], lattices, out_dir, watch);
       },
       [&](std::size_t index, const std::string& record) {
         records[index] = nlohmann::json::parse(record);
@@ -502,7 +503,7 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
         }
       });
 
-  for (Region& r : regions) {
+  for (StudyLattice& r : lattices) {
     cluster.maxToRoot(r.max_w_m2);
     cluster.sumToRoot(r.hazardous);
   }
@@ -510,12 +511,13 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
 
   const std::size_t n = study.scenarios.size();
   AtomicFile csv(out_dir / "scenarios.csv");
-  csv.stream() << scenariosCsv(regions, records);
+  csv.stream() << scenariosCsv(lattices, records);
   csv.commit();
-  for (const Region& r : regions)
-    writeRegionMap(out_dir / (r.plane ? r.name + ".exr" : "box.vdb"), r, study, n);
+  for (const StudyLattice& r : lattices)
+    writeLatticeMap(out_dir / (r.plane ? r.name + ".exr" : "box.vdb"), r, study, n);
   const double wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
-  const nlohmann::json summary = summaryJson(study, regions, records, resumed, cluster.size(), wall_s);
+  const nlohmann::json summary =
+      summaryJson(study, lattices, records, resumed, cluster.size(), wall_s);
   AtomicFile summary_file(out_dir / "summary.json");
   summary_file.stream() << summary.dump(2) << "\n";
   summary_file.commit();
@@ -536,7 +538,7 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
         << " " << unit << "\n";
   }
   err << "  wrote " << out_dir.string() << "/{scenarios.csv, summary.json";
-  for (const Region& r : regions) err << ", " << (r.plane ? r.name + ".exr" : "box.vdb");
+  for (const StudyLattice& r : lattices) err << ", " << (r.plane ? r.name + ".exr" : "box.vdb");
   err << "} in " << formatDuration(wall_s) << "\n";
 }
 

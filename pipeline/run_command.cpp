@@ -50,7 +50,7 @@ Vec3 targetCentre(const Target& target) {
 // The nominal hazard zone: where irradiance ≥ MPE (hazard ratio ≥ 1), in a box or on a plane.
 struct HazardZone {
   double peak_ratio = 0.0;
-  ObserverField::Region region;  ///< measured from the target's centre
+  ObserverField::Exceedance above_mpe;  ///< measured from the target's centre
   Vec3 target_centre_m{0.0};
   /// The largest hazard ratio an unconverged point could have, its error estimate added
   /// (0 when every point converged): below 1, none of them can be hazardous.
@@ -62,7 +62,7 @@ struct HazardZone {
 HazardZone hazardZone(const ObserverField& field, const Scene& scene, const Vec3& target_centre_m) {
   const double mpe = scene.hazard.mpe.irradiance_w_m2;
   const FieldStats& s = field.stats();
-  return {s.peak_w_m2 / mpe, field.regionAbove(mpe, target_centre_m), target_centre_m,
+  return {s.peak_w_m2 / mpe, field.exceedance(mpe, target_centre_m), target_centre_m,
           s.unconverged_max_upper_w_m2 / mpe};
 }
 
@@ -109,7 +109,7 @@ nlohmann::json hazardJson(const Scene& scene, const HazardZone* zone) {
   const HazardZone& z = *zone;
   j["peak_hazard_ratio"] = z.peak_ratio;
   j["unconverged_may_be_hazardous"] = z.unconvergedMayBeHazardous();
-  const ObserverField::Region& r = z.region;
+  const ObserverField::Exceedance& r = z.above_mpe;
   nlohmann::json nhz = {{"points", r.points},
                        {"volume_m3", r.volume_m3},
                        {"reaches_box_edge", r.reaches_edge}};
@@ -240,12 +240,12 @@ void printVolume(std::ostream& err, const ObserverField& field, const Scene& sce
       << formatNumber("%g", h.exposure_s) << " s" << (h.exposure_default ? " (default)" : "")
       << " (" << toString(h.mpe.limit) << "), peak hazard ratio "
       << formatNumber("%.3g", zone.peak_ratio) << "\n";
-  if (zone.region.points > 0) {
-    const ObserverField::Region& r = zone.region;
+  if (zone.above_mpe.points > 0) {
+    const ObserverField::Exceedance& r = zone.above_mpe;
     err << "  nominal hazard zone (ratio ≥ 1): " << formatNumber("%.4g", r.volume_m3)
         << " m³, reaching " << formatNumber("%.4g", r.farthest_m) << " m from the target centre, at ("
         << r.farthest_at_m.x << ", " << r.farthest_at_m.y << ", " << r.farthest_at_m.z << ")\n";
-    if (zone.region.reaches_edge) {
+    if (zone.above_mpe.reaches_edge) {
       err << "  warning: the hazard zone reaches the edge of the observer box and may go on "
              "beyond it: enlarge the box to see its full extent\n";
     }
@@ -261,16 +261,16 @@ void printVolume(std::ostream& err, const ObserverField& field, const Scene& sce
       << " bytes per active voxel\n";
 }
 
-// Computes one observer region (the box or a plane) with its own integrator settings, with
+// Computes one observer field (the box or a plane) with its own integrator settings, with
 // progress on stderr unless quiet.
-struct RegionResult {
+struct FieldResult {
   FieldProblem problem;
   std::unique_ptr<ObserverField> field;
 };
 
-RegionResult computeRegion(const Scene& scene, const FieldSpec& spec, const RunArgs& args,
-                           const char* what, const MemoryWatch& watch, std::ostream& err) {
-  RegionResult r{fieldProblem(scene, spec), nullptr};
+FieldResult computeObserverField(const Scene& scene, const FieldSpec& spec, const RunArgs& args,
+                                 const char* what, const MemoryWatch& watch, std::ostream& err) {
+  FieldResult r{fieldProblem(scene, spec), nullptr};
   WorkCounter counter;
   counter.stop = &watch.stopFlag();
   std::unique_ptr<ProgressReporter> progress;
@@ -311,14 +311,14 @@ void checkRegionMemory(const FieldSpec& spec, const std::string& what, const Run
 
 // A plane's lattice points stand for pixel_m² each.
 double hazardousArea(const ObserverField& field, const HazardZone& zone) {
-  return static_cast<double>(zone.region.points) * field.spec().voxel_m * field.spec().voxel_m;
+  return static_cast<double>(zone.above_mpe.points) * field.spec().voxel_m * field.spec().voxel_m;
 }
 
 nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
                          const HazardZone& zone) {
   const FieldStats& s = field.stats();
   const FieldSpec& spec = field.spec();
-  const ObserverField::Region& r = zone.region;
+  const ObserverField::Exceedance& r = zone.above_mpe;
   nlohmann::json j = {{"name", plane.name},
                       {"file", plane.name + ".exr"},
                       {"pixels", {s.nodes[0], s.nodes[1]}},
@@ -467,7 +467,7 @@ void runField(const RunArgs& args, std::ostream& err) {
   };
   if (scene.observers) {
     const FieldSpec spec = fieldSpec(scene);
-    const RegionResult box = computeRegion(scene, spec, args, "points", watch, err);
+    const FieldResult box = computeObserverField(scene, spec, args, "points", watch, err);
     const ObserverField& field = *box.field;
     requireFinite(field, "the observer box");
     const FacetIntegrator& integrator = box.problem.integrator;
@@ -494,7 +494,7 @@ void runField(const RunArgs& args, std::ostream& err) {
     for (std::size_t p = 0; p < scene.planes.size(); ++p) {
       const PlaneSpec& plane = scene.planes[p];
       const FieldSpec spec = planeFieldSpec(scene, plane);
-      const RegionResult r = computeRegion(scene, spec, args, plane.name.c_str(), watch, err);
+      const FieldResult r = computeObserverField(scene, spec, args, plane.name.c_str(), watch, err);
       const ObserverField& field = *r.field;
       requireFinite(field, "plane " + plane.name);
       writeExr(exrs[p]->stream(), planeMap(field, info.mpe_w_m2),

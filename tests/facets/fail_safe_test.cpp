@@ -107,18 +107,18 @@ TEST(RegionBoundFailSafe, ABallReachingTheTargetIsUnboundedNotNaN) {
   // Summed with compensation they once gave NaN, which no decision could see.
   const Beam beam = test::flatTop(Vec3(0), Vec3(1, 0, 0), 1000.0, 1.0);
   const FacetIntegrator fi(sphereTarget(beam), beam, test::accuracy(1e-3));
-  RegionOptions options;
+  BallBoundOptions options;
   options.drop_allowance_w_m2 = 1e-3;
   options.sample_spacing_m = 0.4;
   std::vector<Candidate> kept;
-  const RegionBound touching =
-      fi.boundRegion(Vec3(-0.6, 0, 0), 0.3, fi.candidates(), 0.0, options, kept);
+  const BallBound touching =
+      fi.boundBall(Vec3(-0.6, 0, 0), 0.3, fi.candidates(), 0.0, options, kept);
   EXPECT_EQ(touching.upper_w_m2, kInf);
   EXPECT_FALSE(touching.bounded()) << "the field refines such a block";
   EXPECT_FALSE(std::isnan(touching.narrow_w_m2));
   EXPECT_FALSE(kept.empty()) << "no facet the ball touches may be dropped";
 
-  const RegionBound away = fi.boundRegion(Vec3(-5, 0, 0), 0.3, fi.candidates(), 0.0, options, kept);
+  const BallBound away = fi.boundBall(Vec3(-5, 0, 0), 0.3, fi.candidates(), 0.0, options, kept);
   EXPECT_TRUE(away.bounded()) << "a ball clear of the target has a finite bound";
   EXPECT_GT(away.upper_w_m2, 0.0) << "in front of a lit mirror ball";
 }
@@ -128,10 +128,10 @@ TEST(RegionBoundFailSafe, AnInfiniteDropAllowanceStillKeepsUnboundedCandidates) 
   // integrate over a list without the facets they touch. Only finite bounds are dropped.
   const Beam beam = test::flatTop(Vec3(0), Vec3(1, 0, 0), 1000.0, 1.0);
   const FacetIntegrator fi(sphereTarget(beam), beam, test::accuracy(1e-3));
-  RegionOptions options;
+  BallBoundOptions options;
   options.drop_allowance_w_m2 = kInf;
   std::vector<Candidate> kept;
-  const RegionBound b = fi.boundRegion(Vec3(-0.6, 0, 0), 0.3, fi.candidates(), 0.0, options, kept);
+  const BallBound b = fi.boundBall(Vec3(-0.6, 0, 0), 0.3, fi.candidates(), 0.0, options, kept);
   EXPECT_FALSE(std::isnan(b.upper_w_m2));
   EXPECT_EQ(b.upper_w_m2, kInf);
   EXPECT_FALSE(kept.empty()) << "the facets the ball reaches are kept for its points";

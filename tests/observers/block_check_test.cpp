@@ -14,8 +14,8 @@ namespace {
 constexpr int kSize = 8;  // voxels per block edge: 35 samples
 
 // A bounded, wide-light bound (nothing narrower than the samples).
-RegionBound boundOf(double upper_w_m2, double narrow_w_m2 = 0.0) {
-  RegionBound b;
+BallBound boundOf(double upper_w_m2, double narrow_w_m2 = 0.0) {
+  BallBound b;
   b.upper_w_m2 = upper_w_m2;
   b.narrow_w_m2 = narrow_w_m2;
   return b;

@@ -247,7 +247,7 @@ TEST(ObserverField, LobeEdgeOnAMiddleSamplePlaneIsResolved) {
 }
 
 TEST(ObserverField, RegionAboveAThresholdIsEveryLatticePointReachingIt) {
-  // The nominal hazard zone is regionAbove(MPE): checked here against a plain scan of every
+  // The nominal hazard zone is exceedance(MPE): checked here against a plain scan of every
   // lattice point through the public accessors, at a threshold of a fifth of the peak.
   const std::string json = cylinderScene(0.03);
   const Scene scene = parseScene(json, "test.json");
@@ -271,7 +271,7 @@ TEST(ObserverField, RegionAboveAThresholdIsEveryLatticePointReachingIt) {
         farthest = std::max(farthest, glm::length(x - from));
       }
   ASSERT_GT(points, 10) << "the premise: a bright region";
-  const ObserverField::Region r = field.regionAbove(threshold, from);
+  const ObserverField::Exceedance r = field.exceedance(threshold, from);
   EXPECT_EQ(r.points, points);
   EXPECT_NEAR(r.volume_m3, static_cast<double>(points) * std::pow(spec.voxel_m, 3), 1e-12);
   EXPECT_NEAR(r.farthest_m, farthest, 1e-12) << "the same lattice point";
@@ -280,7 +280,7 @@ TEST(ObserverField, RegionAboveAThresholdIsEveryLatticePointReachingIt) {
     EXPECT_NEAR(r.min_m[a], lo[a], 1e-12) << "axis " << a;
     EXPECT_NEAR(r.max_m[a], hi[a], 1e-12) << "axis " << a;
   }
-  const ObserverField::Region none = field.regionAbove(2.0 * field.stats().peak_w_m2, from);
+  const ObserverField::Exceedance none = field.exceedance(2.0 * field.stats().peak_w_m2, from);
   EXPECT_EQ(none.points, 0) << "nothing above twice the peak";
   EXPECT_EQ(none.volume_m3, 0.0);
 }
