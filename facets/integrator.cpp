@@ -321,27 +321,42 @@ IntegratorWorkspace::~IntegratorWorkspace() = default;
 IntegratorWorkspace::IntegratorWorkspace(IntegratorWorkspace&&) noexcept = default;
 IntegratorWorkspace& IntegratorWorkspace::operator=(IntegratorWorkspace&&) noexcept = default;
 
-FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const IntegratorOptions& options)
-    : target_(std::move(target)), beam_(beam), options_(options) {
-  static std::atomic<std::uint64_t> instances{0};
-  id_ = ++instances;
-  if (!(options_.tolerance >= 0.0) || !(options_.floor_w_m2 >= 0.0) ||
-      !std::isfinite(options_.floor_w_m2) || options_.max_depth < 0 || options_.max_depth > 30 ||
-      options_.max_evaluations < 1) {
+namespace {
+
+void validateAccuracy(const IntegratorOptions& o) {
+  if (!(o.tolerance >= 0.0) || !(o.floor_w_m2 >= 0.0) || !std::isfinite(o.floor_w_m2) ||
+      o.max_depth < 0 || o.max_depth > 30 || o.max_evaluations < 1) {
     throw std::invalid_argument("FacetIntegrator: accuracy options out of range");
   }
-  object_beams_.reserve(target_.objects.size());
-  for (const TargetObject& obj : target_.objects) {
+}
+
+}  // namespace
+
+FacetIntegrator FacetIntegrator::withAccuracy(double tolerance, double floor_w_m2) const {
+  FacetIntegrator copy = *this;  // the target shared; culling, maps and occluder as they are
+  copy.options_.tolerance = tolerance;
+  copy.options_.floor_w_m2 = floor_w_m2;
+  validateAccuracy(copy.options_);
+  return copy;
+}
+
+FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const IntegratorOptions& options)
+    : target_(std::make_shared<const Target>(std::move(target))), beam_(beam), options_(options) {
+  static std::atomic<std::uint64_t> instances{0};
+  id_ = ++instances;
+  validateAccuracy(options_);
+  object_beams_.reserve(target_->objects.size());
+  for (const TargetObject& obj : target_->objects) {
     object_beams_.push_back(beam_.relativeTo(obj.origin_m));
   }
-  if (options_.occlusion && needsOcclusion(target_)) {
-    occluder_ = std::make_shared<const Occluder>(target_);
+  if (options_.occlusion && needsOcclusion(*target_)) {
+    occluder_ = std::make_shared<const Occluder>(*target_);
     cull_.occlusion = true;
   }
-  cull_.coarse_facets = target_.facetCount();
-  for (std::uint32_t i = 0; i < target_.facetCount(); ++i) {
-    const std::uint32_t obj = target_.object[i];
-    const PatchGeometry g = patchGeometry(target_, coarseSubFacet(target_, i), options_.normals);
+  cull_.coarse_facets = target_->facetCount();
+  for (std::uint32_t i = 0; i < target_->facetCount(); ++i) {
+    const std::uint32_t obj = target_->object[i];
+    const PatchGeometry g = patchGeometry(*target_, coarseSubFacet(*target_, i), options_.normals);
     if (!(g.area_m2 > 0.0)) {
       ++cull_.degenerate;
       continue;
@@ -364,29 +379,29 @@ FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const Integrat
             break;
           }
         }
-        lit_.push_back({coarseSubFacet(target_, i), obj, g, g.cone_rad, g.radius_m});
+        lit_.push_back({coarseSubFacet(*target_, i), obj, g, g.cone_rad, g.radius_m});
         break;
     }
   }
   cull_.lit = lit_.size();
   if (options_.scheme != IntegrationScheme::Paper) {
-    maps_.reserve(target_.facetCount());
-    for (std::uint32_t i = 0; i < target_.facetCount(); ++i) maps_.emplace_back(target_, i);
+    maps_.reserve(target_->facetCount());
+    for (std::uint32_t i = 0; i < target_->facetCount(); ++i) maps_.emplace_back(*target_, i);
   }
 }
 
 void FacetIntegrator::prepareObserver(const Vec3& observer_m, IntegratorWorkspace::Impl& ws) const {
   ws.reset();
   ws.surfaces.bind(id_);
-  ws.observer_local_m.resize(target_.objects.size());
-  for (std::size_t k = 0; k < target_.objects.size(); ++k) {
-    ws.observer_local_m[k] = observer_m - target_.objects[k].origin_m;
+  ws.observer_local_m.resize(target_->objects.size());
+  for (std::size_t k = 0; k < target_->objects.size(); ++k) {
+    ws.observer_local_m[k] = observer_m - target_->objects[k].origin_m;
   }
 }
 
 Vec3 FacetIntegrator::rayOrigin(const PatchGeometry& g, std::uint32_t object,
                                 std::uint32_t coarse) const {
-  return g.centre_m + target_.objects[object].origin_m + occluder_->lift_m(coarse) * g.normal;
+  return g.centre_m + target_->objects[object].origin_m + occluder_->lift_m(coarse) * g.normal;
 }
 
 bool FacetIntegrator::visible(const Candidate& c, const Vec3& observer_m) const {
@@ -421,7 +436,7 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
     const Vec3& x = ws.observer_local_m[lit.object];
     if (!mayFaceObserver(lit.geometry, x) || !visible(lit, observer_m)) continue;
     const Beam& beam = object_beams_[lit.object];
-    const Material& material = target_.materials[target_.objects[lit.object].material];
+    const Material& material = target_->materials[target_->objects[lit.object].material];
     Leaf leaf;
     leaf.facet = lit.facet;
     PatchGeometry g = lit.geometry;
@@ -431,7 +446,7 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
       if (lit.facet.depth > 0) {
         leaf.facet = maps_[lit.facet.coarse].subFacet(lit.facet.bary, lit.facet.depth,
                                                       lit.facet.rim_edges);
-        g = maps_[lit.facet.coarse].geometry(target_, leaf.facet);
+        g = maps_[lit.facet.coarse].geometry(*target_, leaf.facet);
       }
       leaf.sampled = false;
     } else {
@@ -469,10 +484,10 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
 
     const std::uint32_t slot = heap->pop();
     Leaf& leaf = ws.leaves[slot];
-    const std::uint32_t obj = target_.object[leaf.facet.coarse];
+    const std::uint32_t obj = target_->object[leaf.facet.coarse];
     const Vec3& x = ws.observer_local_m[obj];
     const Beam& beam = object_beams_[obj];
-    const Material& material = target_.materials[target_.objects[obj].material];
+    const Material& material = target_->materials[target_->objects[obj].material];
 
     if (!leaf.has_children) {
       // The paper's step: evaluate the four children, E'_O = Σ E_On, ΔE_O = E'_O − E_O.
@@ -503,7 +518,7 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
         const Leaf parent = leaf;
         ws.free_slots.push_back(slot);
         for (const SubFacet& child : maps_[parent.facet.coarse].split(parent.facet)) {
-          const PatchGeometry g = maps_[parent.facet.coarse].geometry(target_, child);
+          const PatchGeometry g = maps_[parent.facet.coarse].geometry(*target_, child);
           const ContributionBound b = contributionBound(g, x, beam, material, limits);
           if (b.upper_w_m2 == 0.0) continue;  // provably dark
           Leaf c;
@@ -517,7 +532,7 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
         }
         continue;
       }
-      detail::withPatchModel(target_, leaf.facet.coarse, [&](const auto& model) {
+      detail::withPatchModel(*target_, leaf.facet.coarse, [&](const auto& model) {
         const std::array<SubFacet, 4> children = model.split(leaf.facet);
         leaf.refined = 0.0;
         for (int k = 0; k < 4; ++k) {
@@ -549,7 +564,7 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
     totals.account(leaf, -1);
     const Leaf parent = leaf;
     ws.free_slots.push_back(slot);
-    const std::array<SubFacet, 4> children = split(target_, parent.facet);
+    const std::array<SubFacet, 4> children = split(*target_, parent.facet);
     for (int k = 0; k < 4; ++k) {
       Leaf child;
       child.facet = children[k];
@@ -633,7 +648,7 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
     account(stored, 1);
   };
   auto bounded = [&](const SubFacet& f, const Vec3& x, const Beam& beam, const Material& material) {
-    const PatchGeometry g = ws.surfaces.geometry(target_, maps_[f.coarse], f);
+    const PatchGeometry g = ws.surfaces.geometry(*target_, maps_[f.coarse], f);
     const ContributionBound b =
         contributionBound(g, x, beam, material, lobeLimits(material.lobe.sigma));
     LobePiece p;
@@ -649,7 +664,7 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
     const Vec3& x = ws.observer_local_m[lit.object];
     if (!mayFaceObserver(lit.geometry, x) || !visible(lit, observer_m)) continue;
     const Beam& beam = object_beams_[lit.object];
-    const Material& material = target_.materials[target_.objects[lit.object].material];
+    const Material& material = target_->materials[target_->objects[lit.object].material];
     // A candidate split by boundBall() has its corners from 1→4 subdivision; the pieces
     // here are those of the surface map, over the same barycentric triangle.
     const SubFacet f = ws.surfaces.subFacet(maps_[lit.facet.coarse], lit.facet.bary,
@@ -669,10 +684,10 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
     if (ws.bounded.empty()) break;  // everything left is frozen at the depth limit
     const std::uint32_t slot = ws.bounded.pop();
     LobePiece piece = ws.pieces[slot];
-    const std::uint32_t obj = target_.object[piece.facet.coarse];
+    const std::uint32_t obj = target_->object[piece.facet.coarse];
     const Vec3& x = ws.observer_local_m[obj];
     const Beam& beam = object_beams_[obj];
-    const Material& material = target_.materials[target_.objects[obj].material];
+    const Material& material = target_->materials[target_->objects[obj].material];
     const SurfaceMap& map = maps_[piece.facet.coarse];
     const double sigma = material.lobe.sigma;
 
@@ -814,8 +829,8 @@ ObserverResult FacetIntegrator::uniform(const Vec3& observer_m, int level,
     const Vec3& x = ws.observer_local_m[lit.object];
     if (!mayFaceObserver(lit.geometry, x) || !visible(lit, observer_m)) continue;
     const Beam& beam = object_beams_[lit.object];
-    const Material& material = target_.materials[target_.objects[lit.object].material];
-    detail::withPatchModel(target_, lit.facet.coarse, [&](const auto& model) {
+    const Material& material = target_->materials[target_->objects[lit.object].material];
+    detail::withPatchModel(*target_, lit.facet.coarse, [&](const auto& model) {
       ws.stack.clear();
       ws.stack.push_back(lit.facet);
       while (!ws.stack.empty()) {
@@ -849,10 +864,10 @@ BallBound FacetIntegrator::boundBall(const Vec3& centre_m, double radius_m,
   std::size_t i = 0;
   while (i < kept.size()) {
     const Candidate c = kept[i];
-    const Vec3 x = centre_m - target_.objects[c.object].origin_m;
+    const Vec3 x = centre_m - target_->objects[c.object].origin_m;
     double upper = 0.0;
     if (mayFaceObserver(c.geometry, x, radius_m)) {
-      const Material& material = target_.materials[target_.objects[c.object].material];
+      const Material& material = target_->materials[target_->objects[c.object].material];
       upper = contributionBound(c.geometry, x, object_beams_[c.object], material,
                                 options_.resolution, radius_m)
                   .upper_w_m2;
@@ -870,7 +885,7 @@ BallBound FacetIntegrator::boundBall(const Vec3& centre_m, double radius_m,
     const double region_angle = d > reach ? std::asin(reach / d) : kPi;
     if (std::isfinite(upper) && upper > options.drop_allowance_w_m2 &&
         c.facet.depth < options.max_split_depth && c.geometry.cone_rad > 0.5 * region_angle) {
-      detail::withPatchModel(target_, c.facet.coarse, [&](const auto& model) {
+      detail::withPatchModel(*target_, c.facet.coarse, [&](const auto& model) {
         const std::array<SubFacet, 4> children = model.split(c.facet);
         kept[i] = {children[0], c.object,
                    model.template geometry<true>(children[0], options_.normals), c.fan_rad,
@@ -916,8 +931,8 @@ BallBound FacetIntegrator::boundBall(const Vec3& centre_m, double radius_m,
     // The light of the whole coarse facet fills at least its own width plus what its cone
     // and lobe (±2σ in the normal, twice that after reflection) spread over the distance.
     const Candidate& c = kept[k];
-    const TargetObject& obj = target_.objects[c.object];
-    const double sigma = target_.materials[obj.material].lobe.sigma;
+    const TargetObject& obj = target_->objects[c.object];
+    const double sigma = target_->materials[obj.material].lobe.sigma;
     const Vec3 x = centre_m - obj.origin_m;
     const double d_min =
         std::max(0.0, glm::length(x - c.geometry.centre_m) - c.fan_radius_m - radius_m);

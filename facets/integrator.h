@@ -183,7 +183,14 @@ class FacetIntegrator {
 
   [[nodiscard]] const CullStats& cullStats() const { return cull_; }
   [[nodiscard]] const IntegratorOptions& options() const { return options_; }
-  [[nodiscard]] const Target& target() const { return target_; }
+  [[nodiscard]] const Target& target() const { return *target_; }
+
+  /// @brief This integrator at another accuracy (IntegratorOptions::tolerance and floor_w_m2,
+  /// which the culling does not depend on): the target, its culling, its occluder and surface
+  /// maps are not built again, and the target itself is shared. What a scene's observer box
+  /// and planes, each with its own accuracy, have in common. Throws std::invalid_argument
+  /// where they are out of range, as the constructor does.
+  [[nodiscard]] FacetIntegrator withAccuracy(double tolerance, double floor_w_m2) const;
   [[nodiscard]] const Beam& beam() const { return beam_; }
 
  private:
@@ -196,7 +203,8 @@ class FacetIntegrator {
   // Whether the observer sees the candidate's centre past the rest of the target.
   bool visible(const Candidate& c, const Vec3& observer_m) const;
 
-  Target target_;
+  // Shared by the copies withAccuracy() makes; the surface maps point into it.
+  std::shared_ptr<const Target> target_;
   Beam beam_;
   IntegratorOptions options_;
   std::vector<Beam> object_beams_;  // the beam in each object's frame

@@ -127,10 +127,12 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
                            {"parameters", parametersJson(s)}};
   nlohmann::json results = nlohmann::json::array();
   std::int64_t evaluations = 0, unconverged = 0;
+  // The scenario's target, built and culled once for all its lattices.
+  const SceneTarget target = sceneTarget(scene, lattices.front().spec);
   for (StudyLattice& r : lattices) {
     // The region's own lattice (the observers do not move with the target), so every
     // scenario's map adds point for point.
-    const FieldProblem problem = fieldProblem(scene, r.spec);
+    const FieldProblem problem = fieldProblem(target, scene, r.spec);
     WorkCounter counter;
     counter.stop = &watch.stopFlag();
     const ObserverField field = [&] {

@@ -268,9 +268,10 @@ struct FieldResult {
   std::unique_ptr<ObserverField> field;
 };
 
-FieldResult computeObserverField(const Scene& scene, const FieldSpec& spec, const RunArgs& args,
-                                 const char* what, const MemoryWatch& watch, std::ostream& err) {
-  FieldResult r{fieldProblem(scene, spec), nullptr};
+FieldResult computeObserverField(const SceneTarget& target, const Scene& scene,
+                                 const FieldSpec& spec, const RunArgs& args, const char* what,
+                                 const MemoryWatch& watch, std::ostream& err) {
+  FieldResult r{fieldProblem(target, scene, spec), nullptr};
   WorkCounter counter;
   counter.stop = &watch.stopFlag();
   std::unique_ptr<ProgressReporter> progress;
@@ -457,8 +458,11 @@ void runField(const RunArgs& args, std::ostream& err) {
   }
   const MemoryWatch watch(budget);
 
+  // Built and culled once, shared by the box and the planes.
+  const SceneTarget target = sceneTarget(
+      scene, scene.observers ? fieldSpec(scene) : planeFieldSpec(scene, scene.planes.front()));
   nlohmann::json j;
-  // The target as the first region's problem made it (every region builds the same one).
+  // The target as the first lattice's problem describes it (all share the same one).
   const bool has_meshes = std::any_of(scene.objects.begin(), scene.objects.end(),
                                       [](const ObjectSpec& o) { return o.mesh.has_value(); });
   auto describeTarget = [&](const FieldProblem& problem) {
@@ -467,7 +471,7 @@ void runField(const RunArgs& args, std::ostream& err) {
   };
   if (scene.observers) {
     const FieldSpec spec = fieldSpec(scene);
-    const FieldResult box = computeObserverField(scene, spec, args, "points", watch, err);
+    const FieldResult box = computeObserverField(target, scene, spec, args, "points", watch, err);
     const ObserverField& field = *box.field;
     requireFinite(field, "the observer box");
     const FacetIntegrator& integrator = box.problem.integrator;
@@ -494,7 +498,8 @@ void runField(const RunArgs& args, std::ostream& err) {
     for (std::size_t p = 0; p < scene.planes.size(); ++p) {
       const PlaneSpec& plane = scene.planes[p];
       const FieldSpec spec = planeFieldSpec(scene, plane);
-      const FieldResult r = computeObserverField(scene, spec, args, plane.name.c_str(), watch, err);
+      const FieldResult r =
+          computeObserverField(target, scene, spec, args, plane.name.c_str(), watch, err);
       const ObserverField& field = *r.field;
       requireFinite(field, "plane " + plane.name);
       writeExr(exrs[p]->stream(), planeMap(field, info.mpe_w_m2),

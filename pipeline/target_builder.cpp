@@ -106,6 +106,19 @@ FieldProblem fieldProblem(const Scene& scene, const FieldSpec& field) {
           std::move(mesh_stats)};
 }
 
+SceneTarget sceneTarget(const Scene& scene, const FieldSpec& first) {
+  std::vector<MeshStats> mesh_stats;
+  FacetIntegrator integrator(buildTarget(scene, &mesh_stats), beamOf(scene),
+                             fieldIntegratorOptions(scene, first));
+  return {std::move(integrator), std::move(mesh_stats)};
+}
+
+FieldProblem fieldProblem(const SceneTarget& shared, const Scene& scene, const FieldSpec& field) {
+  const IntegratorOptions o = fieldIntegratorOptions(scene, field);
+  return {shared.integrator.withAccuracy(o.tolerance, o.floor_w_m2),
+          excludedRegion(scene, 0.5 * field.voxel_m), shared.mesh_stats};
+}
+
 ExcludedFn excludedRegion(const Scene& scene, double margin_m) {
   return [objects = scene.objects, margin_m](const Vec3& x) {
     for (const ObjectSpec& o : objects) {

@@ -50,4 +50,17 @@ struct FieldProblem {
 };
 FieldProblem fieldProblem(const Scene& scene, const FieldSpec& field);
 
+/// @brief The scene's target built and culled once, its integrator at the accuracy of the
+/// lattice @p first (fieldIntegratorOptions()): the observer box and every plane derive their
+/// FieldProblem from it.
+struct SceneTarget {
+  FacetIntegrator integrator;
+  std::vector<MeshStats> mesh_stats;  ///< what buildTarget() made of each mesh
+};
+SceneTarget sceneTarget(const Scene& scene, const FieldSpec& first);
+
+/// @brief As fieldProblem(scene, field), the target, its culling and occluder taken from
+/// @p shared instead of built again (FacetIntegrator::withAccuracy()).
+FieldProblem fieldProblem(const SceneTarget& shared, const Scene& scene, const FieldSpec& field);
+
 }  // namespace glint

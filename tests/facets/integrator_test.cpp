@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 #include <string>
 
 #include "facets/tessellate.h"
@@ -349,6 +350,30 @@ TEST(Integrator, FacetsFacingAwayOrOutsideTheBeamAreDroppedOnce) {
       },
       accuracy(1e-3));
   EXPECT_GT(fn.cullStats().outside_beam, 100u);
+}
+
+TEST(Integrator, AnotherAccuracySharesTheTargetAndMatchesAFreshBuild) {
+  // What the observer box and the planes of one scene share: withAccuracy() keeps the target
+  // (the same object), its culling and maps, and integrates exactly as an integrator built
+  // from scratch at that accuracy; its copy outlives the original (the maps point into the
+  // shared target).
+  const FacetIntegrator loose = paperCylinder(0.003, accuracy(1e-2));
+  std::optional<FacetIntegrator> tight_copy;
+  {
+    const FacetIntegrator original = paperCylinder(0.003, accuracy(1e-2));
+    tight_copy.emplace(original.withAccuracy(1e-4, original.options().floor_w_m2));
+    EXPECT_EQ(&tight_copy->target(), &original.target()) << "the target is shared, not copied";
+    EXPECT_EQ(tight_copy->cullStats().lit, original.cullStats().lit);
+  }
+  const FacetIntegrator fresh = paperCylinder(0.003, accuracy(1e-4));
+  IntegratorWorkspace ws1, ws2;
+  for (const Vec3& x : {Vec3(-3, 0, 0), Vec3(-2.5, 1.66, 0.6), Vec3(-10, 2, -0.6)}) {
+    const ObserverResult a = tight_copy->adaptive(x, ws1);
+    const ObserverResult b = fresh.adaptive(x, ws2);
+    EXPECT_EQ(a.irradiance_w_m2, b.irradiance_w_m2) << "at " << x.x << "," << x.y << "," << x.z;
+    EXPECT_EQ(a.evaluations, b.evaluations) << "at " << x.x << "," << x.y << "," << x.z;
+  }
+  EXPECT_THROW((void)loose.withAccuracy(-1.0, 0.0), std::invalid_argument) << "out of range";
 }
 
 TEST(Integrator, ObserverBehindTheTargetCostsNothingFromFacetsFacingAway) {
