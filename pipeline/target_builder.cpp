@@ -98,14 +98,6 @@ IntegratorOptions fieldIntegratorOptions(const Scene& scene, const FieldSpec& fi
   return o;
 }
 
-FieldProblem fieldProblem(const Scene& scene, const FieldSpec& field) {
-  std::vector<MeshStats> mesh_stats;
-  FacetIntegrator integrator(buildTarget(scene, &mesh_stats), beamOf(scene),
-                             fieldIntegratorOptions(scene, field));
-  return {std::move(integrator), excludedRegion(scene, 0.5 * field.voxel_m),
-          std::move(mesh_stats)};
-}
-
 SceneTarget sceneTarget(const Scene& scene, const FieldSpec& first) {
   std::vector<MeshStats> mesh_stats;
   FacetIntegrator integrator(buildTarget(scene, &mesh_stats), beamOf(scene),
@@ -117,6 +109,10 @@ FieldProblem fieldProblem(const SceneTarget& shared, const Scene& scene, const F
   const IntegratorOptions o = fieldIntegratorOptions(scene, field);
   return {shared.integrator.withAccuracy(o.tolerance, o.floor_w_m2),
           excludedRegion(scene, 0.5 * field.voxel_m), shared.mesh_stats};
+}
+
+FieldProblem fieldProblem(const Scene& scene, const FieldSpec& field) {
+  return fieldProblem(sceneTarget(scene, field), scene, field);
 }
 
 ExcludedFn excludedRegion(const Scene& scene, double margin_m) {
