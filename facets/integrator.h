@@ -184,6 +184,7 @@ class FacetIntegrator {
   [[nodiscard]] const CullStats& cullStats() const { return cull_; }
   [[nodiscard]] const IntegratorOptions& options() const { return options_; }
   [[nodiscard]] const Target& target() const { return *target_; }
+  [[nodiscard]] const Beam& beam() const { return beam_; }
 
   /// @brief This integrator at another accuracy (IntegratorOptions::tolerance and floor_w_m2,
   /// which the culling does not depend on): the target, its culling, its occluder and surface
@@ -191,7 +192,6 @@ class FacetIntegrator {
   /// and planes, each with its own accuracy, have in common. Throws std::invalid_argument
   /// where they are out of range, as the constructor does.
   [[nodiscard]] FacetIntegrator withAccuracy(double tolerance, double floor_w_m2) const;
-  [[nodiscard]] const Beam& beam() const { return beam_; }
 
  private:
   void prepareObserver(const Vec3& observer_m, IntegratorWorkspace::Impl& ws) const;

@@ -255,37 +255,22 @@ class GaussianLobe {
   }
   // The centroid of the Gaussian over the part (requires mass() > 0).
   [[nodiscard]] Vec2 mean() const { return unwhiten(mom_.mean); }
+
   // Five points and weights that average a function over the Gaussian as restricted to the
   // part: its mean (weight 1/3) and two points along each principal axis (1/3 between them),
   // placed so that the rule has the Gaussian's mean and covariance, exact for quadratics.
-  // Symmetric (±√3 standard deviations, 1/6 each), or @p skewed: with the third moment along
-  // each axis too, exact for cubics along the axes (a truncation skews the Gaussian; its
-  // sigma points then err by the third-order term, which this rule does not).
-  [[nodiscard]] SigmaRule sigmaRule(bool skewed) const {
+  // Both rules, from one set of principal axes: the symmetric (±√3 standard deviations, 1/6
+  // each), and the skewed, with the third moment along each axis too, exact for cubics along
+  // the axes (a truncation skews the Gaussian; the symmetric points then err by the
+  // third-order term, which the skewed ones do not).
+  struct SigmaRules {
+    SigmaRule symmetric, skewed;
+  };
+  [[nodiscard]] SigmaRules sigmaRules() const {
     const Axes axes = principalAxes();
-    const Vec2 ym = mom_.mean;
-    SigmaRule rule;
-    rule.points[0] = unwhiten(ym);
-    rule.weights[0] = 1.0 / 3.0;
-    for (int k = 0; k < 2; ++k) {
-      // Weights W p and W (1 − p) at +a and −b standard deviations (W = 1/3): mean 0 and
-      // variance 1 give W p a = W (1 − p) b = m, m² = W p (1 − p); the third moment γ then
-      // gives 1 − 2p = g / √(1 + g²) with g = γ √W / 2 (p = 1/2, a = b = √3 for γ = 0).
-      constexpr double kW = 1.0 / 3.0;
-      const double gamma = axes.skewness[k];
-      const double g =
-          skewed && std::abs(gamma) > kSkewRuleThreshold ? 0.5 * gamma * std::sqrt(kW) : 0.0;
-      const double p = 0.5 * (1.0 - g / std::sqrt(1.0 + g * g));
-      const double wa = kW * p, wb = kW * (1.0 - p);
-      const double m = std::sqrt(kW * p * (1.0 - p));
-      const Vec2 step = axes.sd[k] * axes.dir[k];
-      rule.points[1 + 2 * k] = unwhiten(ym + (m / wa) * step);
-      rule.points[2 + 2 * k] = unwhiten(ym - (m / wb) * step);
-      rule.weights[1 + 2 * k] = wa;
-      rule.weights[2 + 2 * k] = wb;
-    }
-    return rule;
+    return {sigmaRule(axes, false), sigmaRule(axes, true)};
   }
+
   // How evenly the lobe covers the part (requires mass() > 0): the determinant of the
   // Gaussian's covariance as restricted to the part over that of the part's uniform measure,
   // in [0, 1] (a ratio of determinants, the same in any affine coordinates). Near 1 the lobe
@@ -348,6 +333,32 @@ class GaussianLobe {
     }
     return a;
   }
+
+  [[nodiscard]] SigmaRule sigmaRule(const Axes& axes, bool skewed) const {
+    const Vec2 ym = mom_.mean;
+    SigmaRule rule;
+    rule.points[0] = unwhiten(ym);
+    rule.weights[0] = 1.0 / 3.0;
+    for (int k = 0; k < 2; ++k) {
+      // Weights W p and W (1 − p) at +a and −b standard deviations (W = 1/3): mean 0 and
+      // variance 1 give W p a = W (1 − p) b = m, m² = W p (1 − p); the third moment γ then
+      // gives 1 − 2p = g / √(1 + g²) with g = γ √W / 2 (p = 1/2, a = b = √3 for γ = 0).
+      constexpr double kW = 1.0 / 3.0;
+      const double gamma = axes.skewness[k];
+      const double g =
+          skewed && std::abs(gamma) > kSkewRuleThreshold ? 0.5 * gamma * std::sqrt(kW) : 0.0;
+      const double p = 0.5 * (1.0 - g / std::sqrt(1.0 + g * g));
+      const double wa = kW * p, wb = kW * (1.0 - p);
+      const double m = std::sqrt(kW * p * (1.0 - p));
+      const Vec2 step = axes.sd[k] * axes.dir[k];
+      rule.points[1 + 2 * k] = unwhiten(ym + (m / wa) * step);
+      rule.points[2 + 2 * k] = unwhiten(ym - (m / wb) * step);
+      rule.weights[1 + 2 * k] = wa;
+      rule.weights[2 + 2 * k] = wb;
+    }
+    return rule;
+  }
+
   [[nodiscard]] Vec2 whiten(const Vec2& x) const {
     const Vec2 w = x - centre_;
     return {r1_ * (cs_ * w.x + sn_ * w.y), r2_ * (-sn_ * w.x + cs_ * w.y)};
@@ -739,8 +750,7 @@ bool integrateLobe(const LobeSampler& sampler, const std::array<const LobeNode*,
     // Where the part cuts the Gaussian (a glint on a piece's edge), the sigma points also
     // take its skew: the skewed rule is the estimate, its difference from the symmetric one
     // (the symmetric rule's third-order error) part of the error.
-    const SigmaRule symmetric = lobe.sigmaRule(false);
-    const SigmaRule skew = lobe.sigmaRule(true);
+    const auto [symmetric, skew] = lobe.sigmaRules();
     // The mean, the symmetric rule's four points, then those of the skewed rule that differ
     // (along an axis whose skew is below kSkewRuleThreshold the two rules agree).
     std::array<Vec2, 9> points{};

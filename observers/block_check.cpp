@@ -13,6 +13,18 @@ namespace {
 // interpolation is second order), and the octant centres measure it where it is largest.
 constexpr double kCheckShare = 1.0;
 
+// The eight corners of octant (o >> 2, (o >> 1) & 1, o & 1) of the 3×3×3 lattice @p u, in
+// trilinear()'s order.
+std::array<double, 8> octantCorners(const std::array<double, kLatticeSamples>& u,
+                                    const std::array<int, 3>& octant) {
+  std::array<double, 8> corners{};
+  for (int c = 0; c < 8; ++c) {
+    corners[static_cast<std::size_t>(c)] = u[static_cast<std::size_t>(
+        9 * (octant[0] + (c >> 2)) + 3 * (octant[1] + ((c >> 1) & 1)) + (octant[2] + (c & 1)))];
+  }
+  return corners;
+}
+
 // Whether E·w interpolated from the block's corners, divided by w, meets every sample of the
 // 3×3×3 lattice, and the octant-by-octant fill from those meets every octant centre, within
 // `allowed` (v and w in forEachSample's order; the octant centres only if there are any).
@@ -31,10 +43,9 @@ bool interpolates(const BlockValues& v, const BlockValues& w, std::size_t count,
   // The fill at each octant centre: the mean of the octant's eight corners.
   for (std::size_t oct = 0; oct < 8; ++oct) {
     double mean = 0.0;
-    for (std::size_t c = 0; c < 8; ++c) {
-      mean += u[9 * ((oct >> 2) + (c >> 2)) + 3 * (((oct >> 1) & 1) + ((c >> 1) & 1)) +
-                ((oct & 1) + (c & 1))];
-    }
+    const std::array<int, 3> o{static_cast<int>(oct >> 2), static_cast<int>((oct >> 1) & 1),
+                               static_cast<int>(oct & 1)};
+    for (const double corner : octantCorners(u, o)) mean += corner;
     if (!(std::abs(0.125 * mean / w[kLatticeSamples + oct] - v[kLatticeSamples + oct]) <=
           allowed)) {
       return false;
@@ -67,10 +78,13 @@ Decision decideBySamples(const BlockSamples& samples, const BallBound& bound, do
   // A coarse facet whose light could pass between the samples leaves no trace in them: only
   // the bound can say whether such a glint is too weak to matter.
   if (!(bound.narrow_w_m2 <= allowed)) return {Verdict::Refine};
-  for (std::size_t k = 0; k < kInterpolationPowers.size(); ++k) {
-    const int power = kInterpolationPowers[k];
+  for (const int power : kInterpolationPowers) {
     if (power > 0 && !samples.far_from_target) break;
-    if (interpolates(samples.irradiance_w_m2, samples.weight[k], samples.count, allowed)) {
+    BlockValues w{};
+    for (std::size_t s = 0; s < samples.count; ++s) {
+      w[s] = spreadWeight(samples.distance_m[s], power);
+    }
+    if (interpolates(samples.irradiance_w_m2, w, samples.count, allowed)) {
       return {Verdict::Accept, power};
     }
   }
@@ -86,12 +100,7 @@ double trilinear(const std::array<double, 8>& c, double u, double v, double w) {
 
 double octantFill(const std::array<double, kLatticeSamples>& weighted,
                   const std::array<int, 3>& octant, const std::array<double, 3>& t) {
-  std::array<double, 8> corners{};
-  for (int c = 0; c < 8; ++c) {
-    corners[static_cast<std::size_t>(c)] = weighted[static_cast<std::size_t>(
-        9 * (octant[0] + (c >> 2)) + 3 * (octant[1] + ((c >> 1) & 1)) + (octant[2] + (c & 1)))];
-  }
-  return trilinear(corners, t[0], t[1], t[2]);
+  return trilinear(octantCorners(weighted, octant), t[0], t[1], t[2]);
 }
 
 }  // namespace glint::field

@@ -50,6 +50,11 @@ void forEachSample(int size, Fn&& fn) {
 /// samples; E·r² is then nearly constant and a block may be as large as the field is smooth.
 inline constexpr std::array<int, 3> kInterpolationPowers = {0, 2, 1};
 
+/// @brief r^p, the weight of E for power p of kInterpolationPowers at distance @p r_m.
+inline double spreadWeight(double r_m, int power) {
+  return power == 0 ? 1.0 : power == 1 ? r_m : r_m * r_m;
+}
+
 enum class Verdict : std::uint8_t { Skip, Accept, Refine, Finest };
 
 struct Decision {
@@ -68,9 +73,9 @@ std::optional<Decision> decideByBound(const BallBound& bound, int size, double f
 struct BlockSamples {
   std::size_t count = 0;  ///< 27, or 35 with the octant centres (blocks of 4 voxels or more)
   BlockValues irradiance_w_m2{};  ///< in forEachSample()'s order
-  /// r^p at each sample for each power of kInterpolationPowers (r: the distance from the lit
-  /// facets' centre); read only for p > 0 where far_from_target.
-  std::array<BlockValues, kInterpolationPowers.size()> weight{};
+  /// Each sample's distance r from the lit facets' centre, whose powers weigh E (see
+  /// spreadWeight()); read only where far_from_target.
+  BlockValues distance_m{};
   bool excluded = false;         ///< a sample lies inside the target
   bool far_from_target = false;  ///< clear of the centre by the block's own diagonal
 };

@@ -177,9 +177,11 @@ class FieldBuilder {
 
   // r^power, r the distance of lattice point (i, j, k) from the lit facets' centre.
   [[nodiscard]] double spreadWeight(int i, int j, int k, int power) const {
-    if (power == 0) return 1.0;
-    const double r = glm::length(spec_.position(i, j, k) - lit_centre_m_);
-    return power == 1 ? r : r * r;
+    return power == 0 ? 1.0 : field::spreadWeight(litDistance(i, j, k), power);
+  }
+  // The distance of lattice point (i, j, k) from the lit facets' centre.
+  [[nodiscard]] double litDistance(int i, int j, int k) const {
+    return glm::length(spec_.position(i, j, k) - lit_centre_m_);
   }
 
   // Whether E·r^p may be interpolated over block b for p > 0: only where the block keeps clear
@@ -341,11 +343,7 @@ class FieldBuilder {
       const std::size_t s = samples.count++;
       samples.excluded = samples.excluded || v.excluded;
       samples.irradiance_w_m2[s] = v.irradiance_w_m2;
-      for (std::size_t k = 0; k < field::kInterpolationPowers.size(); ++k) {
-        const int power = field::kInterpolationPowers[k];
-        samples.weight[k][s] =
-            power == 0 || samples.far_from_target ? spreadWeight(p[0], p[1], p[2], power) : 1.0;
-      }
+      if (samples.far_from_target) samples.distance_m[s] = litDistance(p[0], p[1], p[2]);
     });
     return field::decideBySamples(samples, bound, spec_.tolerance, spec_.floor_w_m2);
   }

@@ -21,7 +21,7 @@ BallBound boundOf(double upper_w_m2, double narrow_w_m2 = 0.0) {
   return b;
 }
 
-// The block's samples of E(x) with x ∈ [0, 1]³ across the block, and r^p weights from a
+// The block's samples of E(x) with x ∈ [0, 1]³ across the block, and their distances from a
 // centre at @p centre (in block units).
 BlockSamples sample(const std::function<double(double, double, double)>& e, bool far = false,
                     const std::array<double, 3>& centre = {0.0, 0.0, 0.0}) {
@@ -30,10 +30,7 @@ BlockSamples sample(const std::function<double(double, double, double)>& e, bool
   forEachSample(kSize, [&](int i, int j, int k) {
     const double x = double(i) / kSize, y = double(j) / kSize, z = double(k) / kSize;
     s.irradiance_w_m2[s.count] = e(x, y, z);
-    const double r = std::hypot(x - centre[0], y - centre[1], z - centre[2]);
-    for (std::size_t p = 0; p < kInterpolationPowers.size(); ++p) {
-      s.weight[p][s.count] = std::pow(r, kInterpolationPowers[p]);
-    }
+    s.distance_m[s.count] = std::hypot(x - centre[0], y - centre[1], z - centre[2]);
     ++s.count;
   });
   return s;
