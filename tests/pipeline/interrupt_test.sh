@@ -9,10 +9,12 @@ glint=$1 examples=$2 work=$3
 rm -rf "$work" && mkdir -p "$work"
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
-# Waits (up to 60 s) until $1 holds a glint temporary: the run has opened its outputs.
+# await_temporaries DIR PID: waits (up to 60 s) until DIR holds a glint temporary, i.e. the run
+# has opened its outputs. A run that ends first makes the test meaningless: say so at once.
 await_temporaries() {
   for _ in $(seq 600); do
     compgen -G "$1/.*.glint-*" > /dev/null && return 0
+    kill -0 "$2" 2> /dev/null || fail "the run in $1 ended before it could be signalled"
     sleep 0.1
   done
   fail "no temporary appeared in $1"
@@ -26,7 +28,7 @@ interrupt() {
   mkdir -p "$dir"
   "$@" 2> "$dir.err" &
   local pid=$!
-  await_temporaries "$dir"
+  await_temporaries "$dir" "$pid"
   kill -s "$signal" "$pid"
   wait "$pid"
   local got=$?
@@ -42,14 +44,18 @@ interrupt() {
 scene=$examples/cylinder.json  # minutes of work: certainly still running when signalled
 interrupt INT 130 "$work/int" "$glint" run "$scene" -o "$work/int" --quiet
 interrupt TERM 143 "$work/term" "$glint" run "$scene" -o "$work/term" --quiet
-interrupt HUP 129 "$work/hup" "$glint" points "$scene" --points "$examples/cylinder_186.csv" \
+# The 186 observers take a fraction of a second: repeat them until the run lasts minutes.
+many_points=$work/many_points.csv
+head -1 "$examples/cylinder_186.csv" > "$many_points"
+for _ in $(seq 2000); do tail -n +2 "$examples/cylinder_186.csv"; done >> "$many_points"
+interrupt HUP 129 "$work/hup" "$glint" points "$scene" --points "$many_points" \
   --out "$work/hup/out.csv" --quiet
 
 # SIGKILL: the temporaries stay until the next glint writes into the folder.
 mkdir -p "$work/kill"
 "$glint" run "$scene" -o "$work/kill" --quiet 2> /dev/null &
 pid=$!
-await_temporaries "$work/kill"
+await_temporaries "$work/kill" "$pid"
 kill -s KILL "$pid"
 wait "$pid" 2> /dev/null
 compgen -G "$work/kill/.*.glint-$pid-*" > /dev/null || fail "SIGKILL left no temporaries to test with"
