@@ -35,6 +35,10 @@ struct FieldSpec {
   /// every finer sample by at most tolerance × the block's largest sample (+ the floor).
   double tolerance = 1e-2;
   double floor_w_m2 = 0.0;  ///< irradiance below this counts as negligible
+  /// Candidate facets are split 1→4 down to this depth to tighten a block's bound. Deeper
+  /// splits prove more blocks dark, but each block then carries up to 4^depth pieces of every
+  /// lit facet its light may reach.
+  int bound_split_depth = 6;
 
   /// @brief Lattice points per axis (voxels + 1), after extending to whole blocks.
   [[nodiscard]] std::array<int, 3> nodes() const;

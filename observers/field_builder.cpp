@@ -26,8 +26,6 @@ constexpr std::uint32_t kNoParent = std::numeric_limits<std::uint32_t>::max();
 // Share of the floor that pruning may drop from a block's candidates: what every observer in
 // it may miss, on top of the integrator's own error.
 constexpr double kDropShareOfFloor = 0.25;
-// Candidates are split to tighten block bounds down to this subdivision depth.
-constexpr int kMaxBoundSplitDepth = 6;
 
 // A block of the octree: lattice points o .. o + size on each axis. It owns the voxels
 // [o, o + size) per axis, and the last lattice point of an axis where it touches the box's end.
@@ -128,7 +126,8 @@ class FieldBuilder {
             child_parent_lists.push_back(std::move(lists[i]));
             child_parent_dropped.push_back(bounds[i].dropped_w_m2);
             const int h = blk.size / 2;
-            for (int c = 0; c < 8; ++c) {
+            // A plane's block has four children: the other four would repeat them.
+            for (int c = 0; c < 8; c += flat() ? 2 : 1) {
               children.push_back(
                   {{blk.o[0] + h * (c >> 2), blk.o[1] + h * ((c >> 1) & 1), blk.o[2] + h * (c & 1)},
                    h,
@@ -225,7 +224,7 @@ class FieldBuilder {
       BallBoundOptions options;
       options.drop_allowance_w_m2 = kDropShareOfFloor * spec_.floor_w_m2;
       options.sample_spacing_m = spec_.voxel_m * std::max(1, b.size / 2);
-      options.max_split_depth = kMaxBoundSplitDepth;
+      options.max_split_depth = spec_.bound_split_depth;
       const double radius = 0.5 * std::sqrt(flat() ? 2.0 : 3.0) * spec_.voxel_m * b.size;
       bounds[i] = integrator_.boundBall(centre(b), radius, inherited,
                                         root ? 0.0 : parent_dropped[b.parent], options, lists[i]);
