@@ -42,23 +42,22 @@ Imath::V3d v3d(const Vec3& v) { return {v.x, v.y, v.z}; }
 
 }  // namespace
 
-void writeExr(std::ostream& out, const PlaneGrid& grid, const std::vector<ExrChannel>& channels,
-              const ExrInfo& info) {
-  const auto n = static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height);
-  if (grid.width <= 0 || grid.height <= 0 || channels.empty()) {
+namespace {
+
+// Writes @p channels (width × height values each, row j = 0 at the bottom) into a scanline
+// EXR whose header already holds glint's attributes.
+void writeChannels(std::ostream& out, Imf::Header& header, int width, int height,
+                   const std::vector<ExrChannel>& channels, const ExrInfo& info) {
+  const auto n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  if (width <= 0 || height <= 0 || channels.empty()) {
     throw std::invalid_argument("writeExr: an empty map");
   }
   for (const ExrChannel& c : channels) {
     if (c.values == nullptr || c.values->size() != n)
       throw std::invalid_argument("writeExr: channel " + c.name + " must hold width × height values");
   }
-  Imf::Header header(grid.width, grid.height);
   header.compression() = Imf::ZIP_COMPRESSION;
   for (const ExrChannel& c : channels) header.channels().insert(c.name, Imf::Channel(Imf::FLOAT));
-  header.insert("glint_origin_m", Imf::V3dAttribute(v3d(grid.origin_m)));
-  header.insert("glint_u_axis", Imf::V3dAttribute(v3d(grid.u_axis)));
-  header.insert("glint_v_axis", Imf::V3dAttribute(v3d(grid.v_axis)));
-  header.insert("glint_pixel_m", Imf::DoubleAttribute(grid.pixel_m));
   header.insert("glint_wavelength_nm", Imf::DoubleAttribute(info.wavelength_nm));
   header.insert("glint_mpe_w_m2", Imf::DoubleAttribute(info.mpe_w_m2));
   header.insert("glint_program", Imf::StringAttribute(info.program_version));
@@ -66,10 +65,10 @@ void writeExr(std::ostream& out, const PlaneGrid& grid, const std::vector<ExrCha
   // Image row y holds lattice row j = height − 1 − y.
   std::vector<std::vector<float>> rows_down(channels.size(), std::vector<float>(n));
   Imf::FrameBuffer frame;
-  const auto w = static_cast<std::size_t>(grid.width);
+  const auto w = static_cast<std::size_t>(width);
   for (std::size_t c = 0; c < channels.size(); ++c) {
-    for (std::size_t y = 0; y < static_cast<std::size_t>(grid.height); ++y) {
-      const std::size_t j = static_cast<std::size_t>(grid.height) - 1 - y;
+    for (std::size_t y = 0; y < static_cast<std::size_t>(height); ++y) {
+      const std::size_t j = static_cast<std::size_t>(height) - 1 - y;
       std::copy_n(channels[c].values->begin() + static_cast<std::ptrdiff_t>(j * w), w,
                   rows_down[c].begin() + static_cast<std::ptrdiff_t>(y * w));
     }
@@ -80,7 +79,31 @@ void writeExr(std::ostream& out, const PlaneGrid& grid, const std::vector<ExrCha
   StdOStream stream(out);
   Imf::OutputFile file(stream, header);
   file.setFrameBuffer(frame);
-  file.writePixels(grid.height);
+  file.writePixels(height);
+}
+
+}  // namespace
+
+void writeExr(std::ostream& out, const PlaneGrid& grid, const std::vector<ExrChannel>& channels,
+              const ExrInfo& info) {
+  Imf::Header header(std::max(grid.width, 1), std::max(grid.height, 1));
+  header.insert("glint_origin_m", Imf::V3dAttribute(v3d(grid.origin_m)));
+  header.insert("glint_u_axis", Imf::V3dAttribute(v3d(grid.u_axis)));
+  header.insert("glint_v_axis", Imf::V3dAttribute(v3d(grid.v_axis)));
+  header.insert("glint_pixel_m", Imf::DoubleAttribute(grid.pixel_m));
+  writeChannels(out, header, grid.width, grid.height, channels, info);
+}
+
+void writeLatLongExr(std::ostream& out, const LatLongGrid& grid,
+                     const std::vector<ExrChannel>& channels, const ExrInfo& info) {
+  Imf::Header header(std::max(grid.width, 1), std::max(grid.height, 1));
+  header.insert("glint_projection",
+                Imf::StringAttribute("lat-long: column i at azimuth -180 + (i + 0.5) 360 / width "
+                                     "degrees from +x toward +y; row j from the bottom at "
+                                     "elevation -90 + (j + 0.5) 180 / height degrees toward +z"));
+  header.insert("glint_centre_m", Imf::V3dAttribute(v3d(grid.centre_m)));
+  header.insert("glint_far_radius_m", Imf::DoubleAttribute(grid.far_radius_m));
+  writeChannels(out, header, grid.width, grid.height, channels, info);
 }
 
 void writeExr(std::ostream& out, const PlaneMap& map, const ExrInfo& info) {

@@ -52,6 +52,21 @@ struct ExrInfo {
 void writeExr(std::ostream& out, const PlaneGrid& grid, const std::vector<ExrChannel>& channels,
               const ExrInfo& info);
 
+/// @brief A map over all directions from a centre, in longitude and latitude (width = 2 ×
+/// height; see latLongMap() in observers/far_field.h).
+struct LatLongGrid {
+  int width = 0;
+  int height = 0;
+  Vec3 centre_m{0.0};         ///< where the directions start
+  double far_radius_m = 0.0;  ///< beyond it the map's intensity gives the irradiance
+};
+
+/// @brief Writes @p channels over @p grid as writeExr() does, with the attributes
+/// `glint_projection` (string: the mapping of pixels to directions), `glint_centre_m` (V3d),
+/// `glint_far_radius_m`, `glint_wavelength_nm`, `glint_mpe_w_m2` (double), `glint_program`.
+void writeLatLongExr(std::ostream& out, const LatLongGrid& grid,
+                     const std::vector<ExrChannel>& channels, const ExrInfo& info);
+
 /// @brief Writes @p map with its channels `irradiance_w_m2`, `hazard_ratio`, `level` and
 /// `status` (see the overload above).
 void writeExr(std::ostream& out, const PlaneMap& map, const ExrInfo& info);

@@ -254,4 +254,27 @@ void writeTargetVtp(std::ostream& out, const FacetIntegrator& integrator, int le
   out << "</VTKFile>\n";
 }
 
+void writeHazardSurfaceVtp(std::ostream& out, const HazardSurface& surface) {
+  std::vector<double> points;
+  points.reserve(3 * surface.points_m.size());
+  for (const Vec3& p : surface.points_m) points.insert(points.end(), {p.x, p.y, p.z});
+  std::vector<std::int64_t> connectivity, offsets;
+  connectivity.reserve(4 * surface.quads.size());
+  for (const auto& q : surface.quads) {
+    connectivity.insert(connectivity.end(), q.begin(), q.end());
+    offsets.push_back(static_cast<std::int64_t>(connectivity.size()));
+  }
+  out << header("PolyData") << "<PolyData>\n";
+  out << "<Piece NumberOfPoints=\"" << surface.points_m.size() << "\" NumberOfPolys=\""
+      << surface.quads.size() << "\">\n<Points>\n"
+      << dataArray("Points", "Float64", 3, points) << "</Points>\n<Polys>\n"
+      << dataArray("connectivity", "Int64", 1, connectivity)
+      << dataArray("offsets", "Int64", 1, offsets) << "</Polys>\n<PointData Scalars=\"nohd_m\">\n"
+      << dataArray("nohd_m", "Float32", 1, surface.nohd_m)
+      << dataArray("intensity_w_sr", "Float32", 1, surface.intensity_w_sr)
+      << dataArray("beyond_far_radius", "UInt8", 1, surface.beyond_far_radius)
+      << "</PointData>\n</Piece>\n</PolyData>\n";
+  out << "</VTKFile>\n";
+}
+
 }  // namespace glint

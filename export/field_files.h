@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "facets/integrator.h"
+#include "observers/far_field.h"
 #include "observers/field.h"
 
 namespace glint {
@@ -48,5 +49,10 @@ void writeBlocksVtu(std::ostream& out, const ObserverField& field, double mpe_w_
 /// @brief VTK PolyData (.vtp) of the lit target: its coarse facets split @p level times on the
 /// true surface, cell data `incident_power_w` (beam power received) and `coarse_facet`.
 void writeTargetVtp(std::ostream& out, const FacetIntegrator& integrator, int level);
+
+/// @brief VTK PolyData (.vtp) of the far field's hazard boundary (hazardSurface()): quads,
+/// point data `nohd_m` (0 where the hazard ends inside the far radius), `intensity_w_sr` and
+/// `beyond_far_radius` (1 where the point lies at its hazard distance, 0 on the far radius).
+void writeHazardSurfaceVtp(std::ostream& out, const HazardSurface& surface);
 
 }  // namespace glint

@@ -93,6 +93,13 @@ class ObjectReader {
     return v.get<std::int64_t>();
   }
 
+  bool boolean(const std::string& key, bool fallback) {
+    if (!has(key)) return fallback;
+    const json& v = j_.at(key);
+    if (!v.is_boolean()) fail(key, "must be true or false");
+    return v.get<bool>();
+  }
+
   std::string string(const std::string& key) {
     const json& v = require(key);
     if (!v.is_string()) fail(key, "must be a string");

@@ -3,9 +3,12 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "export/atomic_file.h"
 #include "export/exr_map.h"
@@ -213,8 +216,10 @@ nlohmann::json summaryJson(const ObserverField& field, const HazardZone& zone, c
 }
 
 // The one-screen summary of the volume.
+// @p beyond_box: what the far field says of the hazard beyond the box ("" without one).
 void printVolume(std::ostream& err, const ObserverField& field, const Scene& scene,
-                 const HazardZone& zone, const RunInfo& info, bool uniform) {
+                 const HazardZone& zone, const RunInfo& info, bool uniform,
+                 const std::string& beyond_box) {
   const FieldSpec& spec = field.spec();
   const FieldStats& s = field.stats();
   const double box_points = static_cast<double>(s.lattice_points);
@@ -247,7 +252,8 @@ void printVolume(std::ostream& err, const ObserverField& field, const Scene& sce
         << r.farthest_at_m.x << ", " << r.farthest_at_m.y << ", " << r.farthest_at_m.z << ")\n";
     if (zone.above_mpe.reaches_edge) {
       err << "  warning: the hazard zone reaches the edge of the observer box and may go on "
-             "beyond it: enlarge the box to see its full extent\n";
+             "beyond it"
+          << (beyond_box.empty() ? ": enlarge the box to see its full extent" : beyond_box) << "\n";
     }
   } else {
     err << "  nominal hazard zone: none in the box (no point reaches the MPE)\n";
@@ -345,6 +351,110 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
   return j;
 }
 
+// The far field of the scene, with progress on stderr unless quiet.
+FarField computeSceneFarField(const SceneTarget& target, const FarFieldSpec& spec,
+                              const RunArgs& args, const MemoryWatch& watch, std::ostream& err) {
+  WorkCounter counter;
+  counter.stop = &watch.stopFlag();
+  std::unique_ptr<ProgressReporter> progress;
+  if (!args.quiet) {
+    progress = std::make_unique<ProgressReporter>(err, args.terminal, "directions", 0, counter);
+  }
+  try {
+    return computeFarField(target.integrator, spec, &counter);
+  } catch (const WorkStopped&) {
+    if (progress) progress->stop();
+    watch.check("the far field");
+    throw;
+  }
+}
+
+// Refuses a far field whose six faces' memory floor exceeds the budget.
+void checkFarFieldMemory(const FarFieldSpec& spec, const RunArgs& args,
+                         std::uint64_t budget_bytes) {
+  std::uint64_t floor_bytes = 0;
+  for (int f = 0; f < FarField::kFaces; ++f) {
+    floor_bytes += fieldMemoryFloorBytes(cubeFaceSpec(f, Vec3(0.0), 1.0, spec), false);
+  }
+  (void)args;
+  requireWithinBudget(
+      "the far field (6 × " + std::to_string(spec.face_pixels + 1) + "² directions)", floor_bytes,
+      budget_bytes, "lower far_field.face_pixels, or raise --memory");
+}
+
+nlohmann::json farFieldJson(const FarField& field, const FarReach& hazard) {
+  const FarFieldSpec& spec = field.spec();
+  const FieldStats& s = field.stats();
+  const Vec3& c = field.ball().centre_m;
+  const Vec3& d = field.peak().direction;
+  const double azimuth_deg = std::atan2(d.y, d.x) * 180.0 / kPi;
+  const double elevation_deg = std::asin(std::clamp(d.z, -1.0, 1.0)) * 180.0 / kPi;
+  nlohmann::json j = {
+      {"files", {"far_field.exr", "far_field.vtp"}},
+      {"centre_m", {c.x, c.y, c.z}},
+      {"lit_radius_m", field.ball().radius_m},
+      {"far_radius_m", spec.far_radius_m},
+      {"map_distance_m", field.mapDistance()},
+      {"tolerance", spec.tolerance},
+      {"floor_w_sr", spec.floor_w_sr},
+      {"face_pixels", spec.face_pixels},
+      {"directions",
+       {{"in_map", s.lattice_points},
+        {"evaluated", s.evaluated_points},
+        {"interpolated", s.interpolated_points},
+        {"proven_below_floor", s.below_floor_points},
+        {"unconverged", s.unconverged_points}}},
+      {"evaluations", s.evaluations},
+      {"seconds", s.seconds},
+      {"peak_intensity_w_sr", field.peak().intensity_w_sr},
+      {"peak_direction", {d.x, d.y, d.z}},
+      {"peak_azimuth_deg", azimuth_deg},
+      {"peak_elevation_deg", elevation_deg},
+      {"max_nohd_m", hazard.nohd_m},
+      {"max_nohd_direction", {hazard.direction.x, hazard.direction.y, hazard.direction.z}},
+      {"max_nohd_azimuth_deg", std::atan2(hazard.direction.y, hazard.direction.x) * 180.0 / kPi},
+      {"max_nohd_elevation_deg",
+       std::asin(std::clamp(hazard.direction.z, -1.0, 1.0)) * 180.0 / kPi},
+      {"far_radius_toward_max_nohd_m", hazard.far_radius_m},
+      {"hazard_beyond_far_radius", hazard.nohd_m > 0.0},
+      {"beam_direction", {spec.beam_direction.x, spec.beam_direction.y, spec.beam_direction.z}},
+      {"far_radius_rule",
+       "lit_radius_m (1 + (3 + g / sigma) / tolerance), g = max(1, 0.43 / sin(psi / 2)), psi "
+       "the angle from beam_direction: far_radius_m beyond 51 degrees, growing into the "
+       "forward cone"}};
+  if (s.unconverged_points > 0) {
+    j["unconverged_max_intensity_plus_error_w_sr"] = s.unconverged_max_upper_w_m2;
+  }
+  return j;
+}
+
+void printFarField(std::ostream& err, const FarField& field, const FarReach& hazard) {
+  const FarFieldSpec& spec = field.spec();
+  const FieldStats& s = field.stats();
+  err << "far field: 6 × " << spec.face_pixels + 1 << "² directions, " << s.evaluated_points
+      << " evaluated, " << formatNumber("%.4g", static_cast<double>(s.evaluations))
+      << " evaluations in " << formatDuration(s.seconds) << "; E = I/r² within "
+      << formatNumber("%g", spec.tolerance) << " of the peak beyond "
+      << formatNumber("%.4g", spec.far_radius_m)
+      << " m (farther within 51° of the beam's direction)\n";
+  const Vec3& peak = field.peak().direction;
+  err << "  peak intensity " << formatNumber("%.4g", field.peak().intensity_w_sr)
+      << " W/sr toward (" << formatNumber("%.4f", peak.x) << ", " << formatNumber("%.4f", peak.y)
+      << ", " << formatNumber("%.4f", peak.z) << ")";
+  if (hazard.nohd_m > 0.0) {
+    err << "; the hazard reaches " << formatNumber("%.4g", hazard.nohd_m)
+        << " m from the target centre toward (" << formatNumber("%.4f", hazard.direction.x) << ", "
+        << formatNumber("%.4f", hazard.direction.y) << ", "
+        << formatNumber("%.4f", hazard.direction.z) << ") (far-field NOHD)\n";
+  } else {
+    err << ": no direction is hazardous beyond the far radius\n";
+  }
+  if (s.unconverged_points > 0) {
+    err << "  note: " << s.unconverged_points
+        << " directions did not reach the integration tolerance; intensity plus error at most "
+        << formatNumber("%.3g", s.unconverged_max_upper_w_m2) << " W/sr\n";
+  }
+}
 }  // namespace
 
 PlaneMap planeMap(const ObserverField& field, double mpe_w_m2) {
@@ -435,6 +545,12 @@ void runField(const RunArgs& args, std::ostream& err) {
     vtp = &open("target.vtp");
     written.insert(written.end(), {"irradiance.vdb", "irradiance.vti", "blocks.vtu", "target.vtp"});
   }
+  AtomicFile *far_exr = nullptr, *far_vtp = nullptr;
+  if (scene.far_field.enabled) {
+    far_exr = &open("far_field.exr");
+    far_vtp = &open("far_field.vtp");
+    written.insert(written.end(), {"far_field.exr", "far_field.vtp"});
+  }
   std::vector<AtomicFile*> exrs;
   for (const PlaneSpec& plane : scene.planes) {
     exrs.push_back(&open(plane.name + ".exr"));
@@ -461,6 +577,18 @@ void runField(const RunArgs& args, std::ostream& err) {
   // Built and culled once, shared by the box and the planes.
   const SceneTarget target = sceneTarget(
       scene, scene.observers ? fieldSpec(scene) : planeFieldSpec(scene, scene.planes.front()));
+  std::optional<FarField> far;
+  FarReach far_hazard;
+  if (scene.far_field.enabled) {
+    const FarFieldSpec spec = farFieldSpec(scene, target.integrator);
+    checkFarFieldMemory(spec, args, budget);
+    far.emplace(computeSceneFarField(target, spec, args, watch, err));
+    if (far->stats().non_finite_points > 0) {
+      throw std::runtime_error("the far field: " + std::to_string(far->stats().non_finite_points) +
+                               " directions have a non-finite intensity; nothing was written");
+    }
+    far_hazard = farReach(*far, info.mpe_w_m2);
+  }
   nlohmann::json j;
   // The target as the first lattice's problem describes it (all share the same one).
   const bool has_meshes = std::any_of(scene.objects.begin(), scene.objects.end(),
@@ -483,7 +611,17 @@ void runField(const RunArgs& args, std::ostream& err) {
     j = summaryJson(field, zone, info, integrator.cullStats());
     describeTarget(box.problem);
     j["hazard"] = hazardJson(scene, &zone);
-    if (!args.quiet) printVolume(err, field, scene, zone, info, args.uniform);
+    if (!args.quiet) {
+      std::string beyond_box;
+      if (far) {
+        beyond_box = "; beyond " + formatNumber("%.4g", far->spec().far_radius_m) +
+                     " m the far field bounds it: " +
+                     (far_hazard.nohd_m > 0.0
+                          ? "it reaches " + formatNumber("%.4g", far_hazard.nohd_m) + " m"
+                          : std::string("no direction is hazardous there"));
+      }
+      printVolume(err, field, scene, zone, info, args.uniform, beyond_box);
+    }
   } else {
     j = {{"program", info.program_version},
          {"scene_file", info.scene_file},
@@ -520,6 +658,19 @@ void runField(const RunArgs& args, std::ostream& err) {
       }
     }
     j["planes"] = planes;
+  }
+  if (far) {
+    const double mpe = info.mpe_w_m2;
+    // 2:1 lat-long, about as fine as the cube faces' centres, at most 4096 × 2048 pixels.
+    const LatLongMap map = latLongMap(*far, std::min(far->spec().face_pixels, 2048), mpe);
+    writeLatLongExr(far_exr->stream(),
+                    {map.width, map.height, far->ball().centre_m, far->spec().far_radius_m},
+                    {{"intensity_w_sr", &map.intensity_w_sr}, {"nohd_m", &map.nohd_m}},
+                    {info.program_version, info.wavelength_nm, mpe});
+    writeHazardSurfaceVtp(far_vtp->stream(),
+                          hazardSurface(*far, std::min(far->spec().face_pixels, 128), mpe));
+    j["far_field"] = farFieldJson(*far, far_hazard);
+    if (!args.quiet) printFarField(err, *far, far_hazard);
   }
   summary.stream() << j.dump(2) << "\n";
   watch.check("writing the outputs");  // a file written short of memory is not committed

@@ -316,6 +316,25 @@ PlaneSpec readPlane(ObjectReader r, const std::vector<PlaneSpec>& earlier) {
   return p;
 }
 
+FarFieldSettings readFarField(ObjectReader r) {
+  FarFieldSettings f;
+  f.enabled = r.boolean("enabled", true);
+  f.tolerance = r.number("tolerance", f.tolerance);
+  if (!(f.tolerance > 0.0 && f.tolerance < 1.0)) r.fail("tolerance", "must be in (0, 1)");
+  if (r.has("face_pixels")) {
+    const std::int64_t n = r.integer("face_pixels", 0);
+    if (n < 16 || n > 8192 || (n & (n - 1)) != 0)
+      r.fail("face_pixels", "must be a power of two from 16 to 8192");
+    f.face_pixels = static_cast<int>(n);
+  }
+  if (auto floor = r.optionalNumber("floor_w_sr")) {
+    if (!(*floor > 0.0)) r.fail("floor_w_sr", "must be > 0");
+    f.floor_w_sr = *floor;
+  }
+  r.finish();
+  return f;
+}
+
 }  // namespace
 
 Scene parseScene(std::string_view text, const std::string& source,
@@ -357,6 +376,7 @@ Scene parseScene(std::string_view text, const std::string& source,
           ObjectReader(planes[i], "/planes/" + std::to_string(i), source), scene.planes));
     }
   }
+  if (r.has("far_field")) scene.far_field = readFarField(r.object("far_field"));
   r.finish();
   return scene;
 }

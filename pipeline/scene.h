@@ -117,6 +117,16 @@ struct PlaneSpec {
   std::optional<double> floor_w_m2;  ///< default: 1e-3 × the MPE
 };
 
+/// @brief The far field by direction (key `far_field`, all optional; observers/far_field.h).
+struct FarFieldSettings {
+  bool enabled = true;
+  double tolerance = 1e-2;
+  /// Lattice intervals per cube-face edge, a power of two in 16 .. 8192; default: the first
+  /// that samples directions at most σ apart (σ the narrowest lobe), within 64 .. 4096.
+  std::optional<int> face_pixels;
+  std::optional<double> floor_w_sr;  ///< default: 1e-3 × MPE × far radius²
+};
+
 /// @brief The exposure the hazard is judged for and its MPE (README "Hazard").
 struct HazardSpec {
   /// `laser.exposure_s`, by default 0.25 s (the aversion response) for 400–700 nm and 10 s
@@ -137,6 +147,7 @@ struct Scene {
   AccuracySpec accuracy;
   std::optional<ObserversSpec> observers;  ///< `glint run` needs this or planes
   std::vector<PlaneSpec> planes;
+  FarFieldSettings far_field;
 };
 
 /// @brief Reads and validates a scene file, and the mesh files it names.

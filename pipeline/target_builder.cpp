@@ -1,9 +1,12 @@
 #include "pipeline/target_builder.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "facets/tessellate.h"
 #include "pipeline/input_error.h"
+#include "pipeline/limits.h"
 
 namespace glint {
 
@@ -88,6 +91,34 @@ FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane) {
   f.block_voxels = static_cast<int>(std::lround(plane.block_m / plane.pixel_m));
   f.tolerance = plane.tolerance;
   f.floor_w_m2 = plane.floor_w_m2 ? *plane.floor_w_m2 : 1e-3 * scene.hazard.mpe.irradiance_w_m2;
+  return f;
+}
+
+FarFieldSpec farFieldSpec(const Scene& scene, const FacetIntegrator& integrator) {
+  const FarFieldSettings& settings = scene.far_field;
+  double sigma = std::numeric_limits<double>::infinity();
+  for (const MaterialSpec& m : scene.materials) {
+    if (m.specular_reflectance > 0.0) sigma = std::min(sigma, m.sigma);
+  }
+  FarFieldSpec f;
+  f.tolerance = settings.tolerance;
+  // Nothing lit: any radius will do, the map is dark.
+  const double lit_radius_m = std::max(litBall(integrator).radius_m, limits::kMinLengthM);
+  f.far_radius_m = farRadius(lit_radius_m, sigma, f.tolerance);
+  f.lit_radius_m = lit_radius_m;
+  f.narrowest_sigma = sigma;
+  f.beam_direction = beamOf(scene).direction;
+  if (settings.face_pixels) {
+    f.face_pixels = *settings.face_pixels;
+  } else {
+    // At a face's centre directions are 2/N rad apart: at most σ.
+    f.face_pixels = 64;
+    while (f.face_pixels < 4096 && 2.0 / f.face_pixels > sigma) f.face_pixels *= 2;
+  }
+  f.block_pixels = std::max(1, f.face_pixels / 16);
+  f.floor_w_sr = settings.floor_w_sr
+                     ? *settings.floor_w_sr
+                     : 1e-3 * scene.hazard.mpe.irradiance_w_m2 * f.far_radius_m * f.far_radius_m;
   return f;
 }
 

@@ -4,6 +4,7 @@
 
 #include "facets/integrator.h"
 #include "facets/tessellate.h"
+#include "observers/far_field.h"
 #include "observers/field.h"
 #include "pipeline/scene.h"
 
@@ -29,6 +30,12 @@ FieldSpec fieldSpec(const Scene& scene);
 /// @brief The lattice of one of the scene's observer planes (axes u, v, u × v; one layer);
 /// the floor defaults to 1e-3 × the MPE.
 FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane);
+
+/// @brief The far field of the scene's `far_field` key for the target @p integrator lights:
+/// the far radius from its lit ball, the narrowest lobe of the scene's materials and the
+/// tolerance (farRadius()); the face lattice samples directions at most that lobe's σ apart
+/// unless the scene says otherwise; the floor defaults to 1e-3 × the MPE at the far radius.
+FarFieldSpec farFieldSpec(const Scene& scene, const FacetIntegrator& integrator);
 
 /// @brief Integrator settings for the points of an observer field: the scene's accuracy
 /// settings, with the tolerance and floor a quarter of the field's, so that the integration

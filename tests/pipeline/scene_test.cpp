@@ -79,9 +79,25 @@ TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
        "wavelength_nm, exposure_s, beam)"},
       {[](json& j) { j["extra"] = 1; },
        "scene.json: /extra: unknown key (expected one of: description, laser, materials, "
-       "objects, accuracy, observers, planes)"},
+       "objects, accuracy, observers, planes, far_field)"},
       {[](json& j) { j["laser"].erase("power_w"); },
        "scene.json: /laser/power_w: missing (required)"},
+      {[](json& j) {
+         j["far_field"] = {{"face_pixels", 1000}};
+       },
+       "scene.json: /far_field/face_pixels: must be a power of two from 16 to 8192"},
+      {[](json& j) {
+         j["far_field"] = {{"tolerance", 1.0}};
+       },
+       "scene.json: /far_field/tolerance: must be in (0, 1)"},
+      {[](json& j) {
+         j["far_field"] = {{"enabled", 1}};
+       },
+       "scene.json: /far_field/enabled: must be true or false"},
+      {[](json& j) {
+         j["far_field"] = {{"floor_w_sr", -1.0}};
+       },
+       "scene.json: /far_field/floor_w_sr: must be > 0"},
       {[](json& j) { j.erase("objects"); }, "scene.json: /objects: missing (required)"},
       {[](json& j) { j["laser"]["power_w"] = "1000"; },
        "scene.json: /laser/power_w: must be a number"},
