@@ -51,6 +51,15 @@ FaceHit faceHit(const Vec3& d, int face_pixels) {
   return h;
 }
 
+// The direction of the centre of pixel @p p of a width × height lat-long map (latLongMap()).
+Vec3 latLongDirection(std::size_t p, int width, int height) {
+  const auto w = static_cast<std::size_t>(width);
+  const double elevation = -0.5 * kPi + (static_cast<double>(p / w) + 0.5) * kPi / height;
+  const double azimuth = -kPi + (static_cast<double>(p % w) + 0.5) * 2.0 * kPi / width;
+  return {std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
+          std::sin(elevation)};
+}
+
 bool powerOfTwo(int n) { return n > 0 && (n & (n - 1)) == 0; }
 
 void validate(const FarFieldSpec& s) {
@@ -170,8 +179,6 @@ FarField::FarField(LitBall ball, FarFieldSpec spec, double map_distance_m,
   forEachDirection([&](const Vec3& d, double intensity_w_sr) {
     if (hazardSafe(intensity_w_sr) > peak_.intensity_w_sr) peak_ = {intensity_w_sr, d};
   });
-  stats_.peak_w_m2 = peak_.intensity_w_sr;
-  stats_.peak_at_m = ball_.centre_m + map_distance_m_ * peak_.direction;
 }
 
 Vec3 FarField::latticePoint(int face, int i, int j) const {
@@ -219,15 +226,8 @@ LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2) {
   const auto w = static_cast<std::size_t>(m.width);
   m.intensity_w_sr.assign(w * static_cast<std::size_t>(height), 0.0f);
   std::vector<double> cell(m.intensity_w_sr.size(), 0.0);
-  for (int j = 0; j < height; ++j) {
-    const double elevation = -0.5 * kPi + (j + 0.5) * kPi / height;
-    for (int i = 0; i < m.width; ++i) {
-      const double azimuth = -kPi + (i + 0.5) * 2.0 * kPi / m.width;
-      const Vec3 d(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
-                   std::sin(elevation));
-      cell[static_cast<std::size_t>(j) * w + static_cast<std::size_t>(i)] =
-          hazardSafe(field.intensity(d));
-    }
+  for (std::size_t p = 0; p < cell.size(); ++p) {
+    cell[p] = hazardSafe(field.intensity(latLongDirection(p, m.width, height)));
   }
   field.forEachDirection([&](const Vec3& d, double intensity_w_sr) {
     const double azimuth = std::atan2(d.y, d.x);
@@ -241,10 +241,7 @@ LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2) {
   });
   m.nohd_m.resize(cell.size());
   for (std::size_t p = 0; p < cell.size(); ++p) {
-    const double elevation = -0.5 * kPi + (static_cast<double>(p / w) + 0.5) * kPi / height;
-    const double azimuth = -kPi + (static_cast<double>(p % w) + 0.5) * 2.0 * kPi / m.width;
-    const Vec3 d(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
-                 std::sin(elevation));
+    const Vec3 d = latLongDirection(p, m.width, height);
     m.intensity_w_sr[p] = static_cast<float>(std::min<double>(cell[p], FLT_MAX));
     const double nohd = std::sqrt(cell[p] / mpe_w_m2);
     m.nohd_m[p] = nohd >= farRadiusToward(field.spec(), d)
@@ -263,21 +260,13 @@ HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mp
   const Vec3 centre = field.ball().centre_m;
   for (int f = 0; f < FarField::kFaces; ++f) {
     const ObserverField& face = field.faces()[static_cast<std::size_t>(f)];
-    const std::vector<float> e = face.irradianceLattice();
     // Each lattice direction lends its intensity to the nearest vertex.
     std::vector<double> vertex_max(vertices, 0.0);
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i <= n; ++i) {
-        const Vec3 p = face.spec().position(i, j, 0);
-        const double d = glm::length(p - centre);
-        const double intensity =
-            hazardSafe(static_cast<double>(
-                           e[static_cast<std::size_t>(j) * (n + 1) + static_cast<std::size_t>(i)]) *
-                       d * d);
-        const int a = (i + step / 2) / step, b = (j + step / 2) / step;
-        double& v = vertex_max[static_cast<std::size_t>(b) * (m + 1) + static_cast<std::size_t>(a)];
-        v = std::max(v, intensity);
-      }
+    field.forEachDirectionOfFace(f, [&](int i, int j, const Vec3&, double intensity_w_sr) {
+      const int a = (i + step / 2) / step, b = (j + step / 2) / step;
+      double& v = vertex_max[static_cast<std::size_t>(b) * (m + 1) + static_cast<std::size_t>(a)];
+      v = std::max(v, hazardSafe(intensity_w_sr));
+    });
     const auto first = static_cast<std::int64_t>(s.points_m.size());
     for (int b = 0; b <= m; ++b)
       for (int a = 0; a <= m; ++a) {

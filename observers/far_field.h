@@ -102,24 +102,32 @@ class FarField {
   /// @brief The brightest lattice direction of the map.
   [[nodiscard]] const Peak& peak() const { return peak_; }
 
-  /// @brief Sums of the faces' statistics (lattice points, evaluations, time, unconverged).
+  /// @brief Sums of the faces' statistics (lattice points, evaluations, time); the
+  /// unconverged points' largest irradiance plus error is given as an intensity (W/sr).
   [[nodiscard]] const FieldStats& stats() const { return stats_; }
+
+  /// @brief Calls fn(i, j, direction, intensity_w_sr) for every lattice point (i, j) of cube
+  /// face @p face.
+  template <class Fn>
+  void forEachDirectionOfFace(int face, Fn&& fn) const {
+    const std::vector<float> e = faces_[static_cast<std::size_t>(face)].irradianceLattice();
+    const int n = spec_.face_pixels + 1;
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const Vec3 p = latticePoint(face, i, j);
+        const double d = glm::length(p - ball_.centre_m);
+        fn(i, j, (p - ball_.centre_m) / d,
+           static_cast<double>(e[static_cast<std::size_t>(j) * static_cast<std::size_t>(n) +
+                                 static_cast<std::size_t>(i)]) *
+               d * d);
+      }
+  }
 
   /// @brief Calls fn(direction, intensity_w_sr) for every lattice point of every face.
   template <class Fn>
   void forEachDirection(Fn&& fn) const {
     for (int f = 0; f < kFaces; ++f) {
-      const std::vector<float> e = faces_[static_cast<std::size_t>(f)].irradianceLattice();
-      const int n = spec_.face_pixels + 1;
-      for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-          const Vec3 p = latticePoint(f, i, j);
-          const double d = glm::length(p - ball_.centre_m);
-          fn((p - ball_.centre_m) / d,
-             static_cast<double>(e[static_cast<std::size_t>(j) * static_cast<std::size_t>(n) +
-                                   static_cast<std::size_t>(i)]) *
-                 d * d);
-        }
+      forEachDirectionOfFace(f, [&](int, int, const Vec3& d, double i_w_sr) { fn(d, i_w_sr); });
     }
   }
 

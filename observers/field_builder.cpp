@@ -14,6 +14,7 @@
 
 #include "observers/block_check.h"
 #include "observers/detail/field_common.h"
+#include "observers/far_field.h"
 #include "observers/field.h"
 
 namespace glint {
@@ -66,18 +67,12 @@ class FieldBuilder {
         excluded_(excluded),
         counter_(counter),
         lattice_{spec.nodes()},
-        coarse_candidate_(integrator.target().facetCount(), 0) {
+        coarse_candidate_(integrator.target().facetCount(), 0),
+        lit_centre_m_(litBall(integrator).centre_m) {
     const std::span<const Candidate> lit = integrator.candidates();
-    Vec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
     for (std::size_t k = 0; k < lit.size(); ++k) {
       coarse_candidate_[lit[k].facet.coarse] = static_cast<std::uint32_t>(k);
-      const Vec3 origin = integrator.target().objects[lit[k].object].origin_m;
-      for (const Vec3& corner : lit[k].geometry.corner_m) {
-        lo = glm::min(lo, origin + corner);
-        hi = glm::max(hi, origin + corner);
-      }
     }
-    if (!lit.empty()) lit_centre_m_ = 0.5 * (lo + hi);
   }
 
   ObserverField run() {
@@ -448,7 +443,7 @@ class FieldBuilder {
   WorkCounter* counter_;
   Lattice lattice_;
   std::vector<std::uint32_t> coarse_candidate_;  // coarse facet → index of its lit candidate
-  Vec3 lit_centre_m_{0.0};  // centre of the lit facets' box: where the light spreads from
+  Vec3 lit_centre_m_;  // centre of the lit facets' box: where the light spreads from
   FieldStats stats_;
   std::unordered_map<std::uint64_t, PointValue> values_;  // every sample, evaluated once
   std::vector<FinalBlock> final_;

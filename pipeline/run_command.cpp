@@ -370,13 +370,11 @@ FarField computeSceneFarField(const SceneTarget& target, const FarFieldSpec& spe
 }
 
 // Refuses a far field whose six faces' memory floor exceeds the budget.
-void checkFarFieldMemory(const FarFieldSpec& spec, const RunArgs& args,
-                         std::uint64_t budget_bytes) {
+void checkFarFieldMemory(const FarFieldSpec& spec, std::uint64_t budget_bytes) {
   std::uint64_t floor_bytes = 0;
   for (int f = 0; f < FarField::kFaces; ++f) {
     floor_bytes += fieldMemoryFloorBytes(cubeFaceSpec(f, Vec3(0.0), 1.0, spec), false);
   }
-  (void)args;
   requireWithinBudget(
       "the far field (6 × " + std::to_string(spec.face_pixels + 1) + "² directions)", floor_bytes,
       budget_bytes, "lower far_field.face_pixels, or raise --memory");
@@ -581,7 +579,7 @@ void runField(const RunArgs& args, std::ostream& err) {
   FarReach far_hazard;
   if (scene.far_field.enabled) {
     const FarFieldSpec spec = farFieldSpec(scene, target.integrator);
-    checkFarFieldMemory(spec, args, budget);
+    checkFarFieldMemory(spec, budget);
     far.emplace(computeSceneFarField(target, spec, args, watch, err));
     if (far->stats().non_finite_points > 0) {
       throw std::runtime_error("the far field: " + std::to_string(far->stats().non_finite_points) +
