@@ -14,6 +14,7 @@
 
 #include "observers/block_check.h"
 #include "observers/detail/field_common.h"
+#include "observers/detail/piece_pool.h"
 #include "observers/far_field.h"
 #include "observers/field.h"
 
@@ -23,6 +24,10 @@ namespace {
 using namespace field;
 
 constexpr std::uint32_t kNoParent = std::numeric_limits<std::uint32_t>::max();
+
+// A block's candidates: indices into its level's PiecePool (or, for a point's integration,
+// into the integrator's lit candidates).
+using PieceList = std::vector<std::uint32_t>;
 
 // Share of the floor that pruning may drop from a block's candidates: what every observer in
 // it may miss, on top of the integrator's own error.
@@ -84,20 +89,26 @@ class FieldBuilder {
       blocks.push_back({o, b, 0, kNoParent});
     });
 
-    std::vector<std::vector<Candidate>> parent_lists;
+    // Each level's pieces live in that level's pool; its blocks hold indices into it. The
+    // parents' pool is dropped once the level is bounded.
+    auto parent_pool = std::make_unique<PiecePool>();
+    std::vector<PieceList> parent_lists;
     std::vector<double> parent_dropped;
     while (!blocks.empty()) {
       stats_.levels = blocks.front().level;
-      std::vector<std::vector<Candidate>> lists(blocks.size());
+      auto pool = std::make_unique<PiecePool>();
+      std::vector<PieceList> lists(blocks.size());
       std::vector<BallBound> bounds(blocks.size());
-      boundBlocks(blocks, parent_lists, parent_dropped, lists, bounds);
+      boundBlocks(blocks, *parent_pool, parent_lists, parent_dropped, *pool, lists, bounds);
+      parent_pool.reset();
+      parent_lists.clear();
       throwIfStopped();
-      evaluateSamples(blocks, lists, bounds);
+      evaluateSamples(blocks, *pool, lists, bounds);
       throwIfStopped();
       const std::vector<Decision> decisions = decide(blocks, bounds);
 
       std::vector<Block> children;
-      std::vector<std::vector<Candidate>> child_parent_lists;
+      std::vector<PieceList> child_parent_lists;
       std::vector<double> child_parent_dropped;
       for (std::size_t i = 0; i < blocks.size(); ++i) {
         const Block& blk = blocks[i];
@@ -134,6 +145,7 @@ class FieldBuilder {
         }
       }
       blocks = std::move(children);
+      parent_pool = std::move(pool);
       parent_lists = std::move(child_parent_lists);
       parent_dropped = std::move(child_parent_dropped);
     }
@@ -205,24 +217,40 @@ class FieldBuilder {
            spec_.voxel_m * half * (e[0] + e[1] + (flat() ? Vec3(0.0) : e[2]));
   }
 
-  void boundBlocks(const std::vector<Block>& blocks,
-                   const std::vector<std::vector<Candidate>>& parent_lists,
-                   const std::vector<double>& parent_dropped,
-                   std::vector<std::vector<Candidate>>& lists, std::vector<BallBound>& bounds) {
+  // Bounds every block of a level from its parent's pieces (@p parent_pool, @p parent_lists),
+  // interning the pieces each keeps into @p pool and their indices into @p lists.
+  void boundBlocks(const std::vector<Block>& blocks, const PiecePool& parent_pool,
+                   const std::vector<PieceList>& parent_lists,
+                   const std::vector<double>& parent_dropped, PiecePool& pool,
+                   std::vector<PieceList>& lists, std::vector<BallBound>& bounds) {
     tbb::enumerable_thread_specific<std::int64_t> bound_evaluations(0);
+    struct Scratch {
+      std::vector<Candidate> inherited, kept;
+    };
+    tbb::enumerable_thread_specific<Scratch> scratch;
     tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t i) {
       if (stopRequested()) return;
       const Block& b = blocks[i];
       const bool root = b.parent == kNoParent;
+      Scratch& s = scratch.local();
+      if (!root) {
+        s.inherited.clear();
+        for (const std::uint32_t p : parent_lists[b.parent]) s.inherited.push_back(parent_pool[p]);
+      }
       const std::span<const Candidate> inherited =
-          root ? integrator_.candidates() : std::span<const Candidate>(parent_lists[b.parent]);
+          root ? integrator_.candidates() : std::span<const Candidate>(s.inherited);
       BallBoundOptions options;
       options.drop_allowance_w_m2 = kDropShareOfFloor * spec_.floor_w_m2;
       options.sample_spacing_m = spec_.voxel_m * std::max(1, b.size / 2);
       options.max_split_depth = spec_.bound_split_depth;
       const double radius = 0.5 * std::sqrt(flat() ? 2.0 : 3.0) * spec_.voxel_m * b.size;
       bounds[i] = integrator_.boundBall(centre(b), radius, inherited,
-                                        root ? 0.0 : parent_dropped[b.parent], options, lists[i]);
+                                        root ? 0.0 : parent_dropped[b.parent], options, s.kept);
+      // A skipped block's pieces are never read again.
+      if (!skipped(bounds[i])) {
+        lists[i].reserve(s.kept.size());
+        for (const Candidate& c : s.kept) lists[i].push_back(pool.intern(c));
+      }
       bound_evaluations.local() += bounds[i].bound_evaluations;
     });
     for (std::int64_t n : bound_evaluations) stats_.bound_evaluations += n;
@@ -234,15 +262,15 @@ class FieldBuilder {
   // since each piece costs an evaluation before the integrator can see that a smooth facet
   // wants no more. (Measured on bench/scenes/sphere.json at 0.2 m: 4.1e8 evaluations with the
   // pieces, 9.1e7 with their coarse facets; dense 9.4e7. The cylinder is unchanged.)
-  [[nodiscard]] std::vector<Candidate> integrationList(std::span<const Candidate> kept) const {
-    const std::span<const Candidate> lit = integrator_.candidates();
-    std::vector<char> taken(lit.size(), 0);
-    std::vector<Candidate> out;
-    for (const Candidate& c : kept) {
-      const std::uint32_t k = coarse_candidate_[c.facet.coarse];
+  // Indices into integrator_.candidates().
+  [[nodiscard]] PieceList integrationList(const PiecePool& pool, const PieceList& kept) const {
+    std::vector<char> taken(integrator_.candidates().size(), 0);
+    PieceList out;
+    for (const std::uint32_t piece : kept) {
+      const std::uint32_t k = coarse_candidate_[pool[piece].facet.coarse];
       if (taken[k] != 0) continue;
       taken[k] = 1;
-      out.push_back(lit[k]);
+      out.push_back(k);
     }
     return out;
   }
@@ -255,9 +283,8 @@ class FieldBuilder {
 
   // Evaluates the sample lattice points of every block not skipped that no earlier level
   // evaluated; a point shared by several blocks takes the candidates of the first.
-  void evaluateSamples(const std::vector<Block>& blocks,
-                       const std::vector<std::vector<Candidate>>& lists,
-                       const std::vector<BallBound>& bounds) {
+  void evaluateSamples(const std::vector<Block>& blocks, const PiecePool& pool,
+                       const std::vector<PieceList>& lists, const std::vector<BallBound>& bounds) {
     std::vector<std::pair<std::uint64_t, std::uint32_t>> wanted;  // (point, block)
     for (std::size_t i = 0; i < blocks.size(); ++i) {
       if (skipped(bounds[i])) continue;
@@ -275,13 +302,18 @@ class FieldBuilder {
     if (counter_ != nullptr) counter_->items_scheduled.fetch_add(wanted.size());
     std::vector<char> sampled(blocks.size(), 0);
     for (const auto& [key, block] : wanted) sampled[block] = 1;
-    std::vector<std::vector<Candidate>> point_lists(blocks.size());
+    std::vector<PieceList> point_lists(blocks.size());
     tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t i) {
-      if (sampled[i] != 0) point_lists[i] = integrationList(lists[i]);
+      if (sampled[i] != 0) point_lists[i] = integrationList(pool, lists[i]);
     });
     std::vector<PointValue> results(wanted.size());
     std::vector<std::int64_t> evaluations(wanted.size(), 0);
-    tbb::enumerable_thread_specific<IntegratorWorkspace> workspaces;
+    struct Scratch {
+      IntegratorWorkspace workspace;
+      std::vector<Candidate> candidates;
+    };
+    tbb::enumerable_thread_specific<Scratch> scratch;
+    const std::span<const Candidate> lit = integrator_.candidates();
     tbb::parallel_for(std::size_t{0}, wanted.size(), [&](std::size_t w) {
       if (stopRequested()) return;
       const std::uint64_t key = wanted[w].first;
@@ -295,8 +327,10 @@ class FieldBuilder {
         results[w].excluded = true;
         return;
       }
-      const ObserverResult r =
-          integrator_.adaptive(x, point_lists[wanted[w].second], workspaces.local());
+      Scratch& s = scratch.local();
+      s.candidates.clear();
+      for (const std::uint32_t c : point_lists[wanted[w].second]) s.candidates.push_back(lit[c]);
+      const ObserverResult r = integrator_.adaptive(x, s.candidates, s.workspace);
       results[w].irradiance_w_m2 = r.irradiance_w_m2;
       results[w].error_w_m2 = r.error_estimate_w_m2;
       results[w].converged = r.converged;
