@@ -174,8 +174,8 @@ void writeBlocksVtu(std::ostream& out, const ObserverField& field, double mpe_w_
                                  {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
   auto cell = [&](const FieldBlock& b) {
     for (const auto& c : kCorner) {
-      const int i = b.origin[0] + c[0] * b.size, j = b.origin[1] + c[1] * b.size,
-                k = b.origin[2] + c[2] * b.size;
+      const int i = b.origin[0] + c[0] * b.size[0], j = b.origin[1] + c[1] * b.size[1],
+                k = b.origin[2] + c[2] * b.size[2];
       const Vec3 x = spec.position(i, j, k);
       points.insert(points.end(), {x.x, x.y, x.z});
       const openvdb::Coord q(i, j, k);
@@ -188,15 +188,15 @@ void writeBlocksVtu(std::ostream& out, const ObserverField& field, double mpe_w_
     status.push_back(static_cast<std::int32_t>(b.status));
   };
   for (const FieldBlock& b : blocks) {
-    if (b.status != VoxelStatus::Evaluated || b.size != 2) {
+    if (b.status != VoxelStatus::Evaluated || b.size != std::array<int, 3>{2, 2, 2}) {
       cell(b);
       continue;
     }
     // A finest block (every lattice point evaluated) shows them all: one cell per voxel.
-    for (int i = 0; i < b.size; ++i)
-      for (int j = 0; j < b.size; ++j)
-        for (int k = 0; k < b.size; ++k) {
-          cell({{b.origin[0] + i, b.origin[1] + j, b.origin[2] + k}, 1, b.level, b.status});
+    for (int i = 0; i < 2; ++i)
+      for (int j = 0; j < 2; ++j)
+        for (int k = 0; k < 2; ++k) {
+          cell({{b.origin[0] + i, b.origin[1] + j, b.origin[2] + k}, {1, 1, 1}, b.level, b.status});
         }
   }
   out << header("UnstructuredGrid") << "<UnstructuredGrid>\n";

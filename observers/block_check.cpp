@@ -1,6 +1,7 @@
 #include "observers/block_check.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace glint::field {
@@ -25,70 +26,140 @@ std::array<double, 8> octantCorners(const std::array<double, kLatticeSamples>& u
   return corners;
 }
 
-// Whether E·w interpolated from the block's corners, divided by w, meets every sample of the
-// 3×3×3 lattice, and the octant-by-octant fill from those meets every octant centre, within
+std::size_t latticeIndex(const std::array<int, 3>& i) {
+  return static_cast<std::size_t>(9 * i[0] + 3 * i[1] + i[2]);
+}
+
+// The interpolation of the 3×3×3 lattice @p u at lattice index @p at (each 0, 1 or 2): linear
+// between the ends (0 and 2) along the axes that are not exact, the lattice's own value along
+// the exact ones (both "ends" there are the sample itself, at t = 0).
+double interpolateLattice(const std::array<double, kLatticeSamples>& u, const BlockSize& size,
+                          const std::array<int, 3>& at) {
+  std::array<double, 8> corners{};
+  for (int c = 0; c < 8; ++c) {
+    std::array<int, 3> i{};
+    for (int a = 0; a < 3; ++a) {
+      const std::size_t sa = static_cast<std::size_t>(a);
+      i[sa] = exactAxis(size, a) ? at[sa] : 2 * ((c >> (2 - a)) & 1);
+    }
+    corners[static_cast<std::size_t>(c)] = u[latticeIndex(i)];
+  }
+  const auto t = [&](int a) {
+    return exactAxis(size, a) ? 0.0 : 0.5 * at[static_cast<std::size_t>(a)];
+  };
+  return trilinear(corners, t(0), t(1), t(2));
+}
+
+// The fill at the centre of octant @p o: the mean of its eight corners, taken at the middle
+// sample along the exact axes.
+double octantCentreFill(const std::array<double, kLatticeSamples>& u, const BlockSize& size,
+                        const std::array<int, 3>& o) {
+  double sum = 0.0;
+  for (int c = 0; c < 8; ++c) {
+    std::array<int, 3> i{};
+    for (int a = 0; a < 3; ++a) {
+      const std::size_t sa = static_cast<std::size_t>(a);
+      i[sa] = exactAxis(size, a) ? 1 : o[sa] + ((c >> (2 - a)) & 1);
+    }
+    sum += u[latticeIndex(i)];
+  }
+  return 0.125 * sum;
+}
+
+// How E·w interpolated from the block's corners, divided by w, meets the samples, each within
 // `allowed` (v and w in forEachSample's order; the octant centres only if there are any).
-bool interpolates(const BlockValues& v, const BlockValues& w, std::size_t count, double allowed) {
+struct Fit {
+  bool passes = true;          // every sample met
+  std::uint8_t bent_axes = 0;  // bit a: some line of three samples along axis a is not linear
+};
+
+Fit fit(const BlockValues& v, const BlockValues& w, std::size_t count, const BlockSize& size,
+        double allowed) {
   std::array<double, kLatticeSamples> u{};
   for (std::size_t s = 0; s < kLatticeSamples; ++s) u[s] = v[s] * w[s];
-  const std::array<double, 8> corners = {u[0], u[2], u[6], u[8], u[18], u[20], u[24], u[26]};
+  Fit result;
   for (int a = 0; a < 3; ++a)
     for (int c = 0; c < 3; ++c)
       for (int e = 0; e < 3; ++e) {
-        const auto s = static_cast<std::size_t>(9 * a + 3 * c + e);
-        const double interpolated = trilinear(corners, 0.5 * a, 0.5 * c, 0.5 * e) / w[s];
-        if (!(std::abs(interpolated - v[s]) <= allowed)) return false;
+        const std::array<int, 3> at{a, c, e};
+        const std::size_t s = latticeIndex(at);
+        if (!(std::abs(interpolateLattice(u, size, at) / w[s] - v[s]) <= allowed)) {
+          result.passes = false;
+        }
+        // The middle of a line along each axis against the mean of its ends.
+        for (int axis = 0; axis < 3; ++axis) {
+          const std::size_t sa = static_cast<std::size_t>(axis);
+          if (at[sa] != 1 || exactAxis(size, axis)) continue;
+          std::array<int, 3> lo = at, hi = at;
+          lo[sa] = 0;
+          hi[sa] = 2;
+          const double mid = 0.5 * (u[latticeIndex(lo)] + u[latticeIndex(hi)]) / w[s];
+          if (!(std::abs(mid - v[s]) <= allowed)) {
+            result.bent_axes = static_cast<std::uint8_t>(result.bent_axes | (4 >> axis));
+          }
+        }
       }
-  if (count < kBlockSamples) return true;
-  // The fill at each octant centre: the mean of the octant's eight corners.
+  if (count < kBlockSamples) return result;
   for (std::size_t oct = 0; oct < 8; ++oct) {
-    double mean = 0.0;
     const std::array<int, 3> o{static_cast<int>(oct >> 2), static_cast<int>((oct >> 1) & 1),
                                static_cast<int>(oct & 1)};
-    for (const double corner : octantCorners(u, o)) mean += corner;
-    if (!(std::abs(0.125 * mean / w[kLatticeSamples + oct] - v[kLatticeSamples + oct]) <=
-          allowed)) {
-      return false;
-    }
+    const double fill = octantCentreFill(u, size, o) / w[kLatticeSamples + oct];
+    if (!(std::abs(fill - v[kLatticeSamples + oct]) <= allowed)) result.passes = false;
   }
-  return true;
+  return result;
 }
 
 }  // namespace
 
-std::optional<Decision> decideByBound(const BallBound& bound, int size, double floor_w_m2) {
+std::uint8_t splittableAxes(const BlockSize& size) {
+  std::uint8_t mask = 0;
+  for (int a = 0; a < 3; ++a) {
+    if (!exactAxis(size, a)) mask = static_cast<std::uint8_t>(mask | (4 >> a));
+  }
+  return mask;
+}
+
+std::optional<Decision> decideByBound(const BallBound& bound, const BlockSize& size,
+                                      double floor_w_m2) {
   if (bound.upper_w_m2 <= floor_w_m2) return Decision{Verdict::Skip};
-  if (size <= 2) return Decision{Verdict::Finest};
-  if (!bound.bounded()) return Decision{Verdict::Refine};  // (NaN included)
+  const std::uint8_t all = splittableAxes(size);
+  if (all == 0) return Decision{Verdict::Finest};
+  if (!bound.bounded()) return Decision{Verdict::Refine, 0, all};  // (NaN included)
   return std::nullopt;
 }
 
-Decision decideBySamples(const BlockSamples& samples, const BallBound& bound, double tolerance,
-                         double floor_w_m2) {
+Decision decideBySamples(const BlockSamples& samples, const BlockSize& size, const BallBound& bound,
+                         double tolerance, double floor_w_m2) {
+  const std::uint8_t all = splittableAxes(size);
+  const Decision everywhere{Verdict::Refine, 0, all};
   // The target is in the block: resolve it finely.
-  if (samples.excluded || samples.count < kLatticeSamples) return {Verdict::Refine};
+  if (samples.excluded || samples.count < kLatticeSamples) return everywhere;
   double largest = 0.0;
   for (std::size_t s = 0; s < samples.count; ++s) {
     const double v = samples.irradiance_w_m2[s];
     // A sample that is not a finite number gives no budget to check against: look closer.
-    if (!std::isfinite(v)) return {Verdict::Refine};
+    if (!std::isfinite(v)) return everywhere;
     largest = std::max(largest, std::abs(v));
   }
   const double allowed = kCheckShare * (tolerance * largest + floor_w_m2);
   // A coarse facet whose light could pass between the samples leaves no trace in them: only
   // the bound can say whether such a glint is too weak to matter.
-  if (!(bound.narrow_w_m2 <= allowed)) return {Verdict::Refine};
+  if (!(bound.narrow_w_m2 <= allowed)) return everywhere;
+  std::uint8_t split = all;
   for (const int power : kInterpolationPowers) {
     if (power > 0 && !samples.far_from_target) break;
     BlockValues w{};
     for (std::size_t s = 0; s < samples.count; ++s) {
       w[s] = spreadWeight(samples.distance_m[s], power);
     }
-    if (interpolates(samples.irradiance_w_m2, w, samples.count, allowed)) {
-      return {Verdict::Accept, power};
-    }
+    const Fit f = fit(samples.irradiance_w_m2, w, samples.count, size, allowed);
+    if (f.passes) return {Verdict::Accept, power};
+    // Halve only where the lines of samples bend; where none does, the miss lies between the
+    // axes (or at an octant centre) and every axis is halved.
+    const std::uint8_t bent = f.bent_axes & all;
+    if (bent != 0 && std::popcount(bent) < std::popcount(split)) split = bent;
   }
-  return {Verdict::Refine};
+  return {Verdict::Refine, 0, split};
 }
 
 double trilinear(const std::array<double, 8>& c, double u, double v, double w) {

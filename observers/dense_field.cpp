@@ -96,7 +96,7 @@ ObserverField computeDenseField(const FacetIntegrator& integrator, const FieldSp
   finishStats(*grids, stats);
   std::vector<FieldBlock> blocks;
   forEachCoarseBlock(lattice, spec.block_voxels, [&](const Index3& o, int b) {
-    blocks.push_back({o, b, 0, VoxelStatus::Evaluated});
+    blocks.push_back({o, {b, b, lattice.n[2] == 1 ? 2 : b}, 0, VoxelStatus::Evaluated});
   });
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return {spec, stats, std::move(grids), std::move(blocks)};

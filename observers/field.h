@@ -39,6 +39,10 @@ struct FieldSpec {
   /// splits prove more blocks dark, but each block then carries up to 4^depth pieces of every
   /// lit facet its light may reach.
   int bound_split_depth = 6;
+  /// A refined block is halved only along the axes whose samples bend (a rim's step is then
+  /// resolved across itself and interpolated along itself); false halves every axis, as the
+  /// octree of the first versions did (kept to measure the difference).
+  bool anisotropic = true;
 
   /// @brief Lattice points per axis (voxels + 1), after extending to whole blocks.
   [[nodiscard]] std::array<int, 3> nodes() const;
@@ -103,10 +107,11 @@ struct FieldStats {
   std::size_t grid_bytes = 0;      ///< memory of all grids
 };
 
-/// @brief A block of the octree as it ended: lattice points origin .. origin + size per axis.
+/// @brief A block of the tree as it ended: lattice points origin .. origin + size[a] along
+/// each axis a (a plane's blocks: 2 along the normal, folded onto its one layer).
 struct FieldBlock {
   std::array<int, 3> origin{};
-  int size = 0;                                 ///< edge in voxels
+  std::array<int, 3> size{};                    ///< edges in voxels
   int level = 0;                                ///< 0 = coarsest
   VoxelStatus status = VoxelStatus::Evaluated;  ///< Evaluated, Interpolated or BelowFloor
 };
@@ -175,9 +180,9 @@ std::uint64_t fieldMemoryFloorBytes(const FieldSpec& spec, bool dense);
 
 /// @brief The adaptive field: top-down over blocks, each pruning its candidate facets by
 /// bound, skipping where the bound is below the floor, else evaluating its 3×3×3 lattice and
-/// refining into eight where interpolation misses. Evaluated points are cached and never
-/// computed twice; TBB runs over blocks and points. @p integrator's options are used per
-/// point. @p counter (optional) counts evaluated points and evaluations.
+/// refining where interpolation misses, halved along the axes that need it. Evaluated points are
+/// cached and never computed twice; TBB runs over blocks and points. @p integrator's options are
+/// used per point. @p counter (optional) counts evaluated points and evaluations.
 /// @throw WorkStopped when the counter's stop flag is raised (also computeDenseField).
 ObserverField computeField(const FacetIntegrator& integrator, const FieldSpec& spec,
                            const ExcludedFn& excluded, WorkCounter* counter = nullptr);

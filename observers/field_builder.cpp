@@ -33,11 +33,12 @@ using PieceList = std::vector<std::uint32_t>;
 // it may miss, on top of the integrator's own error.
 constexpr double kDropShareOfFloor = 0.25;
 
-// A block of the octree: lattice points o .. o + size on each axis. It owns the voxels
+// A block of the tree: lattice points o .. o + size[a] along each axis a. It owns the voxels
 // [o, o + size) per axis, and the last lattice point of an axis where it touches the box's end.
+// A plane's blocks have size 2 along its normal, which at() folds onto its one layer.
 struct Block {
   Index3 o;
-  int size;
+  BlockSize size;
   int level;
   std::uint32_t parent;  // index into the previous level's blocks
 };
@@ -53,7 +54,7 @@ struct PointValue {
 openvdb::CoordBBox ownedBox(const Block& b, const Lattice& lattice) {
   openvdb::Coord lo(b.o[0], b.o[1], b.o[2]), hi;
   for (int a = 0; a < 3; ++a) {
-    const int end = b.o[a] + b.size;
+    const int end = b.o[a] + b.size[a];
     hi[a] = lattice.n[a] == 1 ? 0 : end == lattice.n[a] - 1 ? end : end - 1;
   }
   return {lo, hi};
@@ -86,7 +87,7 @@ class FieldBuilder {
     stats_.lattice_points = lattice_.count();
     std::vector<Block> blocks;
     forEachCoarseBlock(lattice_, spec_.block_voxels, [&](const Index3& o, int b) {
-      blocks.push_back({o, b, 0, kNoParent});
+      blocks.push_back({o, {b, b, flat() ? 2 : b}, 0, kNoParent});
     });
 
     // Each level's pieces live in that level's pool; its blocks hold indices into it. The
@@ -131,12 +132,20 @@ class FieldBuilder {
             const auto parent = static_cast<std::uint32_t>(child_parent_lists.size());
             child_parent_lists.push_back(std::move(lists[i]));
             child_parent_dropped.push_back(bounds[i].dropped_w_m2);
-            const int h = blk.size / 2;
-            // A plane's block has four children: the other four would repeat them.
-            for (int c = 0; c < 8; c += flat() ? 2 : 1) {
+            // Halved along the axes the check chose (never a plane's normal, whose size 2 is
+            // exact): 2, 4 or 8 children.
+            const std::uint8_t split =
+                spec_.anisotropic ? decisions[i].split : splittableAxes(blk.size);
+            BlockSize child_size = blk.size;
+            for (std::size_t a = 0; a < 3; ++a) {
+              if ((split & (4 >> a)) != 0) child_size[a] /= 2;
+            }
+            for (int c = 0; c < 8; ++c) {
+              if ((c & ~split) != 0) continue;  // an offset along an axis not halved
               children.push_back(
-                  {{blk.o[0] + h * (c >> 2), blk.o[1] + h * ((c >> 1) & 1), blk.o[2] + h * (c & 1)},
-                   h,
+                  {{blk.o[0] + child_size[0] * (c >> 2), blk.o[1] + child_size[1] * ((c >> 1) & 1),
+                    blk.o[2] + child_size[2] * (c & 1)},
+                   child_size,
                    blk.level + 1,
                    parent});
             }
@@ -193,7 +202,7 @@ class FieldBuilder {
   // Whether E·r^p may be interpolated over block b for p > 0: only where the block keeps clear
   // of the centre by its own diagonal, so that no weight is near 0 and r varies smoothly.
   [[nodiscard]] bool farFromTarget(const Block& b) const {
-    const double diagonal_m = std::sqrt(3.0) * spec_.voxel_m * b.size;
+    const double diagonal_m = 2.0 * radius(b);
     return glm::length(centre(b) - lit_centre_m_) > 1.5 * diagonal_m;
   }
 
@@ -211,10 +220,21 @@ class FieldBuilder {
   }
 
   [[nodiscard]] Vec3 centre(const Block& b) const {
-    const double half = 0.5 * b.size;
     const std::array<Vec3, 3>& e = spec_.axes;
     return spec_.position(b.o[0], b.o[1], b.o[2]) +
-           spec_.voxel_m * half * (e[0] + e[1] + (flat() ? Vec3(0.0) : e[2]));
+           spec_.voxel_m * (0.5 * b.size[0] * e[0] + 0.5 * b.size[1] * e[1] +
+                            (flat() ? 0.0 : 0.5 * b.size[2]) * e[2]);
+  }
+  // Half the block's diagonal (a plane's block has no depth). The edges are powers of two, so
+  // their ratios to the longest are exact.
+  [[nodiscard]] double radius(const Block& b) const {
+    const int longest = std::max({b.size[0], b.size[1], flat() ? 0 : b.size[2]});
+    double squares = 0.0;
+    for (std::size_t a = 0; a < (flat() ? 2u : 3u); ++a) {
+      const double ratio = static_cast<double>(b.size[a]) / longest;
+      squares += ratio * ratio;
+    }
+    return 0.5 * std::sqrt(squares) * spec_.voxel_m * longest;
   }
 
   // Bounds every block of a level from its parent's pieces (@p parent_pool, @p parent_lists),
@@ -241,10 +261,11 @@ class FieldBuilder {
           root ? integrator_.candidates() : std::span<const Candidate>(s.inherited);
       BallBoundOptions options;
       options.drop_allowance_w_m2 = kDropShareOfFloor * spec_.floor_w_m2;
-      options.sample_spacing_m = spec_.voxel_m * std::max(1, b.size / 2);
+      // The widest gap between samples: a glint narrower than that may pass between them.
+      const int widest = std::max({b.size[0], b.size[1], flat() ? 0 : b.size[2]});
+      options.sample_spacing_m = spec_.voxel_m * std::max(1, widest / 2);
       options.max_split_depth = spec_.bound_split_depth;
-      const double radius = 0.5 * std::sqrt(flat() ? 2.0 : 3.0) * spec_.voxel_m * b.size;
-      bounds[i] = integrator_.boundBall(centre(b), radius, inherited,
+      bounds[i] = integrator_.boundBall(centre(b), radius(b), inherited,
                                         root ? 0.0 : parent_dropped[b.parent], options, s.kept);
       // A skipped block's pieces are never read again.
       if (!skipped(bounds[i])) {
@@ -373,7 +394,7 @@ class FieldBuilder {
       samples.irradiance_w_m2[s] = v.irradiance_w_m2;
       if (samples.far_from_target) samples.distance_m[s] = litDistance(p[0], p[1], p[2]);
     });
-    return field::decideBySamples(samples, bound, spec_.tolerance, spec_.floor_w_m2);
+    return field::decideBySamples(samples, b.size, bound, spec_.tolerance, spec_.floor_w_m2);
   }
 
   std::unique_ptr<FieldGrids> writeGrids() {
@@ -394,13 +415,13 @@ class FieldBuilder {
           break;  // its points are all samples: written below
         case Verdict::Accept: {
           t.grids->level->tree().fill(box, static_cast<float>(b.level), true);
-          const int h = b.size / 2;
+          const BlockSize h{b.size[0] / 2, b.size[1] / 2, b.size[2] / 2};
           const int power = final_[f].decision.power;
           std::array<double, 27> v{};  // E·r^power at the 3×3×3 lattice
           for (int a = 0; a < 3; ++a)
             for (int c = 0; c < 3; ++c)
               for (int e = 0; e < 3; ++e) {
-                const Index3 p = at(b, a * h, c * h, e * h);
+                const Index3 p = at(b, a * h[0], c * h[1], e * h[2]);
                 v[static_cast<std::size_t>(9 * a + 3 * c + e)] =
                     values_.at(lattice_.key(p[0], p[1], p[2])).irradiance_w_m2 *
                     spreadWeight(p[0], p[1], p[2], power);
@@ -412,8 +433,8 @@ class FieldBuilder {
             std::array<double, 3> t3{};
             for (std::size_t a = 0; a < 3; ++a) {
               const int local = p[static_cast<int>(a)] - b.o[a];  // 0 along a plane's normal
-              oct[a] = std::min(local / h, 1);
-              t3[a] = static_cast<double>(local - oct[a] * h) / h;
+              oct[a] = std::min(local / h[a], 1);
+              t3[a] = static_cast<double>(local - oct[a] * h[a]) / h[a];
             }
             const double value =
                 field::octantFill(v, oct, t3) / spreadWeight(p[0], p[1], p[2], power);

@@ -229,6 +229,35 @@ TEST(ObserverField, CylinderBroadLobeMatchesDense) {
   expectMatchesDense(compare(json), specOf(json), "cylinder σ = 0.03");
 }
 
+TEST(ObserverField, RimStepIsResolvedAcrossItselfAndInterpolatedAlongIt) {
+  // The σ = 0.003 sheet of a 1 m cylinder ends at its rims, z = ±0.5, within a centimetre: a
+  // step across z that is level along x and y. Halving only the axes whose samples bend
+  // resolves it in blocks thin across the step and whole along it; the first versions' octree
+  // halved every axis down to single voxels there. Both must match dense; the anisotropic
+  // field must do it with fewer points, and no more points than the octree anywhere.
+  const std::string json = sceneJson(
+      R"({"profile": "flat_top", "radius_m": 2.0})",
+      R"({"specular_reflectance": 0.9, "sigma": 0.003})",
+      R"({"shape": "cylinder", "center": [0, 0, 0], "axis": [0, 0, 1], "radius": 0.5, "length": 1.0, "material": "m", "segments": 12})",
+      R"({"min": [-6, -2, 0], "max": [-2, 2, 1], "voxel_m": 0.125, "block_m": 1.0,
+          "tolerance": 0.01, "floor_w_m2": 1e-2})");
+  const Scene scene = parseScene(json, "test.json");
+  FieldSpec spec = fieldSpec(scene);
+  ASSERT_TRUE(spec.anisotropic) << "the default";
+  const Comparison anisotropic = compare(scene, spec);
+  expectMatchesDense(anisotropic, spec, "anisotropic");
+  spec.anisotropic = false;
+  const Comparison octree = compare(scene, spec);
+  expectMatchesDense(octree, spec, "octree");
+  EXPECT_LT(2 * anisotropic.adaptive.evaluated_points, octree.adaptive.evaluated_points)
+      << "anisotropic " << anisotropic.adaptive.evaluated_points << " points, octree "
+      << octree.adaptive.evaluated_points;
+  std::printf("rim step: %lld points evaluated (octree %lld, dense %lld)\n",
+              static_cast<long long>(anisotropic.adaptive.evaluated_points),
+              static_cast<long long>(octree.adaptive.evaluated_points),
+              static_cast<long long>(anisotropic.dense.evaluated_points));
+}
+
 TEST(ObserverField, LobeEdgeOnAMiddleSamplePlaneIsResolved) {
   // The σ = 0.003 fan of a 1 m cylinder stops at z = ±0.5 within a centimetre: a step. Blocks
   // of 1 m from z = −1 put it exactly on their middle sample plane, where the sample is half
