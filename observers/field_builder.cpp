@@ -415,6 +415,8 @@ class FieldBuilder {
           break;  // its points are all samples: written below
         case Verdict::Accept: {
           t.grids->level->tree().fill(box, static_cast<float>(b.level), true);
+          t.grids->status->tree().fill(box, statusCode(VoxelStatus::Interpolated), true);
+          interpolated.local() += static_cast<std::int64_t>(box.volume());
           const BlockSize h{b.size[0] / 2, b.size[1] / 2, b.size[2] / 2};
           const int power = final_[f].decision.power;
           std::array<double, 27> v{};  // E·r^power at the 3×3×3 lattice
@@ -438,9 +440,10 @@ class FieldBuilder {
             }
             const double value =
                 field::octantFill(v, oct, t3) / spreadWeight(p[0], p[1], p[2], power);
-            t.irradiance.setValue(p, static_cast<float>(value));
-            t.status.setValue(p, statusCode(VoxelStatus::Interpolated));
-            ++interpolated.local();
+            // At most the floor is negligible (FieldSpec::floor_w_m2): left at 0 and inactive,
+            // so that a kilometre box stores its lit sheet, not the dark around it that its
+            // accepted blocks also cover.
+            if (value > spec_.floor_w_m2) t.irradiance.setValue(p, static_cast<float>(value));
           }
           break;
         }
@@ -487,6 +490,9 @@ class FieldBuilder {
         stats_.peak_at_m = spec_.position(p[0], p[1], p[2]);
       }
     }
+    // Blocks fill whole regions with one status and level; as tiles they cost nothing per voxel.
+    grids->status->tree().prune();
+    grids->level->tree().prune();
     finishStats(*grids, stats_);
     return grids;
   }
