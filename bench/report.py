@@ -242,6 +242,32 @@ def field_section(out, name="field.csv", plot=True):
     return lines
 
 
+def sampled_section(out, name):
+    """Rows of glint_field_bench --dense-sample: the twin's cost estimated from random points."""
+    data = rows(os.path.join(out, name))
+    if not data:
+        return ["No sampled observer-field results."]
+    lines = table_head("scene", "voxel (m)", "tolerance", "refinement", "points",
+                       "adaptive: evaluations, s, peak RSS MB, bytes per active voxel",
+                       "dense (estimated): evaluations ± s.e., s",
+                       "fewer evaluations (± s.e.)", "checked: random + feature points",
+                       "max error / allowed")
+    for r in data:
+        ae = float(r["adaptive_evaluations"])
+        de, se = float(r["dense_evaluations_estimate"]), float(r["dense_evaluations_se"])
+        rss = float(r["adaptive_peak_rss_bytes"])
+        active = float(r["active_voxels"])
+        lines.append(
+            f"| {r['scene']} | {r['voxel_m']} | {r['tolerance']} | "
+            f"{'anisotropic' if r['anisotropic'] == 'yes' else 'octree'} | {r['lattice_points']} | "
+            f"{g(ae)}, {g(r['adaptive_seconds'])}, {rss / 1e6:.0f}, "
+            f"{rss / active if active > 0 else 0:.0f} | {g(de)} ± {g(se)}, "
+            f"{g(r['dense_seconds_estimate'])} | {de / ae:.1f}x (± {se / ae:.1f}) | "
+            f"{r['sample_points']} + {r['feature_points']} | "
+            f"{g(r['max_error_w_m2'])} / {g(r['allowed_error_w_m2'])} |")
+    return lines
+
+
 def main():
     out, report = sys.argv[1], sys.argv[2]
     command = sys.argv[3] if len(sys.argv) > 3 else "bash bench/run_all.sh"
@@ -280,6 +306,13 @@ def main():
             with open(about) as f:
                 text += [f.read().strip(), ""]
         text += field_section(out, extra, plot=False) + [""]
+    for extra in sorted(f for f in os.listdir(out) if f.startswith("sampled_") and f.endswith(".csv")):
+        text += [f"### `{extra}`: the dense twin estimated from random lattice points", ""]
+        about = os.path.join(out, extra[:-4] + ".md")
+        if os.path.exists(about):
+            with open(about) as f:
+                text += [f.read().strip(), ""]
+        text += sampled_section(out, extra) + [""]
     with open(report, "w") as f:
         f.write("\n".join(text))
 

@@ -47,6 +47,26 @@ TEST(Examples, EveryExampleRunsAndConverges) {
   }
 }
 
+TEST(Examples, RangeSceneIsAKilometreBoxWhoseSheetIsHazardousToAbout490Metres) {
+  // examples/range_2km.json as its description says: at least 1e9 lattice points at 0.25 m or
+  // finer, and, back along the beam, the sheet above the MPE at 470 m and below it at 505 m
+  // (its radiant intensity, 1.19e7 W/sr, over the 50 W/m² MPE: sqrt(I / MPE) = 488 m).
+  const Scene scene = loadScene(example("range_2km.json"));
+  const FieldSpec spec = fieldSpec(scene);
+  const auto n = spec.nodes();
+  EXPECT_LE(spec.voxel_m, 0.25);
+  EXPECT_GE(static_cast<double>(n[0]) * n[1] * n[2], 1e9) << n[0] << "×" << n[1] << "×" << n[2];
+  const FacetIntegrator fi(buildTarget(scene), beamOf(scene), integratorOptions(scene));
+  IntegratorWorkspace ws;
+  const double mpe = scene.hazard.mpe.irradiance_w_m2;
+  ASSERT_NEAR(mpe, 50.0, 0.5) << "1064 nm, 10 s";
+  const ObserverResult inside = fi.adaptive(Vec3(-470.0, 0.0, 0.0), ws);
+  const ObserverResult outside = fi.adaptive(Vec3(-505.0, 0.0, 0.0), ws);
+  EXPECT_GT(inside.irradiance_w_m2, mpe) << "470 m back along the beam";
+  EXPECT_LT(outside.irradiance_w_m2, mpe) << "505 m back along the beam";
+  EXPECT_TRUE(inside.converged && outside.converged);
+}
+
 TEST(Examples, CylinderChangesLessThanATenthOfAPercentWhenTheToleranceIsHalved) {
   for (const char* scene : {"cylinder.json", "cylinder_broad.json"}) {
     const auto a = run(scene, "cylinder_186.csv");
