@@ -7,7 +7,9 @@ and the other outputs of the same run:
 - contours of the irradiance at 10 % of the peak and of the hazard ratio at 1 (the nominal
   hazard zone's surface) are non-empty in irradiance.vti and blocks.vtu;
 - target.vtp's incident power sums to the beam power the target intercepts, computed here
-  from the scene for a flat-top beam that covers each analytic object.
+  from the scene for a flat-top beam that covers each analytic object;
+- far_field.vtp, the far field's hazard boundary, encloses the lit centre at the far radius or
+  the NOHD beyond it, as the summary's far_field section says.
 """
 import json
 import math
@@ -16,7 +18,7 @@ import sys
 
 import pyopenvdb as vdb
 from paraview import servermanager
-from paraview.simple import Contour, OpenDataFile
+from paraview.simple import Contour, IntegrateVariables, OpenDataFile
 
 out = sys.argv[1]
 summary = json.load(open(f"{out}/summary.json"))
@@ -132,3 +134,34 @@ expected = intercepted_power_w(scene)
 assert abs(total - expected) <= 1e-9 * expected, (total, expected)
 print(f"target.vtp: {data.GetNumberOfCells()} cells, {total:.10g} W incident, "
       f"{expected:.10g} W intercepted by the scene's objects")
+
+# --- The far field's hazard boundary (far_field.vtp): a closed surface around the lit centre,
+# each point at its direction's NOHD where that lies beyond the far radius, else at the far
+# radius toward it (which only grows into the beam's forward cone).
+far = summary["far_field"]
+surface_reader = OpenDataFile(f"{out}/far_field.vtp")
+surface_reader.UpdatePipeline()
+surface = servermanager.Fetch(surface_reader)
+arrays = surface.GetPointData()
+nohd, beyond = arrays.GetArray("nohd_m"), arrays.GetArray("beyond_far_radius")
+assert nohd is not None and beyond is not None and arrays.GetArray("intensity_w_sr") is not None
+assert surface.GetNumberOfPoints() > 0 and surface.GetNumberOfCells() > 0
+centre, r_far = far["centre_m"], far["far_radius_m"]
+largest_nohd = 0.0
+for p in range(surface.GetNumberOfPoints()):
+    x = surface.GetPoint(p)
+    r = math.dist(x, centre)
+    assert r >= (1.0 - 1e-6) * r_far, (p, r, r_far)
+    if beyond.GetValue(p):
+        assert abs(r - nohd.GetValue(p)) <= 1e-6 * r, (p, r, nohd.GetValue(p))
+    largest_nohd = max(largest_nohd, nohd.GetValue(p))
+# The map's own maximum covers every direction the surface samples.
+assert largest_nohd <= (1.0 + 1e-6) * far["max_nohd_m"] + 1e-9, (largest_nohd, far["max_nohd_m"])
+# Closed around the centre: at least the area of the sphere of the far radius, less the
+# polygonal surface's own shortfall (its cells are a few degrees across).
+integrated = IntegrateVariables(Input=surface_reader)
+integrated.UpdatePipeline()
+area = servermanager.Fetch(integrated).GetCellData().GetArray("Area").GetValue(0)
+assert area >= 0.99 * 4.0 * math.pi * r_far ** 2, (area, 4.0 * math.pi * r_far ** 2)
+print(f"far_field.vtp: {surface.GetNumberOfPoints()} points, area {area:.4g} m^2 around the "
+      f"lit centre at far radius {r_far:.4g} m, largest NOHD {largest_nohd:.4g} m")
