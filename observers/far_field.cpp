@@ -202,7 +202,7 @@ double FarField::intensity(const Vec3& direction) const {
 }
 
 FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& spec,
-                         WorkCounter* counter) {
+                         WorkCounter* counter, PointExchange* exchange) {
   validate(spec);
   const LitBall ball = litBall(integrator);
   const double distance_m = kMapDistanceInFarRadii * spec.far_radius_m;
@@ -214,7 +214,7 @@ FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& 
     // (fieldIntegratorOptions()).
     const FacetIntegrator at_face =
         integrator.withAccuracy(0.25 * face.tolerance, 0.25 * face.floor_w_m2);
-    faces.push_back(computeField(at_face, face, ExcludedFn(), counter));
+    faces.push_back(computeField(at_face, face, ExcludedFn(), counter, exchange));
   }
   return {ball, spec, distance_m, std::move(faces)};
 }

@@ -149,10 +149,10 @@ FieldSpec cubeFaceSpec(int face, const Vec3& centre_m, double distance_m, const 
 
 /// @brief Computes the map: each cube face as an adaptive observer plane at a thousand far
 /// radii (where the map's own parallax is a thousandth of its tolerance), with @p integrator
-/// at that plane's accuracy. @p counter as for computeField().
+/// at that plane's accuracy. @p counter and @p exchange as for computeField().
 /// @throw std::invalid_argument when @p spec is out of range; WorkStopped as computeField().
 FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& spec,
-                         WorkCounter* counter = nullptr);
+                         WorkCounter* counter = nullptr, PointExchange* exchange = nullptr);
 
 /// @brief The hazard distance map in longitude and latitude: column i at azimuth
 /// φ = −π + (i + ½) 2π/width from +x toward +y, row j at elevation −π/2 + (j + ½) π/height

@@ -183,9 +183,14 @@ std::uint64_t fieldMemoryFloorBytes(const FieldSpec& spec, bool dense);
 /// refining where interpolation misses, halved along the axes that need it. Evaluated points are
 /// cached and never computed twice; TBB runs over blocks and points. @p integrator's options are
 /// used per point. @p counter (optional) counts evaluated points and evaluations.
-/// @throw WorkStopped when the counter's stop flag is raised (also computeDenseField).
+/// With @p exchange (an MPI job), each process integrates its share of every level's points
+/// (every size-th of them, which spreads a costly region over all) and receives the others';
+/// every process then holds the field one process would have computed, bit for bit.
+/// @throw WorkStopped when the counter's stop flag is raised (also computeDenseField); with an
+/// exchange, on every process at once.
 ObserverField computeField(const FacetIntegrator& integrator, const FieldSpec& spec,
-                           const ExcludedFn& excluded, WorkCounter* counter = nullptr);
+                           const ExcludedFn& excluded, WorkCounter* counter = nullptr,
+                           PointExchange* exchange = nullptr);
 
 /// @brief The uniform dense twin: every lattice point of the box evaluated with the same
 /// integrator over every lit facet.

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <mutex>
 #include <optional>
@@ -67,11 +68,12 @@ openvdb::CoordBBox ownedBox(const Block& b, const Lattice& lattice) {
 class FieldBuilder {
  public:
   FieldBuilder(const FacetIntegrator& integrator, const FieldSpec& spec, const ExcludedFn& excluded,
-               WorkCounter* counter)
+               WorkCounter* counter, PointExchange* exchange)
       : integrator_(integrator),
         spec_(spec),
         excluded_(excluded),
         counter_(counter),
+        exchange_(exchange != nullptr && exchange->size() > 1 ? exchange : nullptr),
         lattice_{spec.nodes()},
         coarse_candidate_(integrator.target().facetCount(), 0),
         lit_centre_m_(litBall(integrator).centre_m) {
@@ -103,7 +105,9 @@ class FieldBuilder {
       boundBlocks(blocks, *parent_pool, parent_lists, parent_dropped, *pool, lists, bounds);
       parent_pool.reset();
       parent_lists.clear();
-      throwIfStopped();
+      // Shared with other processes, a stop is agreed at the exchange of the level's points:
+      // leaving before it would leave them waiting.
+      if (exchange_ == nullptr) throwIfStopped();
       evaluateSamples(blocks, *pool, lists, bounds);
       throwIfStopped();
       const std::vector<Decision> decisions = decide(blocks, bounds);
@@ -320,7 +324,6 @@ class FieldBuilder {
                              [](const auto& x, const auto& y) { return x.first == y.first; }),
                  wanted.end());
 
-    if (counter_ != nullptr) counter_->items_scheduled.fetch_add(wanted.size());
     std::vector<char> sampled(blocks.size(), 0);
     for (const auto& [key, block] : wanted) sampled[block] = 1;
     std::vector<PieceList> point_lists(blocks.size());
@@ -335,8 +338,17 @@ class FieldBuilder {
     };
     tbb::enumerable_thread_specific<Scratch> scratch;
     const std::span<const Candidate> lit = integrator_.candidates();
-    tbb::parallel_for(std::size_t{0}, wanted.size(), [&](std::size_t w) {
+    // Shared: this process integrates every size-th point from its rank on.
+    const std::size_t share =
+        exchange_ != nullptr ? static_cast<std::size_t>(exchange_->size()) : 1;
+    const std::size_t first =
+        exchange_ != nullptr ? static_cast<std::size_t>(exchange_->rank()) : 0;
+    const std::size_t mine =
+        wanted.size() > first ? (wanted.size() - first + share - 1) / share : 0;
+    if (counter_ != nullptr) counter_->items_scheduled.fetch_add(mine);
+    tbb::parallel_for(std::size_t{0}, mine, [&](std::size_t m) {
       if (stopRequested()) return;
+      const std::size_t w = first + m * share;
       const std::uint64_t key = wanted[w].first;
       const auto nk = static_cast<std::uint64_t>(lattice_.n[2]);
       const auto nj = static_cast<std::uint64_t>(lattice_.n[1]);
@@ -361,6 +373,7 @@ class FieldBuilder {
         counter_->evaluations.fetch_add(r.evaluations, std::memory_order_relaxed);
       }
     });
+    if (exchange_ != nullptr) exchangeResults(results, evaluations);
     for (std::size_t w = 0; w < wanted.size(); ++w) {
       values_.emplace(wanted[w].first, results[w]);
       if (results[w].excluded) {
@@ -370,6 +383,43 @@ class FieldBuilder {
       ++stats_.evaluated_points;
       stats_.evaluations += evaluations[w];
     }
+  }
+
+  // Sends this process's share of a level's results (every size-th from its rank on) to the
+  // others and fills in theirs; a stop raised on any process stops all of them here.
+  void exchangeResults(std::vector<PointValue>& results, std::vector<std::int64_t>& evaluations) {
+    struct Record {
+      double irradiance_w_m2, error_w_m2;
+      std::int64_t evaluations;
+      std::uint8_t excluded, converged;
+    };
+    const std::size_t share = static_cast<std::size_t>(exchange_->size());
+    const std::size_t rank = static_cast<std::size_t>(exchange_->rank());
+    std::vector<std::byte> mine(1);
+    mine[0] = std::byte{stopRequested() ? std::uint8_t{1} : std::uint8_t{0}};
+    for (std::size_t w = rank; w < results.size(); w += share) {
+      const Record r{results[w].irradiance_w_m2, results[w].error_w_m2, evaluations[w],
+                     results[w].excluded ? std::uint8_t{1} : std::uint8_t{0},
+                     results[w].converged ? std::uint8_t{1} : std::uint8_t{0}};
+      const auto* bytes = reinterpret_cast<const std::byte*>(&r);
+      mine.insert(mine.end(), bytes, bytes + sizeof r);
+    }
+    const std::vector<std::vector<std::byte>> all = exchange_->allGather(mine);
+    bool stopped = false;
+    for (std::size_t p = 0; p < all.size(); ++p) {
+      const std::vector<std::byte>& from = all[p];
+      stopped = stopped || from.empty() || from[0] != std::byte{0};
+      if (stopped || p == rank) continue;
+      std::size_t offset = 1;
+      for (std::size_t w = p; w < results.size() && offset + sizeof(Record) <= from.size();
+           w += share, offset += sizeof(Record)) {
+        Record r;
+        std::memcpy(&r, from.data() + offset, sizeof r);
+        results[w] = {r.irradiance_w_m2, r.error_w_m2, r.excluded != 0, r.converged != 0};
+        evaluations[w] = r.evaluations;
+      }
+    }
+    if (stopped) throw WorkStopped();
   }
 
   std::vector<Decision> decide(const std::vector<Block>& blocks,
@@ -502,6 +552,7 @@ class FieldBuilder {
   const FieldSpec& spec_;
   const ExcludedFn& excluded_;
   WorkCounter* counter_;
+  PointExchange* exchange_;  // null when this process computes the field alone
   Lattice lattice_;
   std::vector<std::uint32_t> coarse_candidate_;  // coarse facet → index of its lit candidate
   Vec3 lit_centre_m_;  // centre of the lit facets' box: where the light spreads from
@@ -513,10 +564,11 @@ class FieldBuilder {
 }  // namespace
 
 ObserverField computeField(const FacetIntegrator& integrator, const FieldSpec& spec,
-                           const ExcludedFn& excluded, WorkCounter* counter) {
+                           const ExcludedFn& excluded, WorkCounter* counter,
+                           PointExchange* exchange) {
   validateFieldSpec(spec);
   openvdb::initialize();
-  return FieldBuilder(integrator, spec, excluded, counter).run();
+  return FieldBuilder(integrator, spec, excluded, counter, exchange).run();
 }
 
 }  // namespace glint

@@ -3,6 +3,7 @@
 /// @brief Irradiance at a list of observer points, computed in parallel over the points.
 
 #include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <stdexcept>
@@ -26,6 +27,19 @@ struct WorkCounter {
   [[nodiscard]] bool stopRequested() const {
     return stop != nullptr && stop->load(std::memory_order_relaxed);
   }
+};
+
+/// @brief The processes that share one field's point evaluations (an MPI job: pipeline/cluster.h).
+/// Each evaluates its share of every level's new points and all receive every value, so every
+/// process holds the same field, as one process would have computed it.
+class PointExchange {
+ public:
+  virtual ~PointExchange() = default;
+  [[nodiscard]] virtual int rank() const = 0;
+  [[nodiscard]] virtual int size() const = 0;
+  /// @brief Collective: every process passes its own bytes and receives every process's, in
+  /// rank order. Called by all processes the same number of times.
+  virtual std::vector<std::vector<std::byte>> allGather(std::span<const std::byte> mine) = 0;
 };
 
 /// @brief The work was stopped through WorkCounter::stop; the one who raised it says why.

@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <functional>
 #include <iostream>
 #include <string>
 
@@ -21,19 +22,22 @@
 namespace glint {
 namespace {
 
-// `glint batch` on one process or as one rank of an MPI job. An error on one rank ends them
-// all (MPI_Abort): the others would wait for it for ever.
-int runBatchCommand(BatchArgs& batch, std::ostream& err) {
-  Cluster cluster;
-  const std::string who =
-      cluster.size() > 1 ? " (rank " + std::to_string(cluster.rank()) + ")" : std::string();
+// `glint batch` or `glint run` (@p work) on one process or as one rank of an MPI job. Alone,
+// errors go to the caller's handler; as a rank, an error on one rank ends them all
+// (MPI_Abort): the others would wait for it for ever.
+int runOnCluster(Cluster& cluster, std::ostream& err, const std::function<void()>& work) {
+  if (cluster.size() == 1) {
+    work();
+    return 0;
+  }
+  const std::string who = " (rank " + std::to_string(cluster.rank()) + ")";
   auto fail = [&](const char* kind, const char* what, int status) {
     err << "glint" << who << ": " << kind << what << "\n" << std::flush;
-    if (cluster.size() > 1) cluster.abort(status);
+    cluster.abort(status);
     return status;
   };
   try {
-    runBatch(batch, cluster, err);
+    work();
     return 0;
   } catch (const InputError& e) {
     return fail("error: ", e.what(), 2);
@@ -191,12 +195,18 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
       run.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
       if (!run_memory.empty()) run.memory_bytes = *parseByteSize(run_memory);
       if (*run_scheme_opt) run.scheme = integrationSchemeByName(run_scheme);
-      runField(run, err);
+      Cluster cluster;
+      if (cluster.size() > 1 && cluster.rank() == 0 && !run.quiet) {
+        err << "glint run: " << cluster.size() << " MPI ranks share the fields' points\n";
+      }
+      return runOnCluster(cluster, err,
+                          [&] { runField(run, err, cluster.size() > 1 ? &cluster : nullptr); });
     }
     if (app.got_subcommand(batch_cmd)) {
       batch.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
       if (!batch_memory.empty()) batch.memory_bytes = *parseByteSize(batch_memory);
-      return runBatchCommand(batch, err);
+      Cluster cluster;
+      return runOnCluster(cluster, err, [&] { runBatch(batch, cluster, err); });
     }
     return 0;
   } catch (const InputError& e) {

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <deque>
 #include <exception>
+#include <limits>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -228,6 +229,38 @@ void Cluster::sumToRoot(std::vector<std::uint32_t>& values) {
 #else
   (void)values;
 #endif
+}
+
+std::vector<std::vector<std::byte>> Cluster::allGather(std::span<const std::byte> mine) {
+#ifdef GLINT_WITH_MPI
+  if (size_ > 1) {
+    if (mine.size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+      throw std::runtime_error("MPI: more than 2 GB to exchange in one level");
+    }
+    const int count = static_cast<int>(mine.size());
+    std::vector<int> counts(static_cast<std::size_t>(size_)), offsets(counts.size());
+    check(MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD),
+          "allgather");
+    std::size_t total = 0;
+    for (std::size_t r = 0; r < counts.size(); ++r) {
+      offsets[r] = static_cast<int>(total);
+      total += static_cast<std::size_t>(counts[r]);
+      if (total > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+        throw std::runtime_error("MPI: more than 2 GB to exchange in one level");
+      }
+    }
+    std::vector<std::byte> all(total);
+    check(MPI_Allgatherv(mine.data(), count, MPI_BYTE, all.data(), counts.data(), offsets.data(),
+                         MPI_BYTE, MPI_COMM_WORLD),
+          "allgatherv");
+    std::vector<std::vector<std::byte>> out(counts.size());
+    for (std::size_t r = 0; r < counts.size(); ++r) {
+      out[r].assign(all.begin() + offsets[r], all.begin() + offsets[r] + counts[r]);
+    }
+    return out;
+  }
+#endif
+  return {std::vector<std::byte>(mine.begin(), mine.end())};
 }
 
 void Cluster::abort(int status) {

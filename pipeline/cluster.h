@@ -1,8 +1,8 @@
 #pragma once
 /// @file
-/// @brief The processes a batch study runs on: this one alone, or the ranks of an MPI job
-/// (`mpirun -np N glint batch ...`, `srun glint batch ...`). Without MPI at build time, or
-/// when not started by an MPI launcher, it is one process and calls no MPI at all.
+/// @brief The processes a study or a field runs on: this one alone, or the ranks of an MPI job
+/// (`mpirun -np N glint batch|run ...`, `srun glint ...`). Without MPI at build time, or when
+/// not started by an MPI launcher, it is one process and calls no MPI at all.
 
 #include <cstddef>
 #include <cstdint>
@@ -10,9 +10,11 @@
 #include <string>
 #include <vector>
 
+#include "observers/point_set.h"
+
 namespace glint {
 
-class Cluster {
+class Cluster : public PointExchange {
  public:
   /// @brief Joins the MPI job when glint was built with MPI and an MPI launcher started it.
   Cluster();
@@ -21,8 +23,8 @@ class Cluster {
   Cluster(const Cluster&) = delete;
   Cluster& operator=(const Cluster&) = delete;
 
-  [[nodiscard]] int rank() const { return rank_; }
-  [[nodiscard]] int size() const { return size_; }
+  [[nodiscard]] int rank() const override { return rank_; }
+  [[nodiscard]] int size() const override { return size_; }
   /// @brief Whether this build can join an MPI job at all.
   [[nodiscard]] static bool mpiBuilt();
 
@@ -40,6 +42,10 @@ class Cluster {
   void maxToRoot(std::vector<float>& values);
   /// @brief Element-wise sum of every rank's @p values, into rank 0's.
   void sumToRoot(std::vector<std::uint32_t>& values);
+
+  /// @brief Every rank's bytes to every rank, in rank order (MPI_Allgatherv; the calling thread
+  /// must be the one that joined the job). One process: its own bytes.
+  std::vector<std::vector<std::byte>> allGather(std::span<const std::byte> mine) override;
 
   /// @brief Ends every rank of the job with @p status (after an error on one of them).
   [[noreturn]] void abort(int status);

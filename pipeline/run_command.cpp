@@ -276,7 +276,8 @@ struct FieldResult {
 
 FieldResult computeObserverField(const SceneTarget& target, const Scene& scene,
                                  const FieldSpec& spec, const RunArgs& args, const char* what,
-                                 const MemoryWatch& watch, std::ostream& err) {
+                                 const MemoryWatch& watch, std::ostream& err,
+                                 PointExchange* exchange) {
   FieldResult r{fieldProblem(target, scene, spec), nullptr};
   WorkCounter counter;
   counter.stop = &watch.stopFlag();
@@ -284,8 +285,9 @@ FieldResult computeObserverField(const SceneTarget& target, const Scene& scene,
   if (!args.quiet) progress = std::make_unique<ProgressReporter>(err, args.terminal, what, 0, counter);
   try {
     r.field = std::make_unique<ObserverField>(
-        args.uniform ? computeDenseField(r.problem.integrator, spec, r.problem.excluded, &counter)
-                     : computeField(r.problem.integrator, spec, r.problem.excluded, &counter));
+        args.uniform
+            ? computeDenseField(r.problem.integrator, spec, r.problem.excluded, &counter)
+            : computeField(r.problem.integrator, spec, r.problem.excluded, &counter, exchange));
   } catch (const WorkStopped&) {
     if (progress) progress->stop();
     watch.check(spec.plane ? std::string("plane ") + what : std::string("the observer box"));
@@ -353,7 +355,8 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
 
 // The far field of the scene, with progress on stderr unless quiet.
 FarField computeSceneFarField(const SceneTarget& target, const FarFieldSpec& spec,
-                              const RunArgs& args, const MemoryWatch& watch, std::ostream& err) {
+                              const RunArgs& args, const MemoryWatch& watch, std::ostream& err,
+                              PointExchange* exchange) {
   WorkCounter counter;
   counter.stop = &watch.stopFlag();
   std::unique_ptr<ProgressReporter> progress;
@@ -361,7 +364,7 @@ FarField computeSceneFarField(const SceneTarget& target, const FarFieldSpec& spe
     progress = std::make_unique<ProgressReporter>(err, args.terminal, "directions", 0, counter);
   }
   try {
-    return computeFarField(target.integrator, spec, &counter);
+    return computeFarField(target.integrator, spec, &counter, exchange);
   } catch (const WorkStopped&) {
     if (progress) progress->stop();
     watch.check("the far field");
@@ -512,7 +515,12 @@ RunInfo runInfo(const Scene& scene, const std::string& scene_file, std::string_v
   return info;
 }
 
-void runField(const RunArgs& args, std::ostream& err) {
+void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchange) {
+  // Under MPI every rank computes the same field, sharing the points; rank 0 alone reports
+  // and writes.
+  const bool writer = exchange == nullptr || exchange->rank() == 0;
+  RunArgs args = requested;
+  if (!writer) args.quiet = true;
   Scene scene = loadScene(args.scene_path);
   overrideAccuracy(scene.accuracy, std::nullopt, args.scheme, scene.source);
   if (!scene.observers && scene.planes.empty()) {
@@ -524,36 +532,36 @@ void runField(const RunArgs& args, std::ostream& err) {
     dir = std::filesystem::path("out") / (std::filesystem::path(args.scene_path).stem().string() +
                                           (args.uniform ? "_uniform" : ""));
   }
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw OutputError(dir.string() + ": cannot create the output folder: " + ec.message());
-  // Opened before the work, so an unwritable folder stops the run at once.
+  if (writer) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) throw OutputError(dir.string() + ": cannot create the output folder: " + ec.message());
+  }
+  // Opened before the work, so an unwritable folder stops the run at once (rank 0 only; the
+  // other ranks' pointers stay null and they write nothing).
   std::vector<std::unique_ptr<AtomicFile>> files;
-  auto open = [&](const std::string& name) -> AtomicFile& {
+  std::vector<std::string> written;
+  auto open = [&](const std::string& name) -> AtomicFile* {
+    written.push_back(name);
+    if (!writer) return nullptr;
     files.push_back(std::make_unique<AtomicFile>(dir / name));
-    return *files.back();
+    return files.back().get();
   };
-  AtomicFile& summary = open("summary.json");
-  std::vector<std::string> written = {"summary.json"};
+  AtomicFile* summary = open("summary.json");
   AtomicFile *vdb = nullptr, *vti = nullptr, *vtu = nullptr, *vtp = nullptr;
   if (scene.observers) {
-    vdb = &open("irradiance.vdb");
-    vti = &open("irradiance.vti");
-    vtu = &open("blocks.vtu");
-    vtp = &open("target.vtp");
-    written.insert(written.end(), {"irradiance.vdb", "irradiance.vti", "blocks.vtu", "target.vtp"});
+    vdb = open("irradiance.vdb");
+    vti = open("irradiance.vti");
+    vtu = open("blocks.vtu");
+    vtp = open("target.vtp");
   }
   AtomicFile *far_exr = nullptr, *far_vtp = nullptr;
   if (scene.far_field.enabled) {
-    far_exr = &open("far_field.exr");
-    far_vtp = &open("far_field.vtp");
-    written.insert(written.end(), {"far_field.exr", "far_field.vtp"});
+    far_exr = open("far_field.exr");
+    far_vtp = open("far_field.vtp");
   }
   std::vector<AtomicFile*> exrs;
-  for (const PlaneSpec& plane : scene.planes) {
-    exrs.push_back(&open(plane.name + ".exr"));
-    written.push_back(plane.name + ".exr");
-  }
+  for (const PlaneSpec& plane : scene.planes) exrs.push_back(open(plane.name + ".exr"));
 
   std::unique_ptr<tbb::global_control> thread_limit;
   if (args.threads > 0) {
@@ -580,7 +588,7 @@ void runField(const RunArgs& args, std::ostream& err) {
   if (scene.far_field.enabled) {
     const FarFieldSpec spec = farFieldSpec(scene, target.integrator);
     checkFarFieldMemory(spec, budget);
-    far.emplace(computeSceneFarField(target, spec, args, watch, err));
+    far.emplace(computeSceneFarField(target, spec, args, watch, err, exchange));
     if (far->stats().non_finite_points > 0) {
       throw std::runtime_error("the far field: " + std::to_string(far->stats().non_finite_points) +
                                " directions have a non-finite intensity; nothing was written");
@@ -597,14 +605,17 @@ void runField(const RunArgs& args, std::ostream& err) {
   };
   if (scene.observers) {
     const FieldSpec spec = fieldSpec(scene);
-    const FieldResult box = computeObserverField(target, scene, spec, args, "points", watch, err);
+    const FieldResult box =
+        computeObserverField(target, scene, spec, args, "points", watch, err, exchange);
     const ObserverField& field = *box.field;
     requireFinite(field, "the observer box");
     const FacetIntegrator& integrator = box.problem.integrator;
-    writeVdb(vdb->stream(), field, info);
-    writeVti(vti->stream(), field, vtiStride(spec), info.mpe_w_m2);
-    writeBlocksVtu(vtu->stream(), field, info.mpe_w_m2);
-    writeTargetVtp(vtp->stream(), integrator, 2);
+    if (writer) {
+      writeVdb(vdb->stream(), field, info);
+      writeVti(vti->stream(), field, vtiStride(spec), info.mpe_w_m2);
+      writeBlocksVtu(vtu->stream(), field, info.mpe_w_m2);
+      writeTargetVtp(vtp->stream(), integrator, 2);
+    }
     const HazardZone zone = hazardZone(field, scene, targetCentre(integrator.target()));
     j = summaryJson(field, zone, info, integrator.cullStats());
     describeTarget(box.problem);
@@ -635,11 +646,13 @@ void runField(const RunArgs& args, std::ostream& err) {
       const PlaneSpec& plane = scene.planes[p];
       const FieldSpec spec = planeFieldSpec(scene, plane);
       const FieldResult r =
-          computeObserverField(target, scene, spec, args, plane.name.c_str(), watch, err);
+          computeObserverField(target, scene, spec, args, plane.name.c_str(), watch, err, exchange);
       const ObserverField& field = *r.field;
       requireFinite(field, "plane " + plane.name);
-      writeExr(exrs[p]->stream(), planeMap(field, info.mpe_w_m2),
-               {info.program_version, info.wavelength_nm, info.mpe_w_m2});
+      if (writer) {
+        writeExr(exrs[p]->stream(), planeMap(field, info.mpe_w_m2),
+                 {info.program_version, info.wavelength_nm, info.mpe_w_m2});
+      }
       const HazardZone zone =
           hazardZone(field, scene, targetCentre(r.problem.integrator.target()));
       planes.push_back(planeJson(plane, field, zone));
@@ -657,7 +670,7 @@ void runField(const RunArgs& args, std::ostream& err) {
     }
     j["planes"] = planes;
   }
-  if (far) {
+  if (far && writer) {
     const double mpe = info.mpe_w_m2;
     // 2:1 lat-long, about as fine as the cube faces' centres, at most 4096 × 2048 pixels.
     const LatLongMap map = latLongMap(*far, std::min(far->spec().face_pixels, 2048), mpe);
@@ -670,7 +683,8 @@ void runField(const RunArgs& args, std::ostream& err) {
     j["far_field"] = farFieldJson(*far, far_hazard);
     if (!args.quiet) printFarField(err, *far, far_hazard);
   }
-  summary.stream() << j.dump(2) << "\n";
+  if (!writer) return;
+  summary->stream() << j.dump(2) << "\n";
   watch.check("writing the outputs");  // a file written short of memory is not committed
   for (const auto& f : files) f->commit();
   if (args.quiet) return;

@@ -32,7 +32,9 @@ struct RunArgs {
 /// for the box, `<name>.exr` for each plane, and summary.json into the output folder, each
 /// whole or not at all.
 /// @throw InputError, OutputError on bad input or an unwritable folder.
-void runField(const RunArgs& args, std::ostream& err);
+/// Under MPI (@p exchange with more than one rank) every rank computes the same fields, sharing
+/// their points; rank 0 alone reports and writes, the same bytes as one process would.
+void runField(const RunArgs& args, std::ostream& err, PointExchange* exchange = nullptr);
 
 /// @brief What the files of a run of @p scene record about it: the program, the scene file and
 /// the hash of its text @p scene_text, the scheme ("adaptive" or "uniform"), the laser and MPE.

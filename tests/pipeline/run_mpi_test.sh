@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# `mpirun -np 2 glint run` against `glint run` on one process, on a scene with a box, a plane
+# and the far field: every file must be the same bytes, but for the VDB's grid UUIDs (random
+# per write) and summary.json's "seconds" (wall-clock times).
+# Usage: run_mpi_test.sh GLINT MPIEXEC SCENE WORKDIR
+set -euo pipefail
+export HWLOC_COMPONENTS=-gl,-opencl  # see batch_mpi_test.sh
+glint=$1 mpiexec=$2 scene=$3 work=$4
+rm -rf "$work" && mkdir -p "$work"
+"$glint" run "$scene" -o "$work/one" --threads 2 -q
+"$mpiexec" --allow-run-as-root --oversubscribe -np 2 "$glint" run "$scene" -o "$work/mpi" \
+  --threads 1 2> "$work/mpi.log" || { cat "$work/mpi.log" >&2; exit 1; }
+cat "$work/mpi.log"
+grep -q "2 MPI ranks share" "$work/mpi.log" || { echo "FAIL: the run did not use 2 ranks" >&2; exit 1; }
+
+files=$(cd "$work/one" && ls)
+[ "$files" = "$(cd "$work/mpi" && ls)" ] || { echo "FAIL: different files: $files" >&2; exit 1; }
+for f in $files; do
+  case $f in
+    irradiance.vdb)  # the same grids and metadata, byte for byte once the UUIDs are blanked
+      for d in one mpi; do
+        /usr/bin/python3 - "$work/$d/$f" "$work/$d/$f.blank" <<'PY'
+import re, sys
+data = open(sys.argv[1], "rb").read()
+# Each grid descriptor carries a 36-character UUID, random per write.
+blank = re.sub(rb"[0-9a-f]{8}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{12}", b"U" * 36, data)
+open(sys.argv[2], "wb").write(blank)
+PY
+      done
+      cmp "$work/one/$f.blank" "$work/mpi/$f.blank" ||
+        { echo "FAIL: $f differs between 1 and 2 ranks" >&2; exit 1; } ;;
+    summary.json)
+      diff <(grep -v '"seconds"' "$work/one/$f") <(grep -v '"seconds"' "$work/mpi/$f") ||
+        { echo "FAIL: $f differs between 1 and 2 ranks" >&2; exit 1; } ;;
+    *)
+      cmp "$work/one/$f" "$work/mpi/$f" ||
+        { echo "FAIL: $f differs between 1 and 2 ranks" >&2; exit 1; } ;;
+  esac
+done
+echo "PASS: 2 ranks wrote the same $(echo $files | wc -w) files as 1 process"
