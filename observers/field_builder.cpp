@@ -11,6 +11,7 @@
 #include <mutex>
 #include <optional>
 #include <stdexcept>
+#include <string>
 #include <unordered_map>
 
 #include "observers/block_check.h"
@@ -397,29 +398,44 @@ class FieldBuilder {
     const std::size_t rank = static_cast<std::size_t>(exchange_->rank());
     std::vector<std::byte> mine(1);
     mine[0] = std::byte{stopRequested() ? std::uint8_t{1} : std::uint8_t{0}};
+    const auto records = [&](std::size_t p) {  // how many points process p integrated
+      return results.size() > p ? (results.size() - p + share - 1) / share : 0;
+    };
+    mine.reserve(1 + records(rank) * sizeof(Record));
     for (std::size_t w = rank; w < results.size(); w += share) {
-      const Record r{results[w].irradiance_w_m2, results[w].error_w_m2, evaluations[w],
-                     results[w].excluded ? std::uint8_t{1} : std::uint8_t{0},
-                     results[w].converged ? std::uint8_t{1} : std::uint8_t{0}};
+      Record r;
+      std::memset(&r, 0, sizeof r);  // no indeterminate padding on the wire
+      r.irradiance_w_m2 = results[w].irradiance_w_m2;
+      r.error_w_m2 = results[w].error_w_m2;
+      r.evaluations = evaluations[w];
+      r.excluded = results[w].excluded ? 1 : 0;
+      r.converged = results[w].converged ? 1 : 0;
       const auto* bytes = reinterpret_cast<const std::byte*>(&r);
       mine.insert(mine.end(), bytes, bytes + sizeof r);
     }
     const std::vector<std::vector<std::byte>> all = exchange_->allGather(mine);
     bool stopped = false;
     for (std::size_t p = 0; p < all.size(); ++p) {
+      stopped = stopped || all[p].empty() || all[p][0] != std::byte{0};
+    }
+    if (stopped) throw WorkStopped();
+    for (std::size_t p = 0; p < all.size(); ++p) {
+      if (p == rank) continue;
       const std::vector<std::byte>& from = all[p];
-      stopped = stopped || from.empty() || from[0] != std::byte{0};
-      if (stopped || p == rank) continue;
+      // A short message would leave points at 0 W/m², read as "no hazard": refuse it.
+      if (all.size() != share || from.size() != 1 + records(p) * sizeof(Record)) {
+        throw std::runtime_error("point exchange: process " + std::to_string(p) + " sent " +
+                                 std::to_string(from.size()) + " bytes, expected " +
+                                 std::to_string(1 + records(p) * sizeof(Record)));
+      }
       std::size_t offset = 1;
-      for (std::size_t w = p; w < results.size() && offset + sizeof(Record) <= from.size();
-           w += share, offset += sizeof(Record)) {
+      for (std::size_t w = p; w < results.size(); w += share, offset += sizeof(Record)) {
         Record r;
         std::memcpy(&r, from.data() + offset, sizeof r);
         results[w] = {r.irradiance_w_m2, r.error_w_m2, r.excluded != 0, r.converged != 0};
         evaluations[w] = r.evaluations;
       }
     }
-    if (stopped) throw WorkStopped();
   }
 
   std::vector<Decision> decide(const std::vector<Block>& blocks,
