@@ -248,7 +248,7 @@ def sampled_section(out, name):
     if not data:
         return ["No sampled observer-field results."]
     lines = table_head("scene", "voxel (m)", "tolerance", "refinement", "points",
-                       "adaptive: evaluations, s, peak RSS MB, bytes per active voxel",
+                       "adaptive: evaluations, s, peak RSS MB, peak RSS per active voxel (bytes)",
                        "dense (estimated): evaluations ± s.e., s",
                        "fewer evaluations (± s.e.)", "checked: random + feature points",
                        "max error / allowed")
