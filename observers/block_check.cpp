@@ -70,7 +70,7 @@ double octantCentreFill(const std::array<double, kLatticeSamples>& u, const Bloc
 // `allowed` (v and w in forEachSample's order; the octant centres only if there are any).
 struct Fit {
   bool passes = true;          // every sample met
-  std::uint8_t bent_axes = 0;  // bit a: some line of three samples along axis a is not linear
+  std::uint8_t bent_axes = 0;  // split mask of the axes along which some line of samples bends
 };
 
 Fit fit(const BlockValues& v, const BlockValues& w, std::size_t count, const BlockSize& size,

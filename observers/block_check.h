@@ -70,17 +70,18 @@ inline double spreadWeight(double r_m, int power) {
 
 enum class Verdict : std::uint8_t { Skip, Accept, Refine, Finest };
 
-/// Bit a of a split mask: the block is halved along axis a.
+/// A split mask names the axes a block is halved along as the child index 4x + 2y + z does:
+/// x is 0b100, y 0b010, z 0b001 (axis a is 4 >> a).
 inline constexpr std::uint8_t kSplitAll = 0b111;
 
 struct Decision {
   Verdict verdict = Verdict::Refine;
   int power = 0;  ///< an accepted block interpolates E·r^power (see kInterpolationPowers)
-  /// The axes a refined block is halved along (bit a); never an exact one.
+  /// The axes a refined block is halved along (a split mask); never an exact one.
   std::uint8_t split = kSplitAll;
 };
 
-/// @brief The axes of @p size that may still be halved (bit a where axis a is not exact).
+/// @brief The axes of @p size that may still be halved (a split mask of those not exact).
 std::uint8_t splittableAxes(const BlockSize& size);
 
 /// @brief What a block's bound alone decides, before any of its samples is read: Skip where it
