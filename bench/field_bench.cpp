@@ -32,6 +32,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <limits>
 #include <optional>
@@ -123,16 +124,29 @@ std::vector<Index3> featurePoints(const Scene& scene, const FieldSpec& spec) {
   return out;
 }
 
+// The adaptive field of @p s, with the process's peak resident set while it ran.
+struct AdaptiveRun {
+  ObserverField field;
+  std::int64_t peak_rss_bytes = 0;  // 0 where the kernel would not reset the peak
+};
+
+AdaptiveRun runAdaptive(const std::filesystem::path& path, const FieldProblem& problem,
+                        const FieldSpec& s) {
+  std::fprintf(stderr, "%s: adaptive, tolerance %g ...\n", path.filename().c_str(), s.tolerance);
+  const bool rss_valid = resetPeakRss();
+  ObserverField field = computeField(problem.integrator, s, problem.excluded);
+  return {std::move(field), rss_valid ? peakRssBytes() : 0};
+}
+
 SampledRow measureSampled(const std::filesystem::path& path, const Scene& scene,
                           const FieldProblem& problem, const FieldSpec& s, int samples) {
   SampledRow row;
   row.scene = path.filename().string();
   row.spec = s;
-  std::fprintf(stderr, "%s: adaptive, tolerance %g ...\n", path.filename().c_str(), s.tolerance);
-  const bool rss_valid = resetPeakRss();
-  const ObserverField adaptive = computeField(problem.integrator, s, problem.excluded);
+  const AdaptiveRun run = runAdaptive(path, problem, s);
+  const ObserverField& adaptive = run.field;
   row.adaptive = adaptive.stats();
-  row.adaptive_peak_rss_bytes = rss_valid ? peakRssBytes() : 0;
+  row.adaptive_peak_rss_bytes = run.peak_rss_bytes;
 
   const std::array<int, 3> n = s.nodes();
   std::mt19937_64 rng(20261124);
@@ -173,24 +187,21 @@ SampledRow measureSampled(const std::filesystem::path& path, const Scene& scene,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   // The twin's cost from the random points alone (features are not a uniform sample).
-  double sum = 0.0, sum_sq = 0.0, cpu = 0.0;
-  for (int p = 0; p < samples; ++p) {
-    const double e = static_cast<double>(direct[static_cast<std::size_t>(p)].evaluations);
+  double sum = 0.0, sum_sq = 0.0, cpu = 0.0, cpu_all = 0.0;
+  for (std::size_t p = 0; p < direct.size(); ++p) {
+    cpu_all += direct[p].seconds;
+    if (p >= static_cast<std::size_t>(samples)) continue;
+    const double e = static_cast<double>(direct[p].evaluations);
     sum += e;
     sum_sq += e * e;
-    cpu += direct[static_cast<std::size_t>(p)].seconds;
+    cpu += direct[p].seconds;
   }
   const double points_in_box = static_cast<double>(row.adaptive.lattice_points);
   const double mean = sum / samples;
   const double variance = samples > 1 ? (sum_sq - samples * mean * mean) / (samples - 1) : 0.0;
   row.dense_evaluations = mean * points_in_box;
   row.dense_evaluations_se = std::sqrt(std::max(variance, 0.0) / samples) * points_in_box;
-  // Wall time per point as the samples ran it on all threads, scaled to the box.
-  const double cpu_all = [&] {
-    double t = 0.0;
-    for (const Direct& d : direct) t += d.seconds;
-    return t;
-  }();
+  // The random points' share of the wall time (on all threads), scaled to the box.
   row.dense_seconds = cpu_all > 0.0 ? wall * (cpu / cpu_all) * points_in_box / samples : 0.0;
 
   row.peak_w_m2 = row.adaptive.peak_w_m2;
@@ -231,38 +242,67 @@ FieldSpec benchSpec(const Scene& scene, const Options& o) {
   return spec;
 }
 
-std::vector<SampledRow> measureSampled(const std::filesystem::path& path, const Options& o) {
+// A scene as the options set it up: its lattice, its problem, and the lattice once per
+// tolerance asked (the scene's own when none is).
+struct BenchCase {
+  Scene scene;
+  FieldSpec spec;
+  FieldProblem problem;
+
+  [[nodiscard]] std::vector<FieldSpec> perTolerance(const Options& o) const {
+    std::vector<FieldSpec> out;
+    for (const double t : o.tolerances.empty() ? std::vector{spec.tolerance} : o.tolerances) {
+      out.push_back(spec);
+      out.back().tolerance = t;
+    }
+    return out;
+  }
+};
+
+BenchCase loadCase(const std::filesystem::path& path, const Options& o) {
   Scene scene = loadScene(path);
   if (o.scheme) scene.accuracy.scheme = *o.scheme;
   const FieldSpec spec = benchSpec(scene, o);
-  const FieldProblem problem = fieldProblem(scene, spec);
+  FieldProblem problem = fieldProblem(scene, spec);
+  return {std::move(scene), spec, std::move(problem)};
+}
+
+std::vector<SampledRow> measureSampled(const std::filesystem::path& path, const Options& o) {
+  const BenchCase c = loadCase(path, o);
   std::vector<SampledRow> rows;
-  for (const double tolerance : o.tolerances.empty() ? std::vector{spec.tolerance} : o.tolerances) {
-    FieldSpec s = spec;
-    s.tolerance = tolerance;
-    rows.push_back(measureSampled(path, scene, problem, s, o.dense_sample));
+  for (const FieldSpec& s : c.perTolerance(o)) {
+    rows.push_back(measureSampled(path, c.scene, c.problem, s, o.dense_sample));
   }
   return rows;
 }
 
 std::vector<Row> measure(const std::filesystem::path& path, const Options& o) {
-  Scene scene = loadScene(path);
-  if (o.scheme) scene.accuracy.scheme = *o.scheme;
-  const FieldSpec spec = benchSpec(scene, o);
-  const std::vector<double>& tolerances = o.tolerances;
-  const FieldProblem problem = fieldProblem(scene, spec);
+  const BenchCase c = loadCase(path, o);
   std::fprintf(stderr, "%s: dense ...\n", path.filename().c_str());
-  const ObserverField dense = computeDenseField(problem.integrator, spec, problem.excluded);
+  const ObserverField dense = computeDenseField(c.problem.integrator, c.spec, c.problem.excluded);
   std::vector<Row> rows;
-  for (const double tolerance : tolerances.empty() ? std::vector{spec.tolerance} : tolerances) {
-    FieldSpec s = spec;
-    s.tolerance = tolerance;
-    std::fprintf(stderr, "%s: adaptive, tolerance %g ...\n", path.filename().c_str(), tolerance);
-    const bool rss_valid = resetPeakRss();
-    const ObserverField adaptive = computeField(problem.integrator, s, problem.excluded);
-    rows.push_back({path.filename().string(), s, adaptive.stats(), dense.stats(),
-                    compareFields(adaptive, dense, scene.hazard.mpe.irradiance_w_m2),
-                    rss_valid ? peakRssBytes() : 0});
+  for (const FieldSpec& s : c.perTolerance(o)) {
+    const AdaptiveRun run = runAdaptive(path, c.problem, s);
+    rows.push_back({path.filename().string(), s, run.field.stats(), dense.stats(),
+                    compareFields(run.field, dense, c.scene.hazard.mpe.irradiance_w_m2),
+                    run.peak_rss_bytes});
+  }
+  return rows;
+}
+
+// Every scene's rows, or nothing where a scene file is refused (the message on stderr).
+template <class RowT>
+std::optional<std::vector<RowT>> measureScenes(
+    const std::vector<std::string>& scenes,
+    const std::function<std::vector<RowT>(const std::string&)>& measureOne) {
+  std::vector<RowT> rows;
+  try {
+    for (const std::string& s : scenes) {
+      for (RowT& r : measureOne(s)) rows.push_back(std::move(r));
+    }
+  } catch (const InputError& e) {
+    std::cerr << "glint_field_bench: " << e.what() << "\n";
+    return std::nullopt;
   }
   return rows;
 }
@@ -270,15 +310,10 @@ std::vector<Row> measure(const std::filesystem::path& path, const Options& o) {
 // --dense-sample: one row per scene and tolerance, printed and written as CSV.
 int sampledMain(const std::vector<std::string>& scenes, const Options& options,
                 const std::string& out_path) {
-  std::vector<SampledRow> rows;
-  try {
-    for (const std::string& s : scenes) {
-      for (SampledRow& r : measureSampled(s, options)) rows.push_back(std::move(r));
-    }
-  } catch (const InputError& e) {
-    std::cerr << "glint_field_bench: " << e.what() << "\n";
-    return 2;
-  }
+  const std::optional<std::vector<SampledRow>> measured = measureScenes<SampledRow>(
+      scenes, [&](const std::string& s) { return measureSampled(s, options); });
+  if (!measured) return 2;
+  const std::vector<SampledRow>& rows = *measured;
   std::printf("%-18s %6s %7s %11s | %9s %10s %7s %8s | %10s %9s %7s | %13s | %7s %9s %9s\n",
               "scene", "voxel", "tol.", "points", "adapt.pts", "adapt.eval", "adapt.s", "RSS MB",
               "dense.eval", "± s.e.", "dense.s", "eval× (± s.e.)", "checked", "max.err", "allowed");
@@ -347,15 +382,10 @@ int main(int argc, char** argv) {
   if (!scheme_name.empty()) options.scheme = integrationSchemeByName(scheme_name);
 
   if (options.dense_sample > 0) return sampledMain(scenes, options, out_path);
-  std::vector<Row> rows;
-  try {
-    for (const std::string& s : scenes) {
-      for (Row& r : measure(s, options)) rows.push_back(std::move(r));
-    }
-  } catch (const InputError& e) {
-    std::cerr << "glint_field_bench: " << e.what() << "\n";
-    return 2;
-  }
+  const std::optional<std::vector<Row>> measured =
+      measureScenes<Row>(scenes, [&](const std::string& s) { return measure(s, options); });
+  if (!measured) return 2;
+  const std::vector<Row>& rows = *measured;
 
   std::printf(
       "%-18s %6s %7s %9s | %9s %10s %8s | %9s %10s %8s | %6s %6s | %9s %9s | %6s %6s %6s | %s\n",

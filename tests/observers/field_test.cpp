@@ -209,14 +209,20 @@ TEST(ObserverPlane, PlaneThroughASmallMirrorIsRefinedAroundIt) {
   expectMatchesDense(c, spec, "slice through the mirror");
 }
 
-// A 1 m cylinder lit across its axis, in a box around it, at lobe width σ.
-std::string cylinderScene(double sigma) {
+// A 1 m cylinder lit across its axis by a beam that covers it, at lobe width σ, seen from the
+// box `observers`.
+std::string cylinderSceneWith(double sigma, const std::string& observers) {
   return sceneJson(
       R"({"profile": "flat_top", "radius_m": 2.0})",
       R"({"specular_reflectance": 0.9, "sigma": )" + std::to_string(sigma) + "}",
       R"({"shape": "cylinder", "center": [0, 0, 0], "axis": [0, 0, 1], "radius": 0.5, "length": 1.0, "material": "m", "segments": 12})",
-      R"({"min": [-3, -3, -1.5], "max": [3, 3, 1.5], "voxel_m": 0.25, "block_m": 1.0,
-          "tolerance": 0.01, "floor_w_m2": 1e-2})");
+      observers);
+}
+
+// The same in a box around it.
+std::string cylinderScene(double sigma) {
+  return cylinderSceneWith(sigma, R"({"min": [-3, -3, -1.5], "max": [3, 3, 1.5], "voxel_m": 0.25,
+                                      "block_m": 1.0, "tolerance": 0.01, "floor_w_m2": 1e-2})");
 }
 
 TEST(ObserverField, CylinderNarrowLobeMatchesDense) {
@@ -235,12 +241,9 @@ TEST(ObserverField, RimStepIsResolvedAcrossItselfAndInterpolatedAlongIt) {
   // resolves it in blocks thin across the step and whole along it; the first versions' octree
   // halved every axis down to single voxels there. Both must match dense; the anisotropic
   // field must do it with fewer points, and no more points than the octree anywhere.
-  const std::string json = sceneJson(
-      R"({"profile": "flat_top", "radius_m": 2.0})",
-      R"({"specular_reflectance": 0.9, "sigma": 0.003})",
-      R"({"shape": "cylinder", "center": [0, 0, 0], "axis": [0, 0, 1], "radius": 0.5, "length": 1.0, "material": "m", "segments": 12})",
-      R"({"min": [-6, -2, 0], "max": [-2, 2, 1], "voxel_m": 0.125, "block_m": 1.0,
-          "tolerance": 0.01, "floor_w_m2": 1e-2})");
+  const std::string json =
+      cylinderSceneWith(0.003, R"({"min": [-6, -2, 0], "max": [-2, 2, 1], "voxel_m": 0.125,
+                                   "block_m": 1.0, "tolerance": 0.01, "floor_w_m2": 1e-2})");
   const Scene scene = parseScene(json, "test.json");
   FieldSpec spec = fieldSpec(scene);
   ASSERT_TRUE(spec.anisotropic) << "the default";
@@ -263,12 +266,9 @@ TEST(ObserverField, LobeEdgeOnAMiddleSamplePlaneIsResolved) {
   // of 1 m from z = −1 put it exactly on their middle sample plane, where the sample is half
   // the step and corners, mid-samples and all look linear. Only the octant centres see it
   // (without them: error 1.06 W/m² against 0.11 allowed, volume above 1 % 14 % too large).
-  const std::string json = sceneJson(
-      R"({"profile": "flat_top", "radius_m": 2.0})",
-      R"({"specular_reflectance": 0.9, "sigma": 0.003})",
-      R"({"shape": "cylinder", "center": [0, 0, 0], "axis": [0, 0, 1], "radius": 0.5, "length": 1.0, "material": "m", "segments": 12})",
-      R"({"min": [-6, -2, -1], "max": [-2, 2, 1], "voxel_m": 0.25, "block_m": 1.0,
-          "tolerance": 0.01, "floor_w_m2": 1e-2})");
+  const std::string json =
+      cylinderSceneWith(0.003, R"({"min": [-6, -2, -1], "max": [-2, 2, 1], "voxel_m": 0.25,
+                                   "block_m": 1.0, "tolerance": 0.01, "floor_w_m2": 1e-2})");
   const FieldSpec spec = specOf(json);
   ASSERT_EQ(spec.block_voxels, 4);
   ASSERT_DOUBLE_EQ(spec.position(0, 0, spec.block_voxels / 2).z, -0.5) << "the premise";
