@@ -146,11 +146,13 @@ FieldSpec cubeFaceSpec(int face, const Vec3& centre_m, double distance_m,
   return s;
 }
 
-FarField::FarField(LitBall ball, FarFieldSpec spec, double map_distance_m,
-                   std::vector<ObserverField> faces)
+FarField::Face::Face(const ObserverField& field)
+    : spec(field.spec()), stats(field.stats()), irradiance_w_m2(field.irradianceLattice()) {}
+
+FarField::FarField(LitBall ball, FarFieldSpec spec, double map_distance_m, std::vector<Face> faces)
     : ball_(ball), spec_(spec), map_distance_m_(map_distance_m), faces_(std::move(faces)) {
-  for (const ObserverField& face : faces_) {
-    const FieldStats& s = face.stats();
+  for (const Face& face : faces_) {
+    const FieldStats& s = face.stats;
     stats_.lattice_points += s.lattice_points;
     stats_.evaluated_points += s.evaluated_points;
     stats_.interpolated_points += s.interpolated_points;
@@ -182,12 +184,16 @@ FarField::FarField(LitBall ball, FarFieldSpec spec, double map_distance_m,
 }
 
 Vec3 FarField::latticePoint(int face, int i, int j) const {
-  return faces_[static_cast<std::size_t>(face)].spec().position(i, j, 0);
+  return faces_[static_cast<std::size_t>(face)].spec.position(i, j, 0);
 }
 
 double FarField::latticeIntensity(int face, int i, int j) const {
   const double d = glm::length(latticePoint(face, i, j) - ball_.centre_m);
-  return faces_[static_cast<std::size_t>(face)].irradiance(i, j, 0) * d * d;
+  const Face& f = faces_[static_cast<std::size_t>(face)];
+  const auto row = static_cast<std::size_t>(spec_.face_pixels) + 1;
+  return static_cast<double>(
+             f.irradiance_w_m2[static_cast<std::size_t>(j) * row + static_cast<std::size_t>(i)]) *
+         d * d;
 }
 
 double FarField::intensity(const Vec3& direction) const {
@@ -206,7 +212,7 @@ FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& 
   validate(spec);
   const LitBall ball = litBall(integrator);
   const double distance_m = kMapDistanceInFarRadii * spec.far_radius_m;
-  std::vector<ObserverField> faces;
+  std::vector<FarField::Face> faces;
   faces.reserve(FarField::kFaces);
   for (int f = 0; f < FarField::kFaces; ++f) {
     const FieldSpec face = cubeFaceSpec(f, ball.centre_m, distance_m, spec);
@@ -214,7 +220,8 @@ FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& 
     // (fieldIntegratorOptions()).
     const FacetIntegrator at_face =
         integrator.withAccuracy(0.25 * face.tolerance, 0.25 * face.floor_w_m2);
-    faces.push_back(computeField(at_face, face, ExcludedFn(), counter, exchange));
+    // Each face's grids are dropped as soon as its lattice is taken.
+    faces.emplace_back(computeField(at_face, face, ExcludedFn(), counter, exchange));
   }
   return {ball, spec, distance_m, std::move(faces)};
 }
@@ -259,7 +266,7 @@ HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mp
   HazardSurface s;
   const Vec3 centre = field.ball().centre_m;
   for (int f = 0; f < FarField::kFaces; ++f) {
-    const ObserverField& face = field.faces()[static_cast<std::size_t>(f)];
+    const FarField::Face& face = field.faces()[static_cast<std::size_t>(f)];
     // Each lattice direction lends its intensity to the nearest vertex.
     std::vector<double> vertex_max(vertices, 0.0);
     field.forEachDirectionOfFace(f, [&](int i, int j, const Vec3&, double intensity_w_sr) {
@@ -270,7 +277,7 @@ HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mp
     const auto first = static_cast<std::int64_t>(s.points_m.size());
     for (int b = 0; b <= m; ++b)
       for (int a = 0; a <= m; ++a) {
-        const Vec3 p = face.spec().position(a * step, b * step, 0);
+        const Vec3 p = face.spec.position(a * step, b * step, 0);
         const Vec3 dir = glm::normalize(p - centre);
         const double intensity =
             vertex_max[static_cast<std::size_t>(b) * (m + 1) + static_cast<std::size_t>(a)];
