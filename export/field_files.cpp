@@ -1,11 +1,14 @@
 #include "export/field_files.h"
 
-#include <openvdb/io/Stream.h>
+#include <openvdb/io/Archive.h>
+#include <openvdb/io/GridDescriptor.h>
+#include <openvdb/io/io.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <sstream>
+#include <stdexcept>
 #include <vector>
 
 #include "observers/field_grids.h"
@@ -62,6 +65,51 @@ std::string header(const char* type) {
   return buf;
 }
 
+// OpenVDB's Stream::write takes every grid of a file at once, so each must exist whole at
+// the same time; this writes the same bytes one grid at a time (io::Archive's own steps, for
+// grids that share no tree and have distinct names), so a grid can be freed or reused as the
+// next one once written.
+class GridByGridWriter : private openvdb::io::Archive {
+ public:
+  GridByGridWriter(std::ostream& out, const openvdb::MetaMap& meta, std::int32_t grids)
+      : out_(out), left_(grids), stream_meta_(openvdb::io::getStreamMetadataPtr(out)) {
+    if (!stream_meta_) {
+      // The stream keeps only a raw pointer to it: ours to keep alive until the last grid.
+      stream_meta_ = std::make_shared<openvdb::io::StreamMetadata>();
+      openvdb::io::setStreamMetadataPtr(out, stream_meta_, /*transfer=*/false);
+      owns_stream_meta_ = true;
+    }
+    openvdb::io::setDataCompression(out, compression());
+    openvdb::io::setWriteGridStatsMetadata(out, isGridStatsMetadataEnabled());
+    writeHeader(out, /*seekable=*/false);
+    meta.writeMeta(out);
+    out.write(reinterpret_cast<const char*>(&grids), sizeof grids);
+  }
+
+  void write(const openvdb::GridBase::ConstPtr& grid) {
+    if (left_-- <= 0) throw std::logic_error("GridByGridWriter: more grids than announced");
+    openvdb::io::GridDescriptor descriptor(grid->getName(), grid->type(), grid->saveFloatAsHalf());
+    writeGrid(descriptor, grid, out_, /*seekable=*/false);
+    openvdb::io::setDataCompression(out_, compression());  // as Archive: some flags are per grid
+  }
+
+  void finish() const {
+    if (left_ != 0) throw std::logic_error("GridByGridWriter: fewer grids than announced");
+  }
+
+  ~GridByGridWriter() override {
+    if (owns_stream_meta_) openvdb::io::clearStreamMetadataPtr(out_);
+  }
+  GridByGridWriter(const GridByGridWriter&) = delete;
+  GridByGridWriter& operator=(const GridByGridWriter&) = delete;
+
+ private:
+  std::ostream& out_;
+  std::int32_t left_;
+  openvdb::io::StreamMetadata::Ptr stream_meta_;
+  bool owns_stream_meta_ = false;
+};
+
 }  // namespace
 
 std::vector<float> hazardRatio(const std::vector<float>& irradiance_w_m2, double mpe_w_m2) {
@@ -72,35 +120,9 @@ std::vector<float> hazardRatio(const std::vector<float>& irradiance_w_m2, double
   return ratio;
 }
 
-void writeVdb(std::ostream& out, const ObserverField& field, const RunInfo& info) {
-  const FieldGrids& g = field.grids();
+void writeVdb(std::ostream& out, ObserverField field, const RunInfo& info) {
   const FieldSpec& spec = field.spec();
   const FieldStats& stats = field.stats();
-  openvdb::GridPtrVec grids;
-  // Copies share the trees; only the metadata differs.
-  auto irradiance = g.irradiance->copyGrid();
-  irradiance->insertMeta("units", openvdb::StringMetadata("W/m^2"));
-  auto level = g.level->copyGrid();
-  level->insertMeta("meaning", openvdb::StringMetadata("refinement level, 0 = coarsest block"));
-  auto status = g.status->copyGrid();
-  status->insertMeta("meaning",
-                     openvdb::StringMetadata(
-                         "0 outside the box, 1 evaluated, 2 interpolated, 3 proven "
-                         "below floor_w_m2 (not computed), 4 inside or on the target, 5 evaluated "
-                         "but unconverged (integrator limit reached)"));
-  grids.push_back(irradiance);
-  if (info.mpe_w_m2 > 0.0) {
-    auto hazard = g.irradiance->deepCopy();
-    for (auto it = hazard->beginValueOn(); it; ++it) {
-      it.setValue(static_cast<float>(static_cast<double>(*it) / info.mpe_w_m2));
-    }
-    hazard->setName("hazard_ratio");
-    hazard->insertMeta("units", openvdb::StringMetadata("1 (irradiance / MPE)"));
-    grids.push_back(hazard);
-  }
-  grids.push_back(level);
-  grids.push_back(status);
-
   openvdb::MetaMap meta;
   meta.insertMeta("program", openvdb::StringMetadata(info.program_version));
   meta.insertMeta("scene_file", openvdb::StringMetadata(info.scene_file));
@@ -110,7 +132,8 @@ void writeVdb(std::ostream& out, const ObserverField& field, const RunInfo& info
   meta.insertMeta("irradiance_unit", openvdb::StringMetadata("W/m^2"));
   meta.insertMeta("wavelength_nm", openvdb::DoubleMetadata(info.wavelength_nm));
   meta.insertMeta("power_w", openvdb::DoubleMetadata(info.power_w));
-  if (info.mpe_w_m2 > 0.0) {
+  const bool hazard = info.mpe_w_m2 > 0.0;
+  if (hazard) {
     meta.insertMeta("exposure_s", openvdb::DoubleMetadata(info.exposure_s));
     meta.insertMeta("mpe_w_m2", openvdb::DoubleMetadata(info.mpe_w_m2));
     meta.insertMeta("mpe_rule", openvdb::StringMetadata(info.mpe_rule));
@@ -121,7 +144,39 @@ void writeVdb(std::ostream& out, const ObserverField& field, const RunInfo& info
   meta.insertMeta("evaluations", openvdb::Int64Metadata(stats.evaluations));
   meta.insertMeta("evaluated_points", openvdb::Int64Metadata(stats.evaluated_points));
   meta.insertMeta("peak_irradiance_w_m2", openvdb::DoubleMetadata(stats.peak_w_m2));
-  openvdb::io::Stream(out).write(grids, meta);
+
+  FieldGrids& g = field.grids();
+  GridByGridWriter file(out, meta, hazard ? 4 : 3);
+  // A shallow copy (the same tree) carries the irradiance's metadata: the grid itself goes on
+  // to become the hazard ratio.
+  {
+    auto irradiance = g.irradiance->copyGrid();
+    irradiance->insertMeta("units", openvdb::StringMetadata("W/m^2"));
+    file.write(irradiance);
+  }
+  if (hazard) {
+    openvdb::FloatGrid::Ptr ratio = std::move(g.irradiance);
+    for (auto it = ratio->beginValueOn(); it; ++it) {
+      it.setValue(static_cast<float>(static_cast<double>(*it) / info.mpe_w_m2));
+    }
+    ratio->setName("hazard_ratio");
+    ratio->insertMeta("units", openvdb::StringMetadata("1 (irradiance / MPE)"));
+    file.write(ratio);
+  }
+  g.irradiance.reset();
+  {
+    openvdb::FloatGrid::Ptr level = std::move(g.level);
+    level->insertMeta("meaning", openvdb::StringMetadata("refinement level, 0 = coarsest block"));
+    file.write(level);
+  }
+  openvdb::FloatGrid::Ptr status = std::move(g.status);
+  status->insertMeta("meaning",
+                     openvdb::StringMetadata(
+                         "0 outside the box, 1 evaluated, 2 interpolated, 3 proven "
+                         "below floor_w_m2 (not computed), 4 inside or on the target, 5 evaluated "
+                         "but unconverged (integrator limit reached)"));
+  file.write(status);
+  file.finish();
 }
 
 void writeVti(std::ostream& out, const ObserverField& field, int stride, double mpe_w_m2) {

@@ -133,6 +133,8 @@ class ObserverField {
   [[nodiscard]] const FieldSpec& spec() const { return spec_; }
   [[nodiscard]] const FieldStats& stats() const { return stats_; }
   [[nodiscard]] const FieldGrids& grids() const { return *grids_; }
+  /// @brief For the field's owner to consume them (writeVdb() frees each grid once written).
+  [[nodiscard]] FieldGrids& grids() { return *grids_; }
   /// @brief The final blocks (for the dense twin: the coarsest blocks, all evaluated).
   [[nodiscard]] const std::vector<FieldBlock>& blocks() const { return blocks_; }
 

@@ -463,62 +463,104 @@ class FieldBuilder {
     return field::decideBySamples(samples, b.size, bound, spec_.tolerance, spec_.floor_w_m2);
   }
 
-  std::unique_ptr<FieldGrids> writeGrids() {
-    tbb::enumerable_thread_specific<ThreadGrids> per_thread([&] { return ThreadGrids(spec_); });
-    tbb::enumerable_thread_specific<std::int64_t> interpolated(0), below(0);
-    tbb::parallel_for(std::size_t{0}, final_.size(), [&](std::size_t f) {
-      const Block& b = final_[f].block;
-      ThreadGrids& t = per_thread.local();
-      const openvdb::CoordBBox box = ownedBox(b, lattice_);
-      switch (final_[f].decision.verdict) {
-        case Verdict::Skip:
-          t.grids->status->tree().fill(box, statusCode(VoxelStatus::BelowFloor), true);
-          t.grids->level->tree().fill(box, static_cast<float>(b.level), true);
-          below.local() += static_cast<std::int64_t>(box.volume());
-          break;
-        case Verdict::Finest:
-          t.grids->level->tree().fill(box, static_cast<float>(b.level), true);
-          break;  // its points are all samples: written below
-        case Verdict::Accept: {
-          t.grids->level->tree().fill(box, static_cast<float>(b.level), true);
-          t.grids->status->tree().fill(box, statusCode(VoxelStatus::Interpolated), true);
-          interpolated.local() += static_cast<std::int64_t>(box.volume());
-          const BlockSize h{b.size[0] / 2, b.size[1] / 2, b.size[2] / 2};
-          const int power = final_[f].decision.power;
-          std::array<double, 27> v{};  // E·r^power at the 3×3×3 lattice
-          for (int a = 0; a < 3; ++a)
-            for (int c = 0; c < 3; ++c)
-              for (int e = 0; e < 3; ++e) {
-                const Index3 p = at(b, a * h[0], c * h[1], e * h[2]);
-                v[static_cast<std::size_t>(9 * a + 3 * c + e)] =
-                    values_.at(lattice_.key(p[0], p[1], p[2])).irradiance_w_m2 *
-                    spreadWeight(p[0], p[1], p[2], power);
-              }
-          // Each octant from its own corners: the finer samples the check compared against.
-          for (auto it = box.begin(); it; ++it) {
-            const openvdb::Coord& p = *it;
-            std::array<int, 3> oct{};
-            std::array<double, 3> t3{};
-            for (std::size_t a = 0; a < 3; ++a) {
-              const int local = p[static_cast<int>(a)] - b.o[a];  // 0 along a plane's normal
-              oct[a] = std::min(local / h[a], 1);
-              t3[a] = static_cast<double>(local - oct[a] * h[a]) / h[a];
+  // Writes final block @p f's status, level and (accepted) interpolated irradiance into @p t,
+  // counting its interpolated and below-floor points. Its samples come later, from values_.
+  void fillBlock(const FinalBlock& f, ThreadGrids& t, std::int64_t& interpolated,
+                 std::int64_t& below) const {
+    const Block& b = f.block;
+    const openvdb::CoordBBox box = ownedBox(b, lattice_);
+    switch (f.decision.verdict) {
+      case Verdict::Skip:
+        t.grids->status->tree().fill(box, statusCode(VoxelStatus::BelowFloor), true);
+        t.grids->level->tree().fill(box, static_cast<float>(b.level), true);
+        below += static_cast<std::int64_t>(box.volume());
+        break;
+      case Verdict::Finest:
+        t.grids->level->tree().fill(box, static_cast<float>(b.level), true);
+        break;  // its points are all samples: written below
+      case Verdict::Accept: {
+        t.grids->level->tree().fill(box, static_cast<float>(b.level), true);
+        t.grids->status->tree().fill(box, statusCode(VoxelStatus::Interpolated), true);
+        interpolated += static_cast<std::int64_t>(box.volume());
+        const BlockSize h{b.size[0] / 2, b.size[1] / 2, b.size[2] / 2};
+        const int power = f.decision.power;
+        std::array<double, 27> v{};  // E·r^power at the 3×3×3 lattice
+        for (int a = 0; a < 3; ++a)
+          for (int c = 0; c < 3; ++c)
+            for (int e = 0; e < 3; ++e) {
+              const Index3 p = at(b, a * h[0], c * h[1], e * h[2]);
+              v[static_cast<std::size_t>(9 * a + 3 * c + e)] =
+                  values_.at(lattice_.key(p[0], p[1], p[2])).irradiance_w_m2 *
+                  spreadWeight(p[0], p[1], p[2], power);
             }
-            const double value =
-                field::octantFill(v, oct, t3) / spreadWeight(p[0], p[1], p[2], power);
-            // At most the floor is negligible (FieldSpec::floor_w_m2): left at 0 and inactive,
-            // so that a kilometre box stores its lit sheet, not the dark around it that its
-            // accepted blocks also cover.
-            if (value > spec_.floor_w_m2) t.irradiance.setValue(p, static_cast<float>(value));
+        // Each octant from its own corners: the finer samples the check compared against.
+        for (auto it = box.begin(); it; ++it) {
+          const openvdb::Coord& p = *it;
+          std::array<int, 3> oct{};
+          std::array<double, 3> t3{};
+          for (std::size_t a = 0; a < 3; ++a) {
+            const int local = p[static_cast<int>(a)] - b.o[a];  // 0 along a plane's normal
+            oct[a] = std::min(local / h[a], 1);
+            t3[a] = static_cast<double>(local - oct[a] * h[a]) / h[a];
           }
-          break;
+          const double value =
+              field::octantFill(v, oct, t3) / spreadWeight(p[0], p[1], p[2], power);
+          // At most the floor is negligible (FieldSpec::floor_w_m2): left at 0 and inactive,
+          // so that a kilometre box stores its lit sheet, not the dark around it that its
+          // accepted blocks also cover.
+          if (value > spec_.floor_w_m2) t.irradiance.setValue(p, static_cast<float>(value));
         }
-        case Verdict::Refine:
-          break;
+        break;
       }
+      case Verdict::Refine:
+        break;
+    }
+  }
+
+  std::unique_ptr<FieldGrids> writeGrids() {
+    // The final blocks by their coarsest ancestor, each such group written into grids of its
+    // own and pruned before joining its thread's: a block's region of one status and level
+    // is then a tile wherever it covers whole leaves, and never waits voxel by voxel for the
+    // end (the 2 km example: 3.4 GB of grids before the final prune, 2.8 GB after it).
+    const int bv = spec_.block_voxels;
+    const auto coarseKey = [&](const Block& b) {
+      std::uint64_t key = 0;
+      for (std::size_t a = 0; a < 3; ++a) {
+        key = key * static_cast<std::uint64_t>(lattice_.n[a] / bv + 1) +
+              static_cast<std::uint64_t>(b.o[a] / bv);
+      }
+      return key;
+    };
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> order(final_.size());
+    for (std::size_t f = 0; f < final_.size(); ++f) {
+      order[f] = {coarseKey(final_[f].block), static_cast<std::uint32_t>(f)};
+    }
+    std::sort(order.begin(), order.end());
+    std::vector<std::size_t> group_start;
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      if (i == 0 || order[i].first != order[i - 1].first) group_start.push_back(i);
+    }
+    group_start.push_back(order.size());
+
+    tbb::enumerable_thread_specific<std::unique_ptr<FieldGrids>> per_thread(
+        [&] { return makeGrids(spec_); });
+    tbb::enumerable_thread_specific<std::int64_t> interpolated(0), below(0);
+    tbb::parallel_for(std::size_t{0}, group_start.size() - 1, [&](std::size_t g) {
+      ThreadGrids t(spec_);
+      for (std::size_t i = group_start[g]; i < group_start[g + 1]; ++i) {
+        fillBlock(final_[order[i].second], t, interpolated.local(), below.local());
+      }
+      t.grids->status->tree().prune();
+      t.grids->level->tree().prune();
+      mergeInto(*per_thread.local(), *t.grids);
     });
     std::unique_ptr<FieldGrids> grids = makeGrids(spec_);
-    for (ThreadGrids& t : per_thread) mergeInto(*grids, *t.grids);
+    for (std::unique_ptr<FieldGrids>& t : per_thread) mergeInto(*grids, *t);
+    per_thread.clear();
+    // Before the samples are written in: the blocks' uniform regions become tiles now, so the
+    // grids never hold them voxel by voxel.
+    grids->status->tree().prune();
+    grids->level->tree().prune();
     for (std::int64_t n : interpolated) stats_.interpolated_points += n;
     for (std::int64_t n : below) stats_.below_floor_points += n;
 

@@ -135,7 +135,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
     const FieldProblem problem = fieldProblem(target, scene, r.spec);
     WorkCounter counter;
     counter.stop = &watch.stopFlag();
-    const ObserverField field = [&] {
+    ObserverField field = [&] {
       try {
         return computeField(problem.integrator, r.spec, problem.excluded, &counter);
       } catch (const WorkStopped&) {
@@ -144,6 +144,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
       }
     }();
     requireFinite(field, "scenario " + std::to_string(s.index) + ", region " + r.name);
+    const FieldStats st = field.stats();
     AtomicFile map(dir / r.scenarioFile());
     std::vector<float> e;
     if (r.plane) {
@@ -151,12 +152,11 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
       writeExr(map.stream(), m, {info.program_version, info.wavelength_nm, mpe});
       e = std::move(m.irradiance_w_m2);
     } else {
-      writeVdb(map.stream(), field, info);
       e = field.irradianceLattice();
+      writeVdb(map.stream(), std::move(field), info);
     }
     map.commit();
     const std::int64_t hazardous = accumulate(r, e, mpe);
-    const FieldStats& st = field.stats();
     results.push_back({{"name", r.name},
                        {"peak_hazard_ratio", st.peak_w_m2 / mpe},
                        {"hazardous_points", hazardous},

@@ -605,13 +605,12 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   };
   if (scene.observers) {
     const FieldSpec spec = fieldSpec(scene);
-    const FieldResult box =
+    FieldResult box =
         computeObserverField(target, scene, spec, args, "points", watch, err, exchange);
     const ObserverField& field = *box.field;
     requireFinite(field, "the observer box");
     const FacetIntegrator& integrator = box.problem.integrator;
     if (writer) {
-      writeVdb(vdb->stream(), field, info);
       writeVti(vti->stream(), field, vtiStride(spec), info.mpe_w_m2);
       writeBlocksVtu(vtu->stream(), field, info.mpe_w_m2);
       writeTargetVtp(vtp->stream(), integrator, 2);
@@ -631,6 +630,8 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
       }
       printVolume(err, field, scene, zone, info, args.uniform, beyond_box);
     }
+    // Last: it consumes the field.
+    if (writer) writeVdb(vdb->stream(), std::move(*box.field), info);
   } else {
     j = {{"program", info.program_version},
          {"scene_file", info.scene_file},
