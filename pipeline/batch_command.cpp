@@ -171,6 +171,31 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
     unconverged += st.unconverged_points;
   }
   record["regions"] = results;
+  if (scene.far_field.enabled) {
+    const FarField far = [&] {
+      try {
+        return sceneFarField(target, scene, watch, nullptr, false);
+      } catch (const WorkStopped&) {
+        watch.check("scenario " + std::to_string(s.index) + ", far field");
+        throw;
+      }
+    }();
+    const FarReach reach = farReach(far, mpe);
+    const Vec3& peak = far.peak().direction;
+    record["far_field"] = {
+        {"far_radius_m", far.spec().far_radius_m},
+        {"peak_intensity_w_sr", far.peak().intensity_w_sr},
+        {"peak_direction", {peak.x, peak.y, peak.z}},
+        {"max_nohd_m", reach.nohd_m},
+        {"max_nohd_direction", {reach.direction.x, reach.direction.y, reach.direction.z}},
+        {"evaluations", far.stats().evaluations},
+        {"unconverged_directions", far.stats().unconverged_points}};
+    if (far.stats().unconverged_points > 0) {
+      record["far_field"]["unconverged_max_intensity_plus_error_w_sr"] =
+          far.stats().unconverged_max_upper_w_m2;
+    }
+    evaluations += far.stats().evaluations;
+  }
   record["evaluations"] = evaluations;
   record["unconverged_points"] = unconverged;
   record["seconds"] = std::chrono::duration<double>(Clock::now() - start).count();
@@ -197,7 +222,8 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
     record = nlohmann::json::parse(readUserFile(dir / "result.json", "scenario result"));
     fnv = record.at("study_fnv1a64").get<std::string>();
     matches = record.at("scenario").get<std::size_t>() == s.index &&
-              record.at("regions").size() == lattices.size();
+              record.at("regions").size() == lattices.size() &&
+              record.contains("far_field") == study.base.far_field.enabled;
   } catch (const std::exception&) {
     if (!quiet) err << "glint batch: " << (dir / "result.json").string() << " unreadable: redone\n";
     return std::nullopt;
@@ -258,7 +284,7 @@ nlohmann::json quantilesJson(const std::vector<double>& v) {
 std::string csvNumber(double x) { return formatNumber("%.10g", x); }
 
 std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
-                         const std::map<std::size_t, nlohmann::json>& records) {
+                         const std::map<std::size_t, nlohmann::json>& records, bool far_field) {
   std::string csv =
       "scenario,time_s,offset_x_m,offset_y_m,offset_z_m,pose_yaw_deg,pose_pitch_deg,"
       "pose_roll_deg,yaw_deg,pitch_deg,roll_deg,sigma,specular_reflectance,jitter_sample,"
@@ -267,6 +293,7 @@ std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
     csv += "," + r.name + "_peak_hazard_ratio," + r.name +
            (r.plane ? "_hazardous_area_m2" : "_hazard_volume_m3");
   }
+  if (far_field) csv += ",far_max_nohd_m,far_peak_intensity_w_sr";
   csv += ",unconverged_points,evaluations,seconds\n";
   for (const auto& [index, rec] : records) {
     const nlohmann::json& p = rec.at("parameters");
@@ -291,6 +318,10 @@ std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
     for (const nlohmann::json& r : rec.at("regions")) {
       number(r.at("peak_hazard_ratio"));
       number(r.contains("hazardous_area_m2") ? r.at("hazardous_area_m2") : r.at("hazard_volume_m3"));
+    }
+    if (far_field) {
+      number(rec.at("far_field").at("max_nohd_m"));
+      number(rec.at("far_field").at("peak_intensity_w_sr"));
     }
     cell(std::to_string(rec.at("unconverged_points").get<std::int64_t>()));
     cell(std::to_string(rec.at("evaluations").get<std::int64_t>()));
@@ -411,6 +442,31 @@ nlohmann::json summaryJson(const Study& study, const std::vector<StudyLattice>& 
                   {std::string("hazardous_in_half_or_more") + unit, static_cast<double>(half) * r.cell()}});
   }
   j["regions"] = rs;
+  if (study.base.far_field.enabled) {
+    std::vector<double> nohd;
+    std::size_t beyond = 0;
+    const nlohmann::json* farthest = nullptr;
+    std::size_t farthest_index = 0;
+    for (const auto& [index, rec] : records) {
+      const nlohmann::json& f = rec.at("far_field");
+      const double d = f.at("max_nohd_m").get<double>();
+      nohd.push_back(d);
+      beyond += d > 0.0 ? 1 : 0;
+      if (farthest == nullptr || d > farthest->at("max_nohd_m").get<double>()) {
+        farthest = &f;
+        farthest_index = index;
+      }
+    }
+    nlohmann::json far = {{"max_nohd_m", quantilesJson(nohd)},
+                          {"scenarios_hazardous_beyond_far_radius", beyond}};
+    if (farthest != nullptr) {
+      far["farthest"] = {{"scenario", farthest_index},
+                         {"max_nohd_m", farthest->at("max_nohd_m")},
+                         {"direction", farthest->at("max_nohd_direction")},
+                         {"far_radius_m", farthest->at("far_radius_m")}};
+    }
+    j["far_field"] = far;
+  }
   return j;
 }
 
@@ -513,7 +569,7 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
 
   const std::size_t n = study.scenarios.size();
   AtomicFile csv(out_dir / "scenarios.csv");
-  csv.stream() << scenariosCsv(lattices, records);
+  csv.stream() << scenariosCsv(lattices, records, study.base.far_field.enabled);
   csv.commit();
   for (const StudyLattice& r : lattices)
     writeLatticeMap(out_dir / (r.plane ? r.name + ".exr" : "box.vdb"), r, study, n);

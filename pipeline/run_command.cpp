@@ -353,36 +353,6 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
   return j;
 }
 
-// The far field of the scene, with progress on stderr unless quiet.
-FarField computeSceneFarField(const SceneTarget& target, const FarFieldSpec& spec,
-                              const RunArgs& args, const MemoryWatch& watch, std::ostream& err,
-                              PointExchange* exchange) {
-  WorkCounter counter;
-  counter.stop = &watch.stopFlag();
-  std::unique_ptr<ProgressReporter> progress;
-  if (!args.quiet) {
-    progress = std::make_unique<ProgressReporter>(err, args.terminal, "directions", 0, counter);
-  }
-  try {
-    return computeFarField(target.integrator, spec, &counter, exchange);
-  } catch (const WorkStopped&) {
-    if (progress) progress->stop();
-    watch.check("the far field");
-    throw;
-  }
-}
-
-// Refuses a far field whose six faces' memory floor exceeds the budget.
-void checkFarFieldMemory(const FarFieldSpec& spec, std::uint64_t budget_bytes) {
-  std::uint64_t floor_bytes = 0;
-  for (int f = 0; f < FarField::kFaces; ++f) {
-    floor_bytes += fieldMemoryFloorBytes(cubeFaceSpec(f, Vec3(0.0), 1.0, spec), false);
-  }
-  requireWithinBudget(
-      "the far field (6 × " + std::to_string(spec.face_pixels + 1) + "² directions)", floor_bytes,
-      budget_bytes, "lower far_field.face_pixels, or raise --memory");
-}
-
 nlohmann::json farFieldJson(const FarField& field, const FarReach& hazard) {
   const FarFieldSpec& spec = field.spec();
   const FieldStats& s = field.stats();
@@ -457,6 +427,38 @@ void printFarField(std::ostream& err, const FarField& field, const FarReach& haz
   }
 }
 }  // namespace
+
+FarField sceneFarField(const SceneTarget& target, const Scene& scene, const MemoryWatch& watch,
+                       std::ostream* progress_to, bool terminal, PointExchange* exchange) {
+  const FarFieldSpec spec = farFieldSpec(scene, target.integrator);
+  std::uint64_t floor_bytes = 0;
+  for (int f = 0; f < FarField::kFaces; ++f) {
+    floor_bytes += fieldMemoryFloorBytes(cubeFaceSpec(f, Vec3(0.0), 1.0, spec), false);
+  }
+  requireWithinBudget(
+      "the far field (6 × " + std::to_string(spec.face_pixels + 1) + "² directions)", floor_bytes,
+      watch.budgetBytes(), "lower far_field.face_pixels, or raise --memory");
+
+  WorkCounter counter;
+  counter.stop = &watch.stopFlag();
+  std::unique_ptr<ProgressReporter> progress;
+  if (progress_to != nullptr) {
+    progress = std::make_unique<ProgressReporter>(*progress_to, terminal, "directions", 0, counter);
+  }
+  std::optional<FarField> far;
+  try {
+    far.emplace(computeFarField(target.integrator, spec, &counter, exchange));
+  } catch (const WorkStopped&) {
+    if (progress) progress->stop();
+    watch.check("the far field");
+    throw;
+  }
+  if (far->stats().non_finite_points > 0) {
+    throw std::runtime_error("the far field: " + std::to_string(far->stats().non_finite_points) +
+                             " directions have a non-finite intensity; nothing was written");
+  }
+  return std::move(*far);
+}
 
 PlaneMap planeMap(const ObserverField& field, double mpe_w_m2) {
   const FieldSpec& spec = field.spec();
@@ -586,13 +588,8 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   std::optional<FarField> far;
   FarReach far_hazard;
   if (scene.far_field.enabled) {
-    const FarFieldSpec spec = farFieldSpec(scene, target.integrator);
-    checkFarFieldMemory(spec, budget);
-    far.emplace(computeSceneFarField(target, spec, args, watch, err, exchange));
-    if (far->stats().non_finite_points > 0) {
-      throw std::runtime_error("the far field: " + std::to_string(far->stats().non_finite_points) +
-                               " directions have a non-finite intensity; nothing was written");
-    }
+    far.emplace(
+        sceneFarField(target, scene, watch, args.quiet ? nullptr : &err, args.terminal, exchange));
     far_hazard = farReach(*far, info.mpe_w_m2);
   }
   nlohmann::json j;

@@ -11,6 +11,7 @@
 
 #include "export/exr_map.h"
 #include "export/field_files.h"
+#include "observers/far_field.h"
 #include "observers/field.h"
 #include "pipeline/scene.h"
 
@@ -45,6 +46,16 @@ RunInfo runInfo(const Scene& scene, const std::string& scene_file, std::string_v
 /// no NaN or infinity may reach an output, nor read as "no hazard".
 /// @throw std::runtime_error (an internal error: within pipeline/limits.h none can occur).
 void requireFinite(const ObserverField& field, const std::string& region);
+
+struct SceneTarget;
+class MemoryWatch;
+
+/// @brief The far field of @p target as @p scene asks (scene.far_field), with progress on
+/// @p progress_to unless null. Refused before the work when its faces' memory floor exceeds
+/// @p watch's budget, and after it when a direction's intensity is not finite.
+/// @throw InputError (the memory budget), std::runtime_error (a non-finite intensity).
+FarField sceneFarField(const SceneTarget& target, const Scene& scene, const MemoryWatch& watch,
+                       std::ostream* progress_to, bool terminal, PointExchange* exchange = nullptr);
 
 /// @brief A plane's field as the map `glint run` writes: lattice row j along v, column i along
 /// u; hazard_ratio = irradiance / @p mpe_w_m2.
