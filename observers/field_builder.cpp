@@ -557,8 +557,8 @@ class FieldBuilder {
     std::unique_ptr<FieldGrids> grids = makeGrids(spec_);
     for (std::unique_ptr<FieldGrids>& t : per_thread) mergeInto(*grids, *t);
     per_thread.clear();
-    // Before the samples are written in: the blocks' uniform regions become tiles now, so the
-    // grids never hold them voxel by voxel.
+    // Leaves shared by neighbouring groups (coarse blocks not a multiple of 8 voxels) become
+    // uniform only once merged: tiles too, before the samples are written in.
     grids->status->tree().prune();
     grids->level->tree().prune();
     for (std::int64_t n : interpolated) stats_.interpolated_points += n;

@@ -172,14 +172,8 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
   }
   record["regions"] = results;
   if (scene.far_field.enabled) {
-    const FarField far = [&] {
-      try {
-        return sceneFarField(target, scene, watch, nullptr, false);
-      } catch (const WorkStopped&) {
-        watch.check("scenario " + std::to_string(s.index) + ", far field");
-        throw;
-      }
-    }();
+    const FarField far = sceneFarField(
+        target, scene, watch, "scenario " + std::to_string(s.index) + ", far field", nullptr, false);
     const FarReach reach = farReach(far, mpe);
     const Vec3& peak = far.peak().direction;
     record["far_field"] = {

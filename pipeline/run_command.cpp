@@ -429,7 +429,8 @@ void printFarField(std::ostream& err, const FarField& field, const FarReach& haz
 }  // namespace
 
 FarField sceneFarField(const SceneTarget& target, const Scene& scene, const MemoryWatch& watch,
-                       std::ostream* progress_to, bool terminal, PointExchange* exchange) {
+                       const std::string& what, std::ostream* progress_to, bool terminal,
+                       PointExchange* exchange) {
   const FarFieldSpec spec = farFieldSpec(scene, target.integrator);
   std::uint64_t floor_bytes = 0;
   for (int f = 0; f < FarField::kFaces; ++f) {
@@ -445,19 +446,20 @@ FarField sceneFarField(const SceneTarget& target, const Scene& scene, const Memo
   if (progress_to != nullptr) {
     progress = std::make_unique<ProgressReporter>(*progress_to, terminal, "directions", 0, counter);
   }
-  std::optional<FarField> far;
-  try {
-    far.emplace(computeFarField(target.integrator, spec, &counter, exchange));
-  } catch (const WorkStopped&) {
-    if (progress) progress->stop();
-    watch.check("the far field");
-    throw;
-  }
-  if (far->stats().non_finite_points > 0) {
-    throw std::runtime_error("the far field: " + std::to_string(far->stats().non_finite_points) +
+  FarField far = [&] {
+    try {
+      return computeFarField(target.integrator, spec, &counter, exchange);
+    } catch (const WorkStopped&) {
+      if (progress) progress->stop();
+      watch.check(what);
+      throw;
+    }
+  }();
+  if (far.stats().non_finite_points > 0) {
+    throw std::runtime_error("the far field: " + std::to_string(far.stats().non_finite_points) +
                              " directions have a non-finite intensity; nothing was written");
   }
-  return std::move(*far);
+  return far;
 }
 
 PlaneMap planeMap(const ObserverField& field, double mpe_w_m2) {
@@ -589,7 +591,8 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   FarReach far_hazard;
   if (scene.far_field.enabled) {
     far.emplace(
-        sceneFarField(target, scene, watch, args.quiet ? nullptr : &err, args.terminal, exchange));
+        sceneFarField(target, scene, watch, "the far field", args.quiet ? nullptr : &err,
+                              args.terminal, exchange));
     far_hazard = farReach(*far, info.mpe_w_m2);
   }
   nlohmann::json j;

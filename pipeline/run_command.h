@@ -52,10 +52,12 @@ class MemoryWatch;
 
 /// @brief The far field of @p target as @p scene asks (scene.far_field), with progress on
 /// @p progress_to unless null. Refused before the work when its faces' memory floor exceeds
-/// @p watch's budget, and after it when a direction's intensity is not finite.
+/// @p watch's budget, during it when @p watch stops the work (the message naming @p what),
+/// and after it when a direction's intensity is not finite.
 /// @throw InputError (the memory budget), std::runtime_error (a non-finite intensity).
 FarField sceneFarField(const SceneTarget& target, const Scene& scene, const MemoryWatch& watch,
-                       std::ostream* progress_to, bool terminal, PointExchange* exchange = nullptr);
+                       const std::string& what, std::ostream* progress_to, bool terminal,
+                       PointExchange* exchange = nullptr);
 
 /// @brief A plane's field as the map `glint run` writes: lattice row j along v, column i along
 /// u; hazard_ratio = irradiance / @p mpe_w_m2.

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "export/field_files.h"
+#include "observers/detail/field_common.h"
 #include "observers/field.h"
 #include "observers/field_grids.h"
 
@@ -24,13 +25,7 @@ ObserverField sampleField() {
   spec.max_m = Vec3(4.0);
   spec.voxel_m = 0.25;
   spec.block_voxels = 8;
-  auto g = std::make_unique<FieldGrids>();
-  g->irradiance = openvdb::FloatGrid::create(0.0f);
-  g->irradiance->setName("irradiance_w_m2");
-  g->level = openvdb::FloatGrid::create(-1.0f);
-  g->level->setName("refinement_level");
-  g->status = openvdb::FloatGrid::create(0.0f);
-  g->status->setName("status");
+  std::unique_ptr<FieldGrids> g = field::makeGrids(spec);  // as the field builder makes them
   g->irradiance->tree().fill(openvdb::CoordBBox({0, 0, 0}, {7, 7, 7}), 37.5f, true);
   auto e = g->irradiance->getAccessor();
   for (int i = 8; i < 16; ++i) e.setValue({i, 3, 5}, 1.0f / static_cast<float>(i));
