@@ -284,8 +284,7 @@ std::vector<Row> measure(const std::filesystem::path& path, const Options& o) {
   for (const FieldSpec& s : c.perTolerance(o)) {
     const AdaptiveRun run = runAdaptive(path, c.problem, s);
     rows.push_back({path.filename().string(), s, run.field.stats(), dense.stats(),
-                    compareFields(run.field, dense, c.scene.hazard.mpe.irradiance_w_m2),
-                    run.peak_rss_bytes});
+                    compareFields(run.field, dense, c.scene.hazard.mpe_w_m2), run.peak_rss_bytes});
   }
   return rows;
 }

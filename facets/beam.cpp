@@ -38,6 +38,7 @@ Beam::Sample Beam::at(const Vec3& x_m) const {
   } else {
     e = power_w / (kPi * r2);
   }
+  e *= transmission(z);
   if (divergence_rad == 0.0) return {e, -direction};
   const double half = 0.5 * divergence_rad;
   const Vec3 ray = direction + radial * (z * half * half / r2);
@@ -58,6 +59,7 @@ Beam::Footprint Beam::footprint(const Vec3& x_m) const {
     f.irradiance_w_m2 = power_w / (kPi * r2);
     f.edge_margin = 1.0 - rho2 / r2;
   }
+  f.irradiance_w_m2 *= transmission(z);
   if (divergence_rad > 0.0 && z > 0.0) {
     const double half = 0.5 * divergence_rad;
     f.toward_laser = -glm::normalize(direction + radial * (z * half * half / r2));
@@ -77,10 +79,11 @@ double Beam::maxIrradianceInBall(const Vec3& center_m, double radius_m_ball) con
   const double r_far = radiusAt(zc + radius_m_ball);
   if (rho_min > reachFactor() * r_far) return 0.0;
   const double area_near = kPi * r_near * r_near;
+  const double t = transmission(zc - radius_m_ball);  // the ball's nearest depth
   if (profile == BeamProfile::Gaussian) {
-    return 2.0 * power_w / area_near * std::exp(-2.0 * rho_min * rho_min / (r_far * r_far));
+    return 2.0 * power_w / area_near * std::exp(-2.0 * rho_min * rho_min / (r_far * r_far)) * t;
   }
-  return power_w / area_near;
+  return power_w / area_near * t;
 }
 
 bool Beam::edgeMayCrossBall(const Vec3& center_m, double radius_m_ball) const {

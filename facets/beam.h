@@ -3,6 +3,9 @@
 /// @brief The laser beam: where it is, how much irradiance it puts on a surface point, and
 /// bounds of both over a ball (for culling and the contribution bound).
 
+#include <algorithm>
+#include <cmath>
+
 #include "facets/vec3.h"
 
 namespace glint {
@@ -30,6 +33,12 @@ struct Beam {
   BeamProfile profile = BeamProfile::FlatTop;
   double radius_m = 1.0;        ///< a (flat top) or w (Gaussian) at the laser, > 0
   double divergence_rad = 0.0;  ///< full-angle divergence φ, ≥ 0; 0 is collimated
+  /// Extinction of the air (1/m, ≥ 0) along the beam: irradiance falls as exp(−μ z), z the
+  /// distance along the axis (never more than a ray's path, so an upper bound when divergent).
+  double extinction_per_m = 0.0;
+  /// Extinction (1/m, ≥ 0) along each reflected path to the observer, applied by the kernel as
+  /// exp(−μ d). 0 where intensity is wanted rather than irradiance at a distance (far field).
+  double return_extinction_per_m = 0.0;
 
   /// @brief Irradiance on a plane perpendicular to the beam (W/m²), and the unit vector from
   /// the point toward the laser along the local ray (ωi).
@@ -38,7 +47,8 @@ struct Beam {
     Vec3 toward_laser;
   };
 
-  /// @brief The beam at point @p x_m. Points behind the laser (z < 0) get 0.
+  /// @brief The beam at point @p x_m, attenuated along its path. Points behind the laser
+  /// (z < 0) get 0.
   [[nodiscard]] Sample at(const Vec3& x_m) const;
 
   /// @brief The beam at a point, continued smoothly across its edges, with how far inside
@@ -58,11 +68,11 @@ struct Beam {
   /// @brief Beam radius parameter (a or w) at distance @p z_m ≥ 0 along the axis.
   [[nodiscard]] double radiusAt(double z_m) const;
 
-  /// @brief Irradiance on the axis at the laser: P / (π a²) or 2P / (π w²).
+  /// @brief Irradiance on the axis at the laser: P / (π a²) or 2P / (π w²), the most anywhere.
   [[nodiscard]] double peakIrradiance() const;
 
-  /// @brief An upper bound of the irradiance over the ball (@p center_m, @p radius_m); 0 when
-  /// no point of the ball is lit.
+  /// @brief An upper bound of the irradiance over the ball (@p center_m, @p radius_m),
+  /// attenuation included; 0 when no point of the ball is lit.
   [[nodiscard]] double maxIrradianceInBall(const Vec3& center_m, double radius_m) const;
 
   /// @brief True when a discontinuity of the beam (a flat-top edge, or the laser's own plane)
@@ -78,6 +88,10 @@ struct Beam {
 
  private:
   [[nodiscard]] double reachFactor() const;
+  /// exp(−μ z) for z ≥ 0 along the axis, exactly 1 in vacuum.
+  [[nodiscard]] double transmission(double z_m) const {
+    return extinction_per_m > 0.0 ? std::exp(-extinction_per_m * std::max(z_m, 0.0)) : 1.0;
+  }
 };
 
 }  // namespace glint

@@ -190,7 +190,8 @@ RuleResult ruleIrradiance(const SurfaceMap& map, const SubFacet& f, const Vec3& 
         continue;
       }
       sum += node.weight * pointIrradiance(p.position_m, p.normal, p.jacobian_m2, observer_m,
-                                           beam.at(p.position_m), material);
+                                           beam.at(p.position_m), material,
+                                           beam.return_extinction_per_m);
     }
     return area_uv * sum;
   };
@@ -338,6 +339,13 @@ FacetIntegrator FacetIntegrator::withAccuracy(double tolerance, double floor_w_m
   copy.options_.tolerance = tolerance;
   copy.options_.floor_w_m2 = floor_w_m2;
   validateAccuracy(copy.options_);
+  return copy;
+}
+
+FacetIntegrator FacetIntegrator::withReturnExtinction(double per_m) const {
+  FacetIntegrator copy = *this;  // the surface maps hold geometry only: shared as they are
+  copy.beam_.return_extinction_per_m = per_m;
+  for (Beam& b : copy.object_beams_) b.return_extinction_per_m = per_m;
   return copy;
 }
 

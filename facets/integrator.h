@@ -193,6 +193,10 @@ class FacetIntegrator {
   /// where they are out of range, as the constructor does.
   [[nodiscard]] FacetIntegrator withAccuracy(double tolerance, double floor_w_m2) const;
 
+  /// @brief This integrator with each reflected path attenuated by exp(−μ d), μ = @p per_m
+  /// (Beam::return_extinction_per_m): 0 where intensity is read from a far plane.
+  [[nodiscard]] FacetIntegrator withReturnExtinction(double per_m) const;
+
  private:
   void prepareObserver(const Vec3& observer_m, IntegratorWorkspace::Impl& ws) const;
   ObserverResult adaptiveLobe(const Vec3& observer_m, std::span<const Candidate> candidates,

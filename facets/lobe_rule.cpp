@@ -608,7 +608,8 @@ LobeNode lobeNode(const SurfacePoint& p, const Vec3& observer_m, const Beam& bea
   const double cos_i = glm::dot(p.normal, b.toward_laser);
   const double cos_r = glm::dot(p.normal, wo);
   node.clip = {cos_i, cos_r * d, b.edge_margin, b.axial_m};
-  const double scale = b.irradiance_w_m2 * p.jacobian_m2 / d2;
+  double scale = b.irradiance_w_m2 * p.jacobian_m2 / d2;
+  if (beam.return_extinction_per_m > 0.0) scale *= std::exp(-beam.return_extinction_per_m * d);
   node.diffuse = material.diffuse_reflectance / kPi * scale * cos_i * cos_r;
   node.valid = true;
   const Vec3 h = b.toward_laser + wo;

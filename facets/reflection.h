@@ -20,10 +20,11 @@ struct ClippedTriangle {
 };
 ClippedTriangle clipTriangle(const std::array<double, 3>& a, const std::array<double, 3>& b);
 
-/// @brief Eq. (1) for a point sample: Φ_A f_r cos θi cos θr / d² with Φ_A = E_beam · area.
+/// @brief Eq. (1) for a point sample: Φ_A f_r cos θi cos θr / d² with Φ_A = E_beam · area,
+/// attenuated by exp(−μ d) along the reflected path (μ = @p return_extinction_per_m).
 inline double pointIrradiance(const Vec3& x_m, const Vec3& normal, double area_m2,
                               const Vec3& observer_m, const Beam::Sample& beam_at,
-                              const Material& material) {
+                              const Material& material, double return_extinction_per_m) {
   const Vec3 to_observer = observer_m - x_m;
   const double cos_r_d = glm::dot(normal, to_observer);  // cos θr · d
   const double cos_i = glm::dot(normal, beam_at.toward_laser);
@@ -32,7 +33,8 @@ inline double pointIrradiance(const Vec3& x_m, const Vec3& normal, double area_m
   const double d = std::sqrt(d2);
   const double f = material.cosineWeightedBrdf(normal, beam_at.toward_laser, to_observer / d, cos_i,
                                                cos_r_d / d);
-  return beam_at.irradiance_w_m2 * area_m2 * f / d2;
+  const double e = beam_at.irradiance_w_m2 * area_m2 * f / d2;
+  return return_extinction_per_m > 0.0 ? e * std::exp(-return_extinction_per_m * d) : e;
 }
 
 /// @brief E_O of Eq. (1) in W/m² for one (sub)facet: the beam power on it, Φ_A = E_beam(x_C)·A,
@@ -57,7 +59,8 @@ inline double facetIrradiance(const PatchGeometry& g, const Vec3& observer_m, co
     n_seen += seen[k] > 0.0 ? 1 : 0;
   }
   if (n_lit == 3 && n_seen == 3) {
-    return pointIrradiance(g.centre_m, g.normal, g.area_m2, observer_m, beam_at, material);
+    return pointIrradiance(g.centre_m, g.normal, g.area_m2, observer_m, beam_at, material,
+                           beam.return_extinction_per_m);
   }
   if (n_lit == 0 || n_seen == 0) return 0.0;
   const ClippedTriangle part = clipTriangle(lit, seen);
@@ -67,7 +70,8 @@ inline double facetIrradiance(const PatchGeometry& g, const Vec3& observer_m, co
   const auto n = tryNormalize(w[0] * g.corner_normal[0] + w[1] * g.corner_normal[1] +
                               w[2] * g.corner_normal[2]);
   if (!n) return 0.0;
-  return pointIrradiance(x, *n, part.fraction * g.area_m2, observer_m, beam.at(x), material);
+  return pointIrradiance(x, *n, part.fraction * g.area_m2, observer_m, beam.at(x), material,
+                         beam.return_extinction_per_m);
 }
 
 /// @brief When a facet's sample can stand for the whole facet: the specular lobe may only vary

@@ -115,15 +115,41 @@ double farRadiusToward(const FarFieldSpec& spec, const Vec3& direction) {
   return std::isnan(r) ? std::numeric_limits<double>::infinity() : std::max(r, spec.far_radius_m);
 }
 
-FarReach farReach(const FarField& field, double mpe_w_m2) {
+double hazardDistance(double intensity_w_sr, double threshold_w_m2, double extinction_per_m,
+                      double source_radius_m) {
+  if (!std::isfinite(intensity_w_sr)) return std::numeric_limits<double>::infinity();
+  if (!(intensity_w_sr > 0.0)) return 0.0;
+  const double vacuum_m = std::sqrt(intensity_w_sr / threshold_w_m2);
+  if (!(extinction_per_m > 0.0) || vacuum_m <= source_radius_m) return vacuum_m;
+  // I T(r) / r² falls with r: bisect its logarithm's crossing between the source's edge and
+  // the vacuum distance.
+  const double log_ratio = std::log(intensity_w_sr / threshold_w_m2);
+  auto above = [&](double r) {
+    return log_ratio - extinction_per_m * (r - source_radius_m) - 2.0 * std::log(r) >= 0.0;
+  };
+  double lo = std::max(0.0, source_radius_m), hi = vacuum_m;  // above at lo: I/a² > threshold
+  for (int i = 0; i < 200 && hi - lo > 1e-12 * hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (above(mid) ? lo : hi) = mid;
+  }
+  return hi;  // the upper end: never nearer than the crossing
+}
+
+FarReach farReach(const FarField& field, double mpe_w_m2, double extinction_per_m) {
   FarReach reach;
   reach.direction = field.peak().direction;
   reach.far_radius_m = farRadiusToward(field.spec(), reach.direction);
+  const double source_m = field.ball().radius_m;
+  double best_w_sr = 0.0;  // the distance grows with intensity: only a brighter one can beat it
   field.forEachDirection([&](const Vec3& d, double intensity_w_sr) {
-    const double nohd = std::sqrt(hazardSafe(intensity_w_sr) / mpe_w_m2);
-    if (!(nohd > reach.nohd_m)) return;
+    const double intensity = hazardSafe(intensity_w_sr);
+    if (!(intensity > best_w_sr)) return;
+    const double nohd = hazardDistance(intensity, mpe_w_m2, extinction_per_m, source_m);
     const double far_m = farRadiusToward(field.spec(), d);
-    if (nohd >= far_m) reach = {nohd, d, far_m};
+    if (nohd >= far_m) {
+      reach = {nohd, d, far_m};
+      best_w_sr = intensity;
+    }
   });
   return reach;
 }
@@ -217,16 +243,18 @@ FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& 
   for (int f = 0; f < FarField::kFaces; ++f) {
     const FieldSpec face = cubeFaceSpec(f, ball.centre_m, distance_m, spec);
     // A quarter of the map's tolerance and floor, as for every observer field
-    // (fieldIntegratorOptions()).
+    // (fieldIntegratorOptions()). Intensity is read unattenuated along the reflected paths:
+    // the air's share is the hazard distance's (hazardDistance()).
     const FacetIntegrator at_face =
-        integrator.withAccuracy(0.25 * face.tolerance, 0.25 * face.floor_w_m2);
+        integrator.withAccuracy(0.25 * face.tolerance, 0.25 * face.floor_w_m2)
+            .withReturnExtinction(0.0);
     // Each face's grids are dropped as soon as its lattice is taken.
     faces.emplace_back(computeField(at_face, face, ExcludedFn(), counter, exchange));
   }
   return {ball, spec, distance_m, std::move(faces)};
 }
 
-LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2) {
+LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2, double extinction_per_m) {
   LatLongMap m;
   m.height = height;
   m.width = 2 * height;
@@ -250,7 +278,7 @@ LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2) {
   for (std::size_t p = 0; p < cell.size(); ++p) {
     const Vec3 d = latLongDirection(p, m.width, height);
     m.intensity_w_sr[p] = static_cast<float>(std::min<double>(cell[p], FLT_MAX));
-    const double nohd = std::sqrt(cell[p] / mpe_w_m2);
+    const double nohd = hazardDistance(cell[p], mpe_w_m2, extinction_per_m, field.ball().radius_m);
     m.nohd_m[p] = nohd >= farRadiusToward(field.spec(), d)
                       ? static_cast<float>(std::min<double>(nohd, FLT_MAX))
                       : 0.0f;
@@ -258,7 +286,8 @@ LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2) {
   return m;
 }
 
-HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mpe_w_m2) {
+HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mpe_w_m2,
+                            double extinction_per_m) {
   const int n = field.spec().face_pixels;
   const int m = std::clamp(cells_per_face, 1, n);
   const int step = n / m;  // both powers of two
@@ -281,7 +310,8 @@ HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mp
         const Vec3 dir = glm::normalize(p - centre);
         const double intensity =
             vertex_max[static_cast<std::size_t>(b) * (m + 1) + static_cast<std::size_t>(a)];
-        const double nohd = std::sqrt(intensity / mpe_w_m2);
+        const double nohd =
+            hazardDistance(intensity, mpe_w_m2, extinction_per_m, field.ball().radius_m);
         const double far_m = farRadiusToward(field.spec(), dir);
         const bool beyond = nohd >= far_m;
         // The far radius grows without bound toward the beam's own direction: drawn capped.

@@ -163,6 +163,13 @@ FieldSpec cubeFaceSpec(int face, const Vec3& centre_m, double distance_m, const 
 FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& spec,
                          WorkCounter* counter = nullptr, PointExchange* exchange = nullptr);
 
+/// @brief The farthest distance r from a source of intensity @p intensity_w_sr at which
+/// I T(r) / r² ≥ @p threshold_w_m2, with T(r) = exp(−μ max(0, r − @p source_radius_m)) the
+/// transmission from the source's nearest point (so an upper bound): √(I / threshold) in vacuum.
+/// 0 when I is 0; +∞ for a non-finite intensity (fail safe).
+double hazardDistance(double intensity_w_sr, double threshold_w_m2, double extinction_per_m,
+                      double source_radius_m);
+
 /// @brief The hazard distance map in longitude and latitude: column i at azimuth
 /// φ = −π + (i + ½) 2π/width from +x toward +y, row j at elevation −π/2 + (j + ½) π/height
 /// toward +z. Each pixel holds the largest intensity of its cell: the value interpolated at
@@ -172,11 +179,12 @@ struct LatLongMap {
   int width = 0;
   int height = 0;
   std::vector<float> intensity_w_sr;
-  /// √(I/MPE) where that is at least the far radius toward the pixel's centre; 0 where the
-  /// hazard, if any, ends nearer.
+  /// hazardDistance(I, MPE, μ) where that is at least the far radius toward the pixel's centre; 0
+  /// where the hazard, if any, ends nearer.
   std::vector<float> nohd_m;
 };
-LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2);
+LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2,
+                      double extinction_per_m = 0.0);
 
 /// @brief The hazard boundary as a closed surface about the lit centre: a cube-sphere of
 /// cells_per_face² quads per face, each vertex at the distance √(I/MPE) of its direction where
@@ -189,7 +197,8 @@ struct HazardSurface {
   std::vector<float> intensity_w_sr;            ///< per point
   std::vector<std::uint8_t> beyond_far_radius;  ///< per point: 1 where nohd_m ≥ r_far
 };
-HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mpe_w_m2);
+HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mpe_w_m2,
+                            double extinction_per_m = 0.0);
 
 /// @brief The farthest hazard the far field proves: the largest √(I/MPE) over the map's
 /// lattice directions where it is at least the far radius toward them (0 and the map's peak
@@ -199,6 +208,6 @@ struct FarReach {
   Vec3 direction{1.0, 0.0, 0.0};
   double far_radius_m = 0.0;  ///< toward that direction
 };
-FarReach farReach(const FarField& field, double mpe_w_m2);
+FarReach farReach(const FarField& field, double mpe_w_m2, double extinction_per_m = 0.0);
 
 }  // namespace glint

@@ -110,7 +110,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
   const auto start = Clock::now();
   const std::string scene_json = scenarioSceneJson(study, s);
   const Scene scene = scenarioScene(study, s, scene_json);
-  const double mpe = scene.hazard.mpe.irradiance_w_m2;
+  const double mpe = scene.hazard.mpe_w_m2;
   const fs::path dir = out_dir / "scenarios" / scenarioDirName(s.index);
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -234,7 +234,7 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
     return std::nullopt;
   }
   // Maps read in full before any is added, so a damaged file leaves the aggregates untouched.
-  const double mpe = study.base.hazard.mpe.irradiance_w_m2;
+  const double mpe = study.base.hazard.mpe_w_m2;
   std::vector<std::vector<float>> maps;
   try {
     for (const StudyLattice& r : lattices) {

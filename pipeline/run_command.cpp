@@ -63,7 +63,7 @@ struct HazardZone {
 };
 
 HazardZone hazardZone(const ObserverField& field, const Scene& scene, const Vec3& target_centre_m) {
-  const double mpe = scene.hazard.mpe.irradiance_w_m2;
+  const double mpe = scene.hazard.mpe_w_m2;
   const FieldStats& s = field.stats();
   return {s.peak_w_m2 / mpe, field.exceedance(mpe, target_centre_m), target_centre_m,
           s.unconverged_max_upper_w_m2 / mpe};
@@ -514,7 +514,7 @@ RunInfo runInfo(const Scene& scene, const std::string& scene_file, std::string_v
   info.wavelength_nm = scene.laser.wavelength_nm;
   info.power_w = scene.laser.power_w;
   info.exposure_s = scene.hazard.exposure_s;
-  info.mpe_w_m2 = scene.hazard.mpe.irradiance_w_m2;
+  info.mpe_w_m2 = scene.hazard.mpe_w_m2;
   info.mpe_rule = mpeCitation(scene.hazard.mpe);
   return info;
 }

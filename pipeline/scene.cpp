@@ -14,23 +14,81 @@
 #include "pipeline/gltf_loader.h"
 #include "pipeline/input_error.h"
 #include "pipeline/json_reader.h"
+#include "pipeline/progress.h"
 
 namespace glint {
 namespace {
 
-// The exposure and its MPE; the MPE table's range is checked here, at the boundary.
-HazardSpec readHazard(ObjectReader& r, const LaserSpec& laser) {
+// A pulsed laser (`laser.pulse`): the pulse's duration and its energy (or peak power, or
+// from the mean power), and the repetition rate of a train. Fills laser.power_w, the mean power
+// over the exposure, where the file leaves it out, and checks it where it does not.
+PulseSpec readPulse(ObjectReader r, LaserSpec& laser, const std::optional<double>& power_w) {
+  PulseSpec p;
+  p.duration_s = inRange(r, "duration_s", r.number("duration_s"), 1e-9, 3e4, "s");
+  if (auto f = r.optionalNumber("repetition_rate_hz")) {
+    p.repetition_rate_hz = inRange(r, "repetition_rate_hz", *f, 1e-6, 1e12, "Hz");
+    if (p.duration_s * *p.repetition_rate_hz > 1.0) {
+      r.fail("duration_s", "longer than the time between pulses (1 / repetition_rate_hz)");
+    }
+  }
+  const auto energy = r.optionalNumber("energy_j");
+  const auto peak = r.optionalNumber("peak_power_w");
+  if (energy && peak) r.failHere("give energy_j or peak_power_w, not both");
+  // The mean power over the exposure: of a train, energy × rate; of a single pulse (whose
+  // exposure is its duration), energy / duration.
+  const double per_joule = p.repetition_rate_hz ? *p.repetition_rate_hz : 1.0 / p.duration_s;
+  if (energy) {
+    p.energy_j = positive(r, "energy_j", *energy);
+  } else if (peak) {
+    p.energy_j = positive(r, "peak_power_w", *peak) * p.duration_s;
+  } else if (power_w) {
+    p.energy_j = *power_w / per_joule;
+  } else {
+    r.failHere("needs energy_j or peak_power_w (or the laser's power_w, its mean power)");
+  }
+  const double mean_w = p.energy_j * per_joule;
+  if (power_w && !(std::abs(*power_w - mean_w) <= 1e-3 * mean_w)) {
+    r.failHere("the laser's power_w (" + formatNumber("%.6g", *power_w) +
+               " W) is not the pulse's mean power, " +
+               (p.repetition_rate_hz ? "energy × repetition rate = " : "energy / duration = ") +
+               formatNumber("%.6g", mean_w) + " W; leave power_w out or make them agree");
+  }
+  laser.power_w = mean_w;
+  r.finish();
+  return p;
+}
+
+// The exposure; its MPE once the pulse and the optical aid are known (completeHazard).
+HazardSpec readExposure(ObjectReader& r, const LaserSpec& laser,
+                        const std::optional<PulseSpec>& pulse) {
   HazardSpec h;
   if (!(laser.wavelength_nm >= 400.0 && laser.wavelength_nm <= 1.0e6)) {
     r.fail("wavelength_nm", "must be in 400 nm to 1 mm, the range of the MPE table (ANSI "
                             "Z136.1 / IEC 60825-1) that glint's hazard uses");
   }
+  h.pulse = pulse;
   h.exposure_default = !laser.exposure_s.has_value();
-  h.exposure_s = laser.exposure_s.value_or(laser.wavelength_nm <= 700.0 ? 0.25 : 10.0);
+  if (pulse && !pulse->repetition_rate_hz) {
+    if (laser.exposure_s) {
+      r.fail("exposure_s",
+             "a single pulse's exposure is its duration (pulse/duration_s); leave "
+             "exposure_s out, or give pulse/repetition_rate_hz for a train");
+    }
+    h.exposure_s = pulse->duration_s;
+    return h;
+  }
+  h.exposure_s = laser.exposure_s.value_or(defaultExposureS(laser.wavelength_nm));
   if (!(h.exposure_s >= 1e-9 && h.exposure_s <= 3e4)) {
     r.fail("exposure_s", "must be in 1e-9 s to 3e4 s, the range of the MPE table");
   }
-  h.mpe = ocularMpe(laser.wavelength_nm, h.exposure_s);
+  if (pulse && *pulse->repetition_rate_hz * h.exposure_s < 1.0) {
+    r.fail("exposure_s",
+           "holds fewer than one pulse (exposure_s × pulse/repetition_rate_hz < "
+           "1); describe a single pulse by leaving repetition_rate_hz out");
+  }
+  if (pulse && pulse->duration_s > h.exposure_s) {
+    r.fail("exposure_s", "is shorter than one pulse (pulse/duration_s)");
+  }
   return h;
 }
 
@@ -38,11 +96,19 @@ LaserSpec readLaser(ObjectReader r, HazardSpec& hazard) {
   LaserSpec laser;
   laser.position_m = position(r, "position");
   laser.direction = r.direction("direction");
-  laser.power_w = positive(r, "power_w", r.number("power_w"));
-  inRange(r, "power_w", laser.power_w, 0.0, limits::kMaxPowerW, "W");
+  std::optional<double> power_w = r.optionalNumber("power_w");
+  if (power_w)
+    inRange(r, "power_w", positive(r, "power_w", *power_w), 0.0, limits::kMaxPowerW, "W");
   laser.wavelength_nm = positive(r, "wavelength_nm", r.number("wavelength_nm"));
   if (auto t = r.optionalNumber("exposure_s")) laser.exposure_s = positive(r, "exposure_s", *t);
-  hazard = readHazard(r, laser);
+  std::optional<PulseSpec> pulse;
+  if (r.has("pulse")) {
+    pulse = readPulse(r.object("pulse"), laser, power_w);
+    inRange(r, "power_w", laser.power_w, 0.0, limits::kMaxPowerW, "W (the pulse's mean power)");
+  } else {
+    laser.power_w = r.number("power_w");  // required: fails with the key's name when missing
+  }
+  hazard = readExposure(r, laser, pulse);
 
   ObjectReader beam = r.object("beam");
   const std::size_t profile = beam.choice("profile", {"flat_top", "gaussian"});
@@ -57,6 +123,55 @@ LaserSpec readLaser(ObjectReader r, HazardSpec& hazard) {
   beam.finish();
   r.finish();
   return laser;
+}
+
+// The air (`atmosphere`): an extinction coefficient, or a visibility and the model that turns
+// it into one at the laser's wavelength.
+AtmosphereSpec readAtmosphere(ObjectReader r, double wavelength_nm) {
+  AtmosphereSpec a;
+  const bool by_extinction = r.has("extinction_per_m");
+  const bool by_visibility = r.has("visibility_m");
+  if (by_extinction == by_visibility) {
+    r.failHere("give extinction_per_m or visibility_m (one of them)");
+  }
+  if (by_extinction) {
+    a.extinction_per_m = r.number("extinction_per_m");
+    inRange(r, "extinction_per_m", a.extinction_per_m, 0.0, 1.0, "1/m");
+  } else {
+    // Below 50 m a fog's extinction depends on more than the visibility; above 1000 km nothing
+    // is that clear.
+    a.visibility_m = inRange(r, "visibility_m", r.number("visibility_m"), 50.0, 1e6, "m");
+    a.model = r.choice("visibility_model", {"kim", "kruse"}, 0) == 0 ? VisibilityModel::Kim
+                                                                     : VisibilityModel::Kruse;
+    a.extinction_per_m = extinctionFromVisibility(*a.visibility_m, wavelength_nm, a.model);
+  }
+  r.finish();
+  return a;
+}
+
+// An optical aid (`optical_aid`): its aperture, magnification and transmission, or its gain.
+OpticalAidSpec readOpticalAid(ObjectReader r, double wavelength_nm) {
+  if (!(wavelength_nm >= 302.5 && wavelength_nm <= 4000.0)) {
+    r.failHere("optical aids transmit 302.5 nm to 4000 nm (ANSI Z136.1-2014 8.3); at " +
+               formatNumber("%g", wavelength_nm) + " nm the standards apply none");
+  }
+  OpticalAidSpec aid;
+  if (r.has("gain")) {
+    if (r.has("aperture_m") || r.has("magnification") || r.has("transmission")) {
+      r.failHere("give gain, or aperture_m, magnification and transmission, not both");
+    }
+    aid.gain = inRange(r, "gain", r.number("gain"), 1e-6, 1e6, "");
+  } else {
+    aid.aperture_m = inRange(r, "aperture_m", r.number("aperture_m"), 1e-3, 10.0, "m");
+    aid.magnification = inRange(r, "magnification", r.number("magnification"), 1.0, 1e4, "");
+    aid.transmission = r.number("transmission");
+    if (!(*aid.transmission > 0.0 && *aid.transmission <= 1.0)) {
+      r.fail("transmission", "must be in (0, 1]");
+    }
+    aid.gain = opticalGain(*aid.aperture_m, *aid.magnification, *aid.transmission, wavelength_nm);
+  }
+  r.finish();
+  return aid;
 }
 
 MaterialSpec readMaterial(ObjectReader r, const std::string& name) {
@@ -347,6 +462,13 @@ Scene parseScene(std::string_view text, const std::string& source,
   ObjectReader r(root, "", source);
   scene.description = r.string("description", "");
   scene.laser = readLaser(r.object("laser"), scene.hazard);
+  if (r.has("atmosphere")) {
+    scene.hazard.atmosphere = readAtmosphere(r.object("atmosphere"), scene.laser.wavelength_nm);
+  }
+  if (r.has("optical_aid")) {
+    scene.hazard.aid = readOpticalAid(r.object("optical_aid"), scene.laser.wavelength_nm);
+  }
+  completeHazard(scene.hazard, scene.laser.wavelength_nm);
 
   ObjectReader materials = r.object("materials");
   if (materials.raw().empty()) materials.failHere("must define at least one material");

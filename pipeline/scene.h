@@ -18,7 +18,7 @@
 #include "facets/tessellate.h"
 #include "facets/vec3.h"
 #include "pipeline/gltf_loader.h"
-#include "pipeline/mpe.h"
+#include "pipeline/hazard.h"
 
 namespace glint {
 
@@ -26,6 +26,8 @@ namespace glint {
 struct LaserSpec {
   Vec3 position_m{0.0};
   Vec3 direction{1.0, 0.0, 0.0};  ///< unit (the file's vector, normalised)
+  /// Mean power over the exposure: a pulse train's energy × repetition rate, a single pulse's
+  /// energy / duration (`power_w`, or from `pulse`).
   double power_w = 0.0;
   double wavelength_nm = 0.0;
   std::optional<double> exposure_s;  ///< as in the file; HazardSpec has the one in use
@@ -99,7 +101,7 @@ struct ObserversSpec {
   double voxel_m = 0.0;
   double block_m = 0.0;  ///< coarsest block edge: voxel_m × a power of two (default 16 voxels)
   double tolerance = 1e-2;
-  std::optional<double> floor_w_m2;  ///< default: 1e-3 × the MPE (HazardSpec)
+  std::optional<double> floor_w_m2;  ///< default: 1e-3 × HazardSpec::lowestHazardousW_m2()
 };
 
 /// @brief A plane of observers (key `planes/<i>`): a ground plane, a slice at eye height, a
@@ -114,7 +116,7 @@ struct PlaneSpec {
   double pixel_m = 0.0;
   double block_m = 0.0;  ///< coarsest square block: pixel_m × a power of two (default 16 px)
   double tolerance = 1e-2;
-  std::optional<double> floor_w_m2;  ///< default: 1e-3 × the MPE
+  std::optional<double> floor_w_m2;  ///< default: 1e-3 × HazardSpec::lowestHazardousW_m2()
 };
 
 /// @brief The far field by direction (key `far_field`, all optional; observers/far_field.h).
@@ -125,15 +127,6 @@ struct FarFieldSettings {
   /// that samples directions at most σ apart (σ the narrowest lobe), within 64 .. 4096.
   std::optional<int> face_pixels;
   std::optional<double> floor_w_sr;  ///< default: 1e-3 × MPE × far radius²
-};
-
-/// @brief The exposure the hazard is judged for and its MPE (README "Hazard").
-struct HazardSpec {
-  /// `laser.exposure_s`, by default 0.25 s (the aversion response) for 400–700 nm and 10 s
-  /// beyond 700 nm, where nothing makes the eye turn away.
-  double exposure_s = 0.25;
-  bool exposure_default = true;  ///< exposure_s was not in the file
-  Mpe mpe;
 };
 
 /// @brief A validated scene: every number finite and in range, every reference resolved.

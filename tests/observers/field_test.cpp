@@ -153,7 +153,7 @@ TEST(ObserverField, MirrorInsideACoarseBlockIsRefinedNotInterpolatedAway) {
   const FieldProblem p = fieldProblem(scene, spec);
   const ObserverField a = computeField(p.integrator, spec, p.excluded);
   const ObserverField d = computeDenseField(p.integrator, spec, p.excluded);
-  const double mpe = scene.hazard.mpe.irradiance_w_m2;
+  const double mpe = scene.hazard.mpe_w_m2;
   ASSERT_NEAR(mpe, 25.46, 0.01) << "532 nm for 0.25 s";
   const HazardAgreement h = hazardAgreement(a, d, mpe);
   // The premise: a hazardous pencil, and the block that holds the mirror sees none of it at
@@ -198,7 +198,7 @@ TEST(ObserverPlane, PlaneThroughASmallMirrorIsRefinedAroundIt) {
   const FieldProblem p = fieldProblem(scene, spec);
   const ObserverField a = computeField(p.integrator, spec, p.excluded);
   const ObserverField d = computeDenseField(p.integrator, spec, p.excluded);
-  const HazardAgreement h = hazardAgreement(a, d, scene.hazard.mpe.irradiance_w_m2);
+  const HazardAgreement h = hazardAgreement(a, d, scene.hazard.mpe_w_m2);
   ASSERT_GT(h.dense_hazardous, 10) << "the premise: the pencil crosses the slice";
   EXPECT_EQ(h.missed, 0) << "dense " << h.dense_hazardous << ", adaptive "
                          << h.adaptive_hazardous;

@@ -62,7 +62,7 @@ class Batch : public ::testing::Test {
 
 TEST_F(Batch, AggregatesAreTheMaximumAndTheHazardFractionOfTheScenarioMaps) {
   const Study study = loadStudy(kStudy);
-  const double mpe = study.base.hazard.mpe.irradiance_w_m2;
+  const double mpe = study.base.hazard.mpe_w_m2;
   ASSERT_EQ(study.scenarios.size(), 4u);
 
   // The plane: channels of ground.exr against the four scenario maps, exactly.

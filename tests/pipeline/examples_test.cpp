@@ -58,7 +58,7 @@ TEST(Examples, RangeSceneIsAKilometreBoxWhoseSheetIsHazardousToAbout490Metres) {
   EXPECT_GE(static_cast<double>(n[0]) * n[1] * n[2], 1e9) << n[0] << "×" << n[1] << "×" << n[2];
   const FacetIntegrator fi(buildTarget(scene), beamOf(scene), integratorOptions(scene));
   IntegratorWorkspace ws;
-  const double mpe = scene.hazard.mpe.irradiance_w_m2;
+  const double mpe = scene.hazard.mpe_w_m2;
   ASSERT_NEAR(mpe, 50.0, 0.5) << "1064 nm, 10 s";
   const ObserverResult inside = fi.adaptive(Vec3(-470.0, 0.0, 0.0), ws);
   const ObserverResult outside = fi.adaptive(Vec3(-505.0, 0.0, 0.0), ws);

@@ -267,11 +267,11 @@ TEST(SceneHazard, ExposureDefaultsToTheAversionResponseInTheVisibleAndTenSeconds
   Scene s = parseScene(j.dump(), "scene.json");
   EXPECT_TRUE(s.hazard.exposure_default);
   EXPECT_EQ(s.hazard.exposure_s, 0.25) << "the aversion response";
-  EXPECT_NEAR(s.hazard.mpe.irradiance_w_m2, 18.0 * std::pow(0.25, -0.25), 1e-9) << "25.46 W/m²";
+  EXPECT_NEAR(s.hazard.mpe_w_m2, 18.0 * std::pow(0.25, -0.25), 1e-9) << "25.46 W/m²";
   j["laser"]["wavelength_nm"] = 1064;
   s = parseScene(j.dump(), "scene.json");
   EXPECT_EQ(s.hazard.exposure_s, 10.0) << "no aversion response beyond 700 nm";
-  EXPECT_NEAR(s.hazard.mpe.irradiance_w_m2, 50.0, 1e-9) << "1064 nm from 10 s: 50 C_C W/m²";
+  EXPECT_NEAR(s.hazard.mpe_w_m2, 50.0, 1e-9) << "1064 nm from 10 s: 50 C_C W/m²";
   j["laser"]["exposure_s"] = 1.0;
   s = parseScene(j.dump(), "scene.json");
   EXPECT_FALSE(s.hazard.exposure_default);

@@ -1,0 +1,133 @@
+#pragma once
+/// @file
+/// @brief The hazard a scene is judged for, in one place: the exposure and its MPE (continuous,
+/// single pulse or pulse train), the air's extinction, an optical aid, and the ratios and zones
+/// the outputs report (README "Hazard").
+///
+/// Everything glint integrates is the mean irradiance over the exposure, E (W/m²), from the
+/// laser's mean power. The limits reduce to one number it is compared with, `mpe_w_m2`: the MPE
+/// expressed as mean irradiance. For a pulse train that is the MPE per pulse times the
+/// repetition rate (a pulse's radiant exposure is E / f); for a single pulse, whose exposure is
+/// its duration τ, the MPE for τ divided by τ.
+
+#include <algorithm>
+#include <optional>
+#include <string>
+
+#include "pipeline/mpe.h"
+
+namespace glint {
+
+/// @brief A pulsed laser's pulses (scene key `laser.pulse`).
+struct PulseSpec {
+  double energy_j = 0.0;    ///< per pulse
+  double duration_s = 0.0;  ///< each pulse's duration (full width at half maximum)
+  /// Pulses per second; none: a single pulse, whose exposure is its duration.
+  std::optional<double> repetition_rate_hz;
+};
+
+/// @brief The MPE of a train of pulses, per pulse, by the three rules of ANSI Z136.1-2014
+/// section 8.2.3 (IEC 60825-1:2014 section A.3 words them alike).
+struct PulseTrainMpe {
+  double pulses = 0.0;  ///< n = f T over the exposure T (of groups, where grouped below)
+  /// 400–1400 nm: pulses closer than t_min (5 µs below 1050 nm, 13 µs above) act as one pulse
+  /// of duration t_min carrying their summed energy (ANSI Z136.1-2014 8.2.3.2).
+  bool grouped = false;
+  double single_pulse_j_m2 = 0.0;  ///< rule 1: the MPE of one pulse alone
+  double average_j_m2 = 0.0;       ///< rule 2: the MPE for T shared among the n pulses
+  /// rule 3 (retinal thermal limits, 400–1400 nm): rule 1 × C_P, C_P = n^-0.25; 0 elsewhere.
+  double reduced_j_m2 = 0.0;
+  double c_p = 1.0;
+  double per_pulse_j_m2 = 0.0;  ///< the most restrictive of the three, per (ungrouped) pulse
+  int rule = 1;                 ///< which of the three set it
+};
+
+/// @brief The MPE per pulse of @p pulse repeated over @p exposure_s at @p wavelength_nm.
+/// @pre the pulse has a repetition rate, duration × rate ≤ 1 and rate × exposure ≥ 1; the MPE
+/// table's ranges hold (ocularMpe throws std::out_of_range otherwise).
+PulseTrainMpe pulseTrainMpe(double wavelength_nm, const PulseSpec& pulse, double exposure_s);
+
+/// @brief How meteorological visibility gives extinction (both: μ = 3.912/V (λ/550 nm)^-q).
+enum class VisibilityModel {
+  Kim,    ///< Kim, McArthur, Korevaar (SPIE 4214, 2001): q falls to 0 in fog below 0.5 km
+  Kruse,  ///< Kruse et al. (1962): q = 0.585 V^(1/3) below 6 km
+};
+
+/// @brief The air between laser, target and observers (scene key `atmosphere`): Beer–Lambert
+/// extinction along the laser's path to the target and along each reflected path.
+struct AtmosphereSpec {
+  double extinction_per_m = 0.0;       ///< μ; 0 is vacuum (the default)
+  std::optional<double> visibility_m;  ///< where μ came from the visibility
+  VisibilityModel model = VisibilityModel::Kim;
+};
+
+/// @brief The extinction coefficient (1/m) at @p wavelength_nm for a meteorological
+/// visibility (2 % contrast at 550 nm) of @p visibility_m.
+double extinctionFromVisibility(double visibility_m, double wavelength_nm, VisibilityModel model);
+
+/// @brief Viewing through binoculars or a telescope (scene key `optical_aid`).
+struct OpticalAidSpec {
+  std::optional<double> aperture_m;     ///< objective diameter D
+  std::optional<double> magnification;  ///< M
+  std::optional<double> transmission;   ///< τ in (0, 1]
+  /// What the aid multiplies the irradiance at the eye by: τ min(M, D / d)², d the eye's
+  /// limiting aperture, or the file's `gain`.
+  double gain = 1.0;
+};
+
+/// @brief τ min(M, D/d)²: an aid collects the beam over D and sends it through an exit pupil
+/// D/M, so it gathers (D/d)² times what the eye's limiting aperture d does, but no more than M²
+/// once the exit pupil is smaller than d (ANSI Z136.1-2014 8.3, IEC 60825-1:2014 A.2).
+/// d = 7 mm over 400–1400 nm; beyond 1400 nm the smallest limiting aperture of ANSI Z136.1-2014
+/// Table 8 (1 mm), which gives the largest gain.
+double opticalGain(double aperture_m, double magnification, double transmission,
+                   double wavelength_nm);
+
+/// @brief The exposure the hazard is judged for, its limit, the air and the aid: what every
+/// hazard ratio, zone and distance of the outputs is computed from.
+struct HazardSpec {
+  /// `laser.exposure_s`, by default 0.25 s (the aversion response) for 400–700 nm and 10 s
+  /// beyond 700 nm, where nothing makes the eye turn away; a single pulse's duration.
+  double exposure_s = 0.25;
+  bool exposure_default = true;  ///< exposure_s was not in the file
+  /// The table's MPE for the exposure (a continuous laser) or for one pulse (a pulsed laser).
+  Mpe mpe;
+  std::optional<PulseSpec> pulse;
+  std::optional<PulseTrainMpe> train;  ///< a pulse train's MPE per pulse
+  /// The MPE as mean irradiance over the exposure: what `irradiance_w_m2` is compared with.
+  double mpe_w_m2 = 0.0;
+  /// Seconds that turn mean irradiance into one pulse's radiant exposure (J/m²): 1/f for a
+  /// train, τ for a single pulse, 0 for a continuous laser.
+  double pulse_exposure_s = 0.0;
+  AtmosphereSpec atmosphere;
+  std::optional<OpticalAidSpec> aid;
+
+  /// @brief E / MPE for unaided viewing.
+  [[nodiscard]] double ratio(double irradiance_w_m2) const { return irradiance_w_m2 / mpe_w_m2; }
+  /// @brief E × gain / MPE through the optical aid (the unaided ratio without one).
+  [[nodiscard]] double aidedRatio(double irradiance_w_m2) const {
+    return irradiance_w_m2 * aidGain() / mpe_w_m2;
+  }
+  [[nodiscard]] double aidGain() const { return aid ? aid->gain : 1.0; }
+  /// @brief The lowest irradiance that is hazardous to any viewer the scene describes (aided
+  /// where the aid gathers more than the eye): what defaults of floors are scaled from.
+  [[nodiscard]] double lowestHazardousW_m2() const { return mpe_w_m2 / std::max(1.0, aidGain()); }
+  /// @brief One pulse's radiant exposure (J/m²) at mean irradiance @p irradiance_w_m2.
+  [[nodiscard]] double pulseRadiantExposureJ_m2(double irradiance_w_m2) const {
+    return irradiance_w_m2 * pulse_exposure_s;
+  }
+};
+
+/// @brief The default exposure at @p wavelength_nm: 0.25 s (aversion response) to 700 nm, 10 s
+/// beyond.
+double defaultExposureS(double wavelength_nm);
+
+/// @brief Fills @p h's limits from its exposure, pulse and aid: the table's MPE, the pulse
+/// train's, `mpe_w_m2` and `pulse_exposure_s`.
+/// @throw std::out_of_range where the MPE table does not reach (ocularMpe).
+void completeHazard(HazardSpec& h, double wavelength_nm);
+
+/// @brief The lines of the standards the limit came from, as outputs record them.
+std::string hazardCitation(const HazardSpec& h);
+
+}  // namespace glint
