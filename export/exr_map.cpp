@@ -107,12 +107,14 @@ void writeLatLongExr(std::ostream& out, const LatLongGrid& grid,
 }
 
 void writeExr(std::ostream& out, const PlaneMap& map, const ExrInfo& info) {
-  writeExr(out, static_cast<const PlaneGrid&>(map),
-           {{"irradiance_w_m2", &map.irradiance_w_m2},
-            {"hazard_ratio", &map.hazard_ratio},
-            {"level", &map.level},
-            {"status", &map.status}},
-           info);
+  std::vector<ExrChannel> channels = {{"irradiance_w_m2", &map.irradiance_w_m2},
+                                      {"hazard_ratio", &map.hazard_ratio}};
+  if (!map.aided_hazard_ratio.empty()) {
+    channels.push_back({"aided_hazard_ratio", &map.aided_hazard_ratio});
+  }
+  channels.push_back({"level", &map.level});
+  channels.push_back({"status", &map.status});
+  writeExr(out, static_cast<const PlaneGrid&>(map), channels, info);
 }
 
 std::vector<float> readExrChannel(const std::string& path, const std::string& name, int& width,

@@ -26,6 +26,7 @@ struct PlaneGrid {
 struct PlaneMap : PlaneGrid {
   std::vector<float> irradiance_w_m2;
   std::vector<float> hazard_ratio;  ///< irradiance / MPE
+  std::vector<float> aided_hazard_ratio;  ///< irradiance × aid gain / MPE; empty without an aid
   std::vector<float> level;         ///< refinement level (0 = coarsest block)
   std::vector<float> status;        ///< VoxelStatus: why a 0 is 0 (proven below floor, ...)
 };
@@ -67,8 +68,8 @@ struct LatLongGrid {
 void writeLatLongExr(std::ostream& out, const LatLongGrid& grid,
                      const std::vector<ExrChannel>& channels, const ExrInfo& info);
 
-/// @brief Writes @p map with its channels `irradiance_w_m2`, `hazard_ratio`, `level` and
-/// `status` (see the overload above).
+/// @brief Writes @p map with its channels `irradiance_w_m2`, `hazard_ratio`,
+/// `aided_hazard_ratio` (where the map has one), `level` and `status` (see the overload above).
 void writeExr(std::ostream& out, const PlaneMap& map, const ExrInfo& info);
 
 /// @brief Reads FLOAT channel @p name of an EXR glint wrote, indexed [j × width + i] like the

@@ -133,6 +133,8 @@ void writeVdb(std::ostream& out, ObserverField field, const RunInfo& info) {
   meta.insertMeta("wavelength_nm", openvdb::DoubleMetadata(info.wavelength_nm));
   meta.insertMeta("power_w", openvdb::DoubleMetadata(info.power_w));
   const bool hazard = info.mpe_w_m2 > 0.0;
+  const bool aided = hazard && info.aid_gain > 0.0;
+  if (aided) meta.insertMeta("optical_aid_gain", openvdb::DoubleMetadata(info.aid_gain));
   if (hazard) {
     meta.insertMeta("exposure_s", openvdb::DoubleMetadata(info.exposure_s));
     meta.insertMeta("mpe_w_m2", openvdb::DoubleMetadata(info.mpe_w_m2));
@@ -146,7 +148,7 @@ void writeVdb(std::ostream& out, ObserverField field, const RunInfo& info) {
   meta.insertMeta("peak_irradiance_w_m2", openvdb::DoubleMetadata(stats.peak_w_m2));
 
   FieldGrids& g = field.grids();
-  GridByGridWriter file(out, meta, hazard ? 4 : 3);
+  GridByGridWriter file(out, meta, 3 + (hazard ? 1 : 0) + (aided ? 1 : 0));
   // A shallow copy (the same tree) carries the irradiance's metadata: the grid itself goes on
   // to become the hazard ratio.
   {
@@ -162,6 +164,16 @@ void writeVdb(std::ostream& out, ObserverField field, const RunInfo& info) {
     ratio->setName("hazard_ratio");
     ratio->insertMeta("units", openvdb::StringMetadata("1 (irradiance / MPE)"));
     file.write(ratio);
+    if (aided) {  // once written, the ratio grid goes on to become the aided one
+      auto aided_ratio = ratio->copyGrid();
+      for (auto it = ratio->beginValueOn(); it; ++it) {
+        it.setValue(static_cast<float>(static_cast<double>(*it) * info.aid_gain));
+      }
+      aided_ratio->setName("aided_hazard_ratio");
+      aided_ratio->insertMeta("units",
+                              openvdb::StringMetadata("1 (irradiance x optical aid gain / MPE)"));
+      file.write(aided_ratio);
+    }
   }
   g.irradiance.reset();
   {

@@ -25,15 +25,17 @@ struct RunInfo {
   double exposure_s = 0.0;
   double mpe_w_m2 = 0.0;  ///< > 0: `hazard_ratio` (irradiance / MPE) is written beside irradiance
   std::string mpe_rule;   ///< the MPE table row that applied
+  /// > 0: `aided_hazard_ratio` (irradiance × gain / MPE, an optical aid's) is written too
+  double aid_gain = 0.0;
 };
 
 /// @brief irradiance / MPE for each value, computed in double and stored as float.
 std::vector<float> hazardRatio(const std::vector<float>& irradiance_w_m2, double mpe_w_m2);
 
 /// @brief The grids `irradiance_w_m2`, `hazard_ratio` (irradiance / MPE, where
-/// info.mpe_w_m2 > 0), `refinement_level` and `status` (see VoxelStatus) with the field's
-/// transform, and as file metadata the units, laser, exposure and MPE, tolerance, floor,
-/// counts, program version and scene hash.
+/// info.mpe_w_m2 > 0), `aided_hazard_ratio` (where info.aid_gain > 0 too), `refinement_level` and
+/// `status` (see VoxelStatus) with the field's transform, and as file metadata the units, laser,
+/// exposure and MPE, tolerance, floor, counts, program version and scene hash.
 ///
 /// Consumes @p field (move it in as the last use of it): the grids are written one at a time
 /// and each freed once written, and `hazard_ratio` is the irradiance grid divided in place

@@ -148,7 +148,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
     AtomicFile map(dir / r.scenarioFile());
     std::vector<float> e;
     if (r.plane) {
-      PlaneMap m = planeMap(field, mpe);
+      PlaneMap m = planeMap(field, scene.hazard);
       writeExr(map.stream(), m, {info.program_version, info.wavelength_nm, mpe});
       e = std::move(m.irradiance_w_m2);
     } else {
@@ -156,34 +156,48 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
       writeVdb(map.stream(), std::move(field), info);
     }
     map.commit();
+    const HazardSpec& h = scene.hazard;
     const std::int64_t hazardous = accumulate(r, e, mpe);
-    results.push_back({{"name", r.name},
-                       {"peak_hazard_ratio", st.peak_w_m2 / mpe},
-                       {"hazardous_points", hazardous},
-                       {r.plane ? "hazardous_area_m2" : "hazard_volume_m3",
-                        static_cast<double>(hazardous) * r.cell()},
-                       {"evaluations", st.evaluations},
-                       {"unconverged_points", st.unconverged_points},
-                       // Below 1, no unconverged point of the scenario can be hazardous.
-                       {"unconverged_max_hazard_ratio_plus_error",
-                        st.unconverged_max_upper_w_m2 / mpe}});
+    const char* extent = r.plane ? "hazardous_area_m2" : "hazard_volume_m3";
+    nlohmann::json region = {{"name", r.name},
+                             {"peak_hazard_ratio", h.ratio(st.peak_w_m2)},
+                             {"hazardous_points", hazardous},
+                             {extent, static_cast<double>(hazardous) * r.cell()},
+                             {"evaluations", st.evaluations},
+                             {"unconverged_points", st.unconverged_points},
+                             // Below 1, no unconverged point of the scenario can be hazardous
+                             // (aided, where there is an aid).
+                             {"unconverged_max_hazard_ratio_plus_error",
+                              std::max(h.ratio(st.unconverged_max_upper_w_m2),
+                                       h.aidedRatio(st.unconverged_max_upper_w_m2))}};
+    if (h.pulse) {
+      region["peak_radiant_exposure_j_m2_per_pulse"] = h.pulseRadiantExposureJ_m2(st.peak_w_m2);
+    }
+    if (h.aid) {
+      // As accumulate() counts: the stored float against the limit.
+      const auto aided = static_cast<std::int64_t>(std::count_if(e.begin(), e.end(), [&](float x) {
+        return h.aidedRatio(static_cast<double>(x)) >= 1.0;
+      }));
+      region["aided_peak_hazard_ratio"] = h.aidedRatio(st.peak_w_m2);
+      region["aided_hazardous_points"] = aided;
+      region[std::string("aided_") + extent] = static_cast<double>(aided) * r.cell();
+    }
+    results.push_back(std::move(region));
     evaluations += st.evaluations;
     unconverged += st.unconverged_points;
   }
   record["regions"] = results;
   if (scene.far_field.enabled) {
-    const FarField far = sceneFarField(
-        target, scene, watch, "scenario " + std::to_string(s.index) + ", far field", nullptr, false);
-    const FarReach reach = farReach(far, mpe);
+    const FarField far =
+        sceneFarField(target, scene, watch, "scenario " + std::to_string(s.index) + ", far field",
+                      nullptr, false);
     const Vec3& peak = far.peak().direction;
-    record["far_field"] = {
-        {"far_radius_m", far.spec().far_radius_m},
-        {"peak_intensity_w_sr", far.peak().intensity_w_sr},
-        {"peak_direction", {peak.x, peak.y, peak.z}},
-        {"max_nohd_m", reach.nohd_m},
-        {"max_nohd_direction", {reach.direction.x, reach.direction.y, reach.direction.z}},
-        {"evaluations", far.stats().evaluations},
-        {"unconverged_directions", far.stats().unconverged_points}};
+    record["far_field"] = {{"far_radius_m", far.spec().far_radius_m},
+                           {"peak_intensity_w_sr", far.peak().intensity_w_sr},
+                           {"peak_direction", {peak.x, peak.y, peak.z}},
+                           {"evaluations", far.stats().evaluations},
+                           {"unconverged_directions", far.stats().unconverged_points}};
+    record["far_field"].update(farHazardJson(farHazard(far, scene.hazard)));
     if (far.stats().unconverged_points > 0) {
       record["far_field"]["unconverged_max_intensity_plus_error_w_sr"] =
           far.stats().unconverged_max_upper_w_m2;
@@ -215,9 +229,12 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
   try {
     record = nlohmann::json::parse(readUserFile(dir / "result.json", "scenario result"));
     fnv = record.at("study_fnv1a64").get<std::string>();
-    matches = record.at("scenario").get<std::size_t>() == s.index &&
-              record.at("regions").size() == lattices.size() &&
-              record.contains("far_field") == study.base.far_field.enabled;
+    matches =
+        record.at("scenario").get<std::size_t>() == s.index &&
+        record.at("regions").size() == lattices.size() &&
+        record.contains("far_field") == study.base.far_field.enabled &&
+        // A result from before the scene had an optical aid lacks the aided figures.
+        (!study.base.hazard.aid || record.at("regions").at(0).contains("aided_peak_hazard_ratio"));
   } catch (const std::exception&) {
     if (!quiet) err << "glint batch: " << (dir / "result.json").string() << " unreadable: redone\n";
     return std::nullopt;
@@ -278,16 +295,19 @@ nlohmann::json quantilesJson(const std::vector<double>& v) {
 std::string csvNumber(double x) { return formatNumber("%.10g", x); }
 
 std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
-                         const std::map<std::size_t, nlohmann::json>& records, bool far_field) {
+                         const std::map<std::size_t, nlohmann::json>& records, bool far_field,
+                         bool aided) {
   std::string csv =
       "scenario,time_s,offset_x_m,offset_y_m,offset_z_m,pose_yaw_deg,pose_pitch_deg,"
       "pose_roll_deg,yaw_deg,pitch_deg,roll_deg,sigma,specular_reflectance,jitter_sample,"
       "jitter_u_rad,jitter_v_rad";
   for (const StudyLattice& r : lattices) {
-    csv += "," + r.name + "_peak_hazard_ratio," + r.name +
-           (r.plane ? "_hazardous_area_m2" : "_hazard_volume_m3");
+    const std::string extent = r.plane ? "_hazardous_area_m2" : "_hazard_volume_m3";
+    csv += "," + r.name + "_peak_hazard_ratio," + r.name + extent;
+    if (aided) csv += "," + r.name + "_aided_peak_hazard_ratio," + r.name + "_aided" + extent;
   }
   if (far_field) csv += ",far_max_nohd_m,far_peak_intensity_w_sr";
+  if (far_field && aided) csv += ",far_aided_max_nohd_m";
   csv += ",unconverged_points,evaluations,seconds\n";
   for (const auto& [index, rec] : records) {
     const nlohmann::json& p = rec.at("parameters");
@@ -310,12 +330,18 @@ std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
     number(p.at("jitter_u_rad"));
     number(p.at("jitter_v_rad"));
     for (const nlohmann::json& r : rec.at("regions")) {
+      const bool plane = r.contains("hazardous_area_m2");
       number(r.at("peak_hazard_ratio"));
-      number(r.contains("hazardous_area_m2") ? r.at("hazardous_area_m2") : r.at("hazard_volume_m3"));
+      number(plane ? r.at("hazardous_area_m2") : r.at("hazard_volume_m3"));
+      if (aided) {
+        number(r.at("aided_peak_hazard_ratio"));
+        number(plane ? r.at("aided_hazardous_area_m2") : r.at("aided_hazard_volume_m3"));
+      }
     }
     if (far_field) {
       number(rec.at("far_field").at("max_nohd_m"));
       number(rec.at("far_field").at("peak_intensity_w_sr"));
+      if (aided) number(rec.at("far_field").at("aided_max_nohd_m"));
     }
     cell(std::to_string(rec.at("unconverged_points").get<std::int64_t>()));
     cell(std::to_string(rec.at("evaluations").get<std::int64_t>()));
@@ -337,7 +363,9 @@ std::vector<float> coverage(const StudyLattice& r, std::size_t scenarios) {
 void writeLatticeMap(const fs::path& path, const StudyLattice& r, const Study& study,
                      std::size_t scenarios) {
   const HazardSpec& h = study.base.hazard;
-  const std::vector<float> max_ratio = hazardRatio(r.max_w_m2, h.mpe.irradiance_w_m2);
+  std::vector<float> max_ratio(r.max_w_m2.size());
+  for (std::size_t i = 0; i < max_ratio.size(); ++i)
+    max_ratio[i] = static_cast<float>(h.ratio(static_cast<double>(r.max_w_m2[i])));
   const std::vector<float> cover = coverage(r, scenarios);
   const std::string program = std::string("glint ") + GLINT_VERSION;
   AtomicFile file(path);
@@ -355,18 +383,18 @@ void writeLatticeMap(const fs::path& path, const StudyLattice& r, const Study& s
              {{"max_irradiance_w_m2", &r.max_w_m2},
               {"max_hazard_ratio", &max_ratio},
               {"coverage_probability", &cover}},
-             {program, study.base.laser.wavelength_nm, h.mpe.irradiance_w_m2});
+             {program, study.base.laser.wavelength_nm, h.mpe_w_m2});
   } else {
     LatticeMeta meta;
     meta.strings = {{"program", program},
                     {"study_file", study.source},
                     {"study_fnv1a64", study.fnv1a64},
                     {"length_unit", "m"},
-                    {"mpe_rule", mpeCitation(h.mpe)}};
+                    {"mpe_rule", hazardCitation(h)}};
     meta.numbers = {{"scenarios", static_cast<double>(scenarios)},
                     {"wavelength_nm", study.base.laser.wavelength_nm},
                     {"exposure_s", h.exposure_s},
-                    {"mpe_w_m2", h.mpe.irradiance_w_m2},
+                    {"mpe_w_m2", h.mpe_w_m2},
                     {"voxel_m", r.spec.voxel_m}};
     writeLatticeVdb(file.stream(), r.spec,
                     {{"max_irradiance_w_m2", "W/m^2", &r.max_w_m2},
@@ -383,18 +411,16 @@ nlohmann::json summaryJson(const Study& study, const std::vector<StudyLattice>& 
                            std::size_t resumed, int ranks, double wall_s) {
   const HazardSpec& h = study.base.hazard;
   const std::size_t n = records.size();
-  nlohmann::json j = {{"program", std::string("glint ") + GLINT_VERSION},
-                      {"study_file", study.source},
-                      {"study_fnv1a64", study.fnv1a64},
-                      {"scene_file", study.scene_path.string()},
-                      {"description", study.description},
-                      {"scenarios", {{"count", n}, {"computed", n - resumed}, {"resumed", resumed}}},
-                      {"ranks", ranks},
-                      {"wall_seconds", wall_s},
-                      {"hazard",
-                       {{"exposure_s", h.exposure_s},
-                        {"mpe_w_m2", h.mpe.irradiance_w_m2},
-                        {"mpe_rule", mpeCitation(h.mpe)}}}};
+  nlohmann::json j = {
+      {"program", std::string("glint ") + GLINT_VERSION},
+      {"study_file", study.source},
+      {"study_fnv1a64", study.fnv1a64},
+      {"scene_file", study.scene_path.string()},
+      {"description", study.description},
+      {"scenarios", {{"count", n}, {"computed", n - resumed}, {"resumed", resumed}}},
+      {"ranks", ranks},
+      {"wall_seconds", wall_s},
+      {"hazard", hazardLimitsJson(h)}};
   std::vector<double> evaluations, seconds;
   for (const auto& [index, rec] : records) {
     evaluations.push_back(static_cast<double>(rec.at("evaluations").get<std::int64_t>()));
@@ -405,14 +431,20 @@ nlohmann::json summaryJson(const Study& study, const std::vector<StudyLattice>& 
   nlohmann::json rs = nlohmann::json::array();
   for (std::size_t k = 0; k < lattices.size(); ++k) {
     const StudyLattice& r = lattices[k];
-    std::vector<double> peak, extent;
-    std::size_t with_hazard = 0;
+    std::vector<double> peak, extent, aided_peak, aided_extent;
+    std::size_t with_hazard = 0, with_aided_hazard = 0;
     for (const auto& [index, rec] : records) {
       const nlohmann::json& x = rec.at("regions")[k];
       peak.push_back(x.at("peak_hazard_ratio").get<double>());
       const std::int64_t points = x.at("hazardous_points").get<std::int64_t>();
       extent.push_back(static_cast<double>(points) * r.cell());
       with_hazard += points > 0 ? 1 : 0;
+      if (h.aid) {
+        aided_peak.push_back(x.at("aided_peak_hazard_ratio").get<double>());
+        const std::int64_t aided = x.at("aided_hazardous_points").get<std::int64_t>();
+        aided_extent.push_back(static_cast<double>(aided) * r.cell());
+        with_aided_hazard += aided > 0 ? 1 : 0;
+      }
     }
     std::int64_t ever = 0, half = 0;
     float max_e = 0.0f;
@@ -434,6 +466,13 @@ nlohmann::json summaryJson(const Study& study, const std::vector<StudyLattice>& 
                   {"max_irradiance_w_m2", max_e},
                   {std::string("hazardous_in_any_scenario") + unit, static_cast<double>(ever) * r.cell()},
                   {std::string("hazardous_in_half_or_more") + unit, static_cast<double>(half) * r.cell()}});
+    if (h.aid) {
+      nlohmann::json& a = rs.back();
+      a["aided_peak_hazard_ratio"] = quantilesJson(aided_peak);
+      a[std::string(r.plane ? "aided_hazardous_area" : "aided_hazard_volume") + unit] =
+          quantilesJson(aided_extent);
+      a["scenarios_with_aided_hazard"] = with_aided_hazard;
+    }
   }
   j["regions"] = rs;
   if (study.base.far_field.enabled) {
@@ -458,6 +497,13 @@ nlohmann::json summaryJson(const Study& study, const std::vector<StudyLattice>& 
                          {"max_nohd_m", farthest->at("max_nohd_m")},
                          {"direction", farthest->at("max_nohd_direction")},
                          {"far_radius_m", farthest->at("far_radius_m")}};
+    }
+    if (h.aid) {
+      std::vector<double> aided;
+      for (const auto& [index, rec] : records) {
+        aided.push_back(rec.at("far_field").at("aided_max_nohd_m").get<double>());
+      }
+      far["aided_max_nohd_m"] = quantilesJson(aided);
     }
     j["far_field"] = far;
   }
@@ -563,7 +609,8 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
 
   const std::size_t n = study.scenarios.size();
   AtomicFile csv(out_dir / "scenarios.csv");
-  csv.stream() << scenariosCsv(lattices, records, study.base.far_field.enabled);
+  csv.stream() << scenariosCsv(lattices, records, study.base.far_field.enabled,
+                               study.base.hazard.aid.has_value());
   csv.commit();
   for (const StudyLattice& r : lattices)
     writeLatticeMap(out_dir / (r.plane ? r.name + ".exr" : "box.vdb"), r, study, n);

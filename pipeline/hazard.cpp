@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
+
+#include "pipeline/progress.h"
 
 namespace glint {
 namespace {
@@ -112,6 +115,142 @@ std::string hazardCitation(const HazardSpec& h) {
     s += "; a single pulse";
   }
   return s;
+}
+
+std::string hazardLine(const HazardSpec& h) {
+  std::string s =
+      "MPE " + formatNumber("%.4g", h.mpe_w_m2) + " W/m² for " + formatNumber("%g", h.exposure_s) +
+      " s (" +
+      (h.exposure_default && !(h.pulse && !h.pulse->repetition_rate_hz) ? "default, " : "") +
+      toString(h.mpe.limit) + ")";
+  if (h.train) {
+    s += ", " + formatNumber("%.4g", h.mpe_w_m2 * h.pulse_exposure_s) + " J/m² a pulse (rule " +
+         std::to_string(h.train->rule) + ", " + formatNumber("%.4g", h.train->pulses) +
+         (h.train->grouped ? " groups of pulses)" : " pulses)");
+  } else if (h.pulse) {
+    s += ", " + formatNumber("%.4g", h.mpe_w_m2 * h.pulse_exposure_s) + " J/m² (single pulse)";
+  }
+  if (h.atmosphere.extinction_per_m > 0.0) {
+    s += "; air " + formatNumber("%.3g", h.atmosphere.extinction_per_m) + " /m";
+  }
+  if (h.aid) s += "; optical aid gain " + formatNumber("%.3g", h.aid->gain);
+  return s;
+}
+
+nlohmann::json hazardLimitsJson(const HazardSpec& h) {
+  nlohmann::json j = {{"exposure_s", h.exposure_s},
+                      {"exposure_default", h.exposure_default},
+                      {"mpe_w_m2", h.mpe_w_m2},
+                      {"mpe_j_m2", h.mpe_w_m2 * h.exposure_s},
+                      {"mpe_limit", toString(h.mpe.limit)},
+                      {"mpe_rule", hazardCitation(h)}};
+  if (h.pulse) {
+    const PulseSpec& p = *h.pulse;
+    nlohmann::json pulse = {{"energy_j", p.energy_j},
+                            {"duration_s", p.duration_s},
+                            {"mpe_j_m2_per_pulse", h.mpe_w_m2 * h.pulse_exposure_s}};
+    if (p.repetition_rate_hz) pulse["repetition_rate_hz"] = *p.repetition_rate_hz;
+    if (h.train) {
+      const PulseTrainMpe& t = *h.train;
+      pulse["pulses_in_exposure"] = t.pulses;
+      pulse["grouped_within_t_min"] = t.grouped;
+      pulse["rule"] = t.rule;
+      pulse["rule_1_single_pulse_j_m2"] = t.single_pulse_j_m2;
+      pulse["rule_2_average_j_m2"] = t.average_j_m2;
+      if (t.reduced_j_m2 > 0.0) {
+        pulse["rule_3_reduced_j_m2"] = t.reduced_j_m2;
+        pulse["c_p"] = t.c_p;
+      }
+    }
+    j["pulse"] = pulse;
+  }
+  const AtmosphereSpec& a = h.atmosphere;
+  nlohmann::json air = {{"extinction_per_m", a.extinction_per_m}};
+  if (a.visibility_m) {
+    air["visibility_m"] = *a.visibility_m;
+    air["visibility_model"] = a.model == VisibilityModel::Kim ? "kim" : "kruse";
+  }
+  j["atmosphere"] = air;
+  if (h.aid) {
+    nlohmann::json aid = {{"gain", h.aid->gain}, {"aided_mpe_w_m2", h.mpe_w_m2 / h.aid->gain}};
+    if (h.aid->aperture_m) {
+      aid["aperture_m"] = *h.aid->aperture_m;
+      aid["magnification"] = *h.aid->magnification;
+      aid["transmission"] = *h.aid->transmission;
+    }
+    j["optical_aid"] = aid;
+  }
+  return j;
+}
+
+HazardZone hazardZone(const ObserverField& field, const HazardSpec& h,
+                      const Vec3& target_centre_m) {
+  const FieldStats& s = field.stats();
+  HazardZone z;
+  z.peak_ratio = h.ratio(s.peak_w_m2);
+  z.aided_peak_ratio = h.aidedRatio(s.peak_w_m2);
+  z.peak_pulse_j_m2 = h.pulseRadiantExposureJ_m2(s.peak_w_m2);
+  z.above_mpe = field.exceedance(h.mpe_w_m2, target_centre_m);
+  if (h.aid) z.aided_above_mpe = field.exceedance(h.mpe_w_m2 / h.aid->gain, target_centre_m);
+  z.target_centre_m = target_centre_m;
+  z.unconverged_ratio_upper =
+      std::max(h.ratio(s.unconverged_max_upper_w_m2), h.aidedRatio(s.unconverged_max_upper_w_m2));
+  return z;
+}
+
+FarHazard farHazard(const FarField& field, const HazardSpec& h) {
+  const double mu = h.atmosphere.extinction_per_m;
+  FarHazard f{farReach(field, h.mpe_w_m2, mu), std::nullopt};
+  if (h.aid) f.aided = farReach(field, h.mpe_w_m2 / h.aid->gain, mu);
+  return f;
+}
+
+namespace {
+nlohmann::json reachJson(const FarReach& r, const std::string& prefix) {
+  const Vec3& d = r.direction;
+  return {{prefix + "max_nohd_m", r.nohd_m},
+          {prefix + "max_nohd_direction", {d.x, d.y, d.z}},
+          {prefix + "max_nohd_azimuth_deg", std::atan2(d.y, d.x) * 180.0 / kPi},
+          {prefix + "max_nohd_elevation_deg", std::asin(std::clamp(d.z, -1.0, 1.0)) * 180.0 / kPi},
+          {prefix + "far_radius_toward_max_nohd_m", r.far_radius_m},
+          {prefix + "hazard_beyond_far_radius", r.nohd_m > 0.0}};
+}
+}  // namespace
+
+nlohmann::json farHazardJson(const FarHazard& hazard) {
+  nlohmann::json j = reachJson(hazard.unaided, "");
+  if (hazard.aided) j.update(reachJson(*hazard.aided, "aided_"));
+  return j;
+}
+
+namespace {
+nlohmann::json zoneJson(const ObserverField::Exceedance& r, const Vec3& target_centre_m) {
+  nlohmann::json nhz = {
+      {"points", r.points}, {"volume_m3", r.volume_m3}, {"reaches_box_edge", r.reaches_edge}};
+  if (r.points > 0) {
+    nhz["box"] = {{"min_m", {r.min_m.x, r.min_m.y, r.min_m.z}},
+                  {"max_m", {r.max_m.x, r.max_m.y, r.max_m.z}}};
+    nhz["farthest_from_target_m"] = r.farthest_m;
+    nhz["farthest_at_m"] = {r.farthest_at_m.x, r.farthest_at_m.y, r.farthest_at_m.z};
+    nhz["target_centre_m"] = {target_centre_m.x, target_centre_m.y, target_centre_m.z};
+  }
+  return nhz;
+}
+}  // namespace
+
+nlohmann::json hazardJson(const HazardSpec& h, const HazardZone* zone) {
+  nlohmann::json j = hazardLimitsJson(h);
+  if (zone == nullptr) return j;
+  const HazardZone& z = *zone;
+  j["peak_hazard_ratio"] = z.peak_ratio;
+  if (h.aid) j["aided_peak_hazard_ratio"] = z.aided_peak_ratio;
+  if (h.pulse) j["peak_radiant_exposure_j_m2_per_pulse"] = z.peak_pulse_j_m2;
+  j["unconverged_may_be_hazardous"] = z.unconvergedMayBeHazardous();
+  j["nominal_hazard_zone"] = zoneJson(z.above_mpe, z.target_centre_m);
+  if (z.aided_above_mpe) {
+    j["aided_nominal_hazard_zone"] = zoneJson(*z.aided_above_mpe, z.target_centre_m);
+  }
+  return j;
 }
 
 }  // namespace glint

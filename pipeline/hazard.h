@@ -11,9 +11,13 @@
 /// its duration τ, the MPE for τ divided by τ.
 
 #include <algorithm>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 
+#include "facets/vec3.h"
+#include "observers/far_field.h"
+#include "observers/field.h"
 #include "pipeline/mpe.h"
 
 namespace glint {
@@ -129,5 +133,53 @@ void completeHazard(HazardSpec& h, double wavelength_nm);
 
 /// @brief The lines of the standards the limit came from, as outputs record them.
 std::string hazardCitation(const HazardSpec& h);
+
+/// @brief The limits in one line for the terminal, e.g. "MPE 50 W/m² for 10 s (default,
+/// thermal)", with the pulse's MPE, the air and the aid where the scene has them.
+std::string hazardLine(const HazardSpec& h);
+
+/// @brief The limits as `summary.json` and `result.json` record them (README "Hazard"):
+/// exposure, MPE and its rule, the pulse train's rules, the air, the aid.
+nlohmann::json hazardLimitsJson(const HazardSpec& h);
+
+/// @brief The nominal hazard zone of an observer box or plane: where E ≥ MPE, and where an
+/// optical aid lifts E × gain to the MPE (the aided zone).
+struct HazardZone {
+  double peak_ratio = 0.0;
+  double aided_peak_ratio = 0.0;        ///< the unaided ratio where there is no aid
+  double peak_pulse_j_m2 = 0.0;         ///< one pulse's radiant exposure at the peak (0: CW)
+  ObserverField::Exceedance above_mpe;  ///< measured from the target's centre
+  std::optional<ObserverField::Exceedance> aided_above_mpe;  ///< with an aid only
+  Vec3 target_centre_m{0.0};
+  /// The largest (aided, where there is an aid) hazard ratio an unconverged point could have,
+  /// its error estimate added (0 when every point converged): below 1 none of them can be
+  /// hazardous.
+  double unconverged_ratio_upper = 0.0;
+
+  [[nodiscard]] bool unconvergedMayBeHazardous() const { return !(unconverged_ratio_upper < 1.0); }
+};
+
+/// @brief The zones of @p field under @p h, distances from @p target_centre_m.
+HazardZone hazardZone(const ObserverField& field, const HazardSpec& h, const Vec3& target_centre_m);
+
+/// @brief What the far field proves beyond its far radius, for the naked eye and through the
+/// aid, the air's extinction included (hazardDistance()).
+struct FarHazard {
+  FarReach unaided;
+  std::optional<FarReach> aided;  ///< with an aid only
+  /// The farther of the two: what a study's coverage and a warning are judged by.
+  [[nodiscard]] const FarReach& farthest() const {
+    return aided && aided->nohd_m > unaided.nohd_m ? *aided : unaided;
+  }
+};
+FarHazard farHazard(const FarField& field, const HazardSpec& h);
+
+/// @brief The far-field hazard's entries of `far_field` in the summaries: `max_nohd_m` and its
+/// direction, the aided ones with an aid.
+nlohmann::json farHazardJson(const FarHazard& hazard);
+
+/// @brief hazardLimitsJson() with, where there is a @p zone, its peak ratios and the nominal
+/// hazard zone (`nominal_hazard_zone`, and `aided_nominal_hazard_zone` with an aid).
+nlohmann::json hazardJson(const HazardSpec& h, const HazardZone* zone);
 
 }  // namespace glint

@@ -22,9 +22,9 @@
 namespace glint {
 namespace {
 
-void printSummary(std::ostream& err, const PointsArgs& args, const FacetIntegrator& integrator,
-                  std::span<const Vec3> points, std::span<const ObserverResult> results,
-                  double seconds, int threads) {
+void printSummary(std::ostream& err, const PointsArgs& args, const HazardSpec& hazard,
+                  const FacetIntegrator& integrator, std::span<const Vec3> points,
+                  std::span<const ObserverResult> results, double seconds, int threads) {
   const IntegratorOptions& opt = integrator.options();
   const CullStats& cull = integrator.cullStats();
   std::int64_t total = 0, lo = results.empty() ? 0 : results[0].evaluations, hi = 0;
@@ -55,8 +55,17 @@ void printSummary(std::ostream& err, const PointsArgs& args, const FacetIntegrat
       << formatNumber("%.4g", static_cast<double>(total) / static_cast<double>(results.size()))
       << " on average, " << lo << " to " << hi << "\n";
   const Vec3& p = points[peak];
-  err << "  peak irradiance: " << formatNumber("%.6g", results[peak].irradiance_w_m2)
-      << " W/m² at (" << p.x << ", " << p.y << ", " << p.z << ")\n";
+  const double e_peak = results[peak].irradiance_w_m2;
+  err << "  peak irradiance: " << formatNumber("%.6g", e_peak) << " W/m² at (" << p.x << ", " << p.y
+      << ", " << p.z << ")\n";
+  err << "  hazard: " << hazardLine(hazard) << "; peak hazard ratio "
+      << formatNumber("%.3g", hazard.ratio(e_peak));
+  if (hazard.aid) err << ", aided " << formatNumber("%.3g", hazard.aidedRatio(e_peak));
+  if (hazard.pulse) {
+    err << "; peak " << formatNumber("%.3g", hazard.pulseRadiantExposureJ_m2(e_peak))
+        << " J/m² a pulse";
+  }
+  err << "\n";
   err << "  time: " << formatDuration(seconds) << " ("
       << formatNumber("%.3g", static_cast<double>(total) / std::max(seconds, 1e-9))
       << " evaluations/s)\n";
@@ -71,6 +80,24 @@ void printSummary(std::ostream& err, const PointsArgs& args, const FacetIntegrat
     }
   }
   if (args.out_path != "-") err << "  wrote " << args.out_path << "\n";
+}
+
+// The hazard of each observer: its ratio (E / MPE), through the optical aid where the scene has
+// one, and one pulse's radiant exposure for a pulsed laser.
+std::vector<CsvColumn> hazardColumns(const HazardSpec& h, std::span<const ObserverResult> results) {
+  std::vector<CsvColumn> columns;
+  auto add = [&](const char* name, auto value) {
+    CsvColumn c{name, {}};
+    c.values.reserve(results.size());
+    for (const ObserverResult& r : results) c.values.push_back(value(r.irradiance_w_m2));
+    columns.push_back(std::move(c));
+  };
+  add("hazard_ratio", [&](double e) { return h.ratio(e); });
+  if (h.aid) add("aided_hazard_ratio", [&](double e) { return h.aidedRatio(e); });
+  if (h.pulse) {
+    add("radiant_exposure_j_m2_per_pulse", [&](double e) { return h.pulseRadiantExposureJ_m2(e); });
+  }
+  return columns;
 }
 
 }  // namespace
@@ -131,14 +158,16 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
                                "was written");
     }
   }
+  const std::vector<CsvColumn> hazard = hazardColumns(scene.hazard, results);
   if (file) {
-    writePointsCsv(file->stream(), points, results);
+    writePointsCsv(file->stream(), points, results, hazard);
     file->commit();
   } else {
-    writePointsCsv(out, points, results);
+    writePointsCsv(out, points, results, hazard);
     out.flush();
   }
-  if (!args.quiet) printSummary(err, args, integrator, points, results, seconds, threads);
+  if (!args.quiet)
+    printSummary(err, args, scene.hazard, integrator, points, results, seconds, threads);
 }
 
 }  // namespace glint

@@ -50,25 +50,6 @@ Vec3 targetCentre(const Target& target) {
   return target.facetCount() > 0 ? 0.5 * (lo + hi) : Vec3(0.0);
 }
 
-// The nominal hazard zone: where irradiance ≥ MPE (hazard ratio ≥ 1), in a box or on a plane.
-struct HazardZone {
-  double peak_ratio = 0.0;
-  ObserverField::Exceedance above_mpe;  ///< measured from the target's centre
-  Vec3 target_centre_m{0.0};
-  /// The largest hazard ratio an unconverged point could have, its error estimate added
-  /// (0 when every point converged): below 1, none of them can be hazardous.
-  double unconverged_ratio_upper = 0.0;
-
-  [[nodiscard]] bool unconvergedMayBeHazardous() const { return !(unconverged_ratio_upper < 1.0); }
-};
-
-HazardZone hazardZone(const ObserverField& field, const Scene& scene, const Vec3& target_centre_m) {
-  const double mpe = scene.hazard.mpe_w_m2;
-  const FieldStats& s = field.stats();
-  return {s.peak_w_m2 / mpe, field.exceedance(mpe, target_centre_m), target_centre_m,
-          s.unconverged_max_upper_w_m2 / mpe};
-}
-
 // What the summary says of the points whose integration stopped short of its tolerance: where
 // they are (status 5 marks each) and whether any could be hazardous.
 nlohmann::json unconvergedJson(const FieldStats& s, const HazardZone& zone) {
@@ -97,34 +78,6 @@ void printUnconverged(std::ostream& err, const FieldStats& s, const HazardZone& 
       << (may ? ": some may be hazardous; raise accuracy.max_depth or accuracy.max_evaluations"
               : ", so none of them can be hazardous")
       << "\n";
-}
-
-// The hazard section of summary.json; the nominal hazard zone where there is a volume (`z`).
-nlohmann::json hazardJson(const Scene& scene, const HazardZone* zone) {
-  const HazardSpec& h = scene.hazard;
-  nlohmann::json j = {{"exposure_s", h.exposure_s},
-                      {"exposure_default", h.exposure_default},
-                      {"mpe_w_m2", h.mpe.irradiance_w_m2},
-                      {"mpe_j_m2", h.mpe.radiant_exposure_j_m2},
-                      {"mpe_limit", toString(h.mpe.limit)},
-                      {"mpe_rule", mpeCitation(h.mpe)}};
-  if (zone == nullptr) return j;
-  const HazardZone& z = *zone;
-  j["peak_hazard_ratio"] = z.peak_ratio;
-  j["unconverged_may_be_hazardous"] = z.unconvergedMayBeHazardous();
-  const ObserverField::Exceedance& r = z.above_mpe;
-  nlohmann::json nhz = {{"points", r.points},
-                       {"volume_m3", r.volume_m3},
-                       {"reaches_box_edge", r.reaches_edge}};
-  if (r.points > 0) {
-    nhz["box"] = {{"min_m", {r.min_m.x, r.min_m.y, r.min_m.z}},
-                  {"max_m", {r.max_m.x, r.max_m.y, r.max_m.z}}};
-    nhz["farthest_from_target_m"] = r.farthest_m;
-    nhz["farthest_at_m"] = {r.farthest_at_m.x, r.farthest_at_m.y, r.farthest_at_m.z};
-    nhz["target_centre_m"] = {z.target_centre_m.x, z.target_centre_m.y, z.target_centre_m.z};
-  }
-  j["nominal_hazard_zone"] = nhz;
-  return j;
 }
 
 nlohmann::json targetJson(const CullStats& cull) {
@@ -240,24 +193,30 @@ void printVolume(std::ostream& err, const ObserverField& field, const Scene& sce
       << formatDuration(s.seconds) << "\n";
   err << "  peak irradiance: " << formatNumber("%.6g", s.peak_w_m2) << " W/m² at (" << s.peak_at_m.x
       << ", " << s.peak_at_m.y << ", " << s.peak_at_m.z << ")\n";
-  const HazardSpec& h = scene.hazard;
-  err << "  hazard: MPE " << formatNumber("%.4g", h.mpe.irradiance_w_m2) << " W/m² for "
-      << formatNumber("%g", h.exposure_s) << " s" << (h.exposure_default ? " (default)" : "")
-      << " (" << toString(h.mpe.limit) << "), peak hazard ratio "
-      << formatNumber("%.3g", zone.peak_ratio) << "\n";
-  if (zone.above_mpe.points > 0) {
-    const ObserverField::Exceedance& r = zone.above_mpe;
-    err << "  nominal hazard zone (ratio ≥ 1): " << formatNumber("%.4g", r.volume_m3)
-        << " m³, reaching " << formatNumber("%.4g", r.farthest_m) << " m from the target centre, at ("
+  err << "  hazard: " << hazardLine(scene.hazard) << "; peak hazard ratio "
+      << formatNumber("%.3g", zone.peak_ratio);
+  if (scene.hazard.aid) err << ", aided " << formatNumber("%.3g", zone.aided_peak_ratio);
+  if (scene.hazard.pulse) {
+    err << "; peak " << formatNumber("%.3g", zone.peak_pulse_j_m2) << " J/m² a pulse";
+  }
+  err << "\n";
+  auto printZone = [&](const ObserverField::Exceedance& r, const char* name) {
+    if (r.points == 0) {
+      err << "  " << name << ": none in the box (no point reaches the MPE)\n";
+      return;
+    }
+    err << "  " << name << ": " << formatNumber("%.4g", r.volume_m3) << " m³, reaching "
+        << formatNumber("%.4g", r.farthest_m) << " m from the target centre, at ("
         << r.farthest_at_m.x << ", " << r.farthest_at_m.y << ", " << r.farthest_at_m.z << ")\n";
-    if (zone.above_mpe.reaches_edge) {
-      err << "  warning: the hazard zone reaches the edge of the observer box and may go on "
+    if (r.reaches_edge) {
+      err << "  warning: the " << name
+          << " reaches the edge of the observer box and may go on "
              "beyond it"
           << (beyond_box.empty() ? ": enlarge the box to see its full extent" : beyond_box) << "\n";
     }
-  } else {
-    err << "  nominal hazard zone: none in the box (no point reaches the MPE)\n";
-  }
+  };
+  printZone(zone.above_mpe, "nominal hazard zone (ratio ≥ 1)");
+  if (zone.aided_above_mpe) printZone(*zone.aided_above_mpe, "aided hazard zone (aided ratio ≥ 1)");
   printUnconverged(err, s, zone, "  ");
   err << "  memory: " << formatNumber("%.3g", static_cast<double>(s.grid_bytes) / 1e6)
       << " MB of grids, "
@@ -345,6 +304,11 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
                       {"peak_at_m", {s.peak_at_m.x, s.peak_at_m.y, s.peak_at_m.z}},
                       {"peak_hazard_ratio", zone.peak_ratio},
                       {"hazardous_area_m2", hazardousArea(field, zone)}};
+  if (zone.aided_above_mpe) {
+    j["aided_peak_hazard_ratio"] = zone.aided_peak_ratio;
+    j["aided_hazardous_area_m2"] =
+        static_cast<double>(zone.aided_above_mpe->points) * spec.voxel_m * spec.voxel_m;
+  }
   if (s.unconverged_points > 0) j["unconverged"] = unconvergedJson(s, zone);
   if (r.points > 0) {
     j["hazard_farthest_from_target_m"] = r.farthest_m;
@@ -353,7 +317,7 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
   return j;
 }
 
-nlohmann::json farFieldJson(const FarField& field, const FarReach& hazard) {
+nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard) {
   const FarFieldSpec& spec = field.spec();
   const FieldStats& s = field.stats();
   const Vec3& c = field.ball().centre_m;
@@ -381,25 +345,20 @@ nlohmann::json farFieldJson(const FarField& field, const FarReach& hazard) {
       {"peak_direction", {d.x, d.y, d.z}},
       {"peak_azimuth_deg", azimuth_deg},
       {"peak_elevation_deg", elevation_deg},
-      {"max_nohd_m", hazard.nohd_m},
-      {"max_nohd_direction", {hazard.direction.x, hazard.direction.y, hazard.direction.z}},
-      {"max_nohd_azimuth_deg", std::atan2(hazard.direction.y, hazard.direction.x) * 180.0 / kPi},
-      {"max_nohd_elevation_deg",
-       std::asin(std::clamp(hazard.direction.z, -1.0, 1.0)) * 180.0 / kPi},
-      {"far_radius_toward_max_nohd_m", hazard.far_radius_m},
-      {"hazard_beyond_far_radius", hazard.nohd_m > 0.0},
       {"beam_direction", {spec.beam_direction.x, spec.beam_direction.y, spec.beam_direction.z}},
       {"far_radius_rule",
        "lit_radius_m (1 + (3 + g / sigma) / tolerance), g = max(1, 0.43 / sin(psi / 2)), psi "
        "the angle from beam_direction: far_radius_m beyond 51 degrees, growing into the "
        "forward cone"}};
+  j.update(farHazardJson(hazard));
   if (s.unconverged_points > 0) {
     j["unconverged_max_intensity_plus_error_w_sr"] = s.unconverged_max_upper_w_m2;
   }
   return j;
 }
 
-void printFarField(std::ostream& err, const FarField& field, const FarReach& hazard) {
+void printFarField(std::ostream& err, const FarField& field, const FarHazard& far_hazard) {
+  const FarReach& hazard = far_hazard.unaided;
   const FarFieldSpec& spec = field.spec();
   const FieldStats& s = field.stats();
   err << "far field: 6 × " << spec.face_pixels + 1 << "² directions, " << s.evaluated_points
@@ -419,6 +378,16 @@ void printFarField(std::ostream& err, const FarField& field, const FarReach& haz
         << formatNumber("%.4f", hazard.direction.z) << ") (far-field NOHD)\n";
   } else {
     err << ": no direction is hazardous beyond the far radius\n";
+  }
+  if (far_hazard.aided) {
+    const FarReach& a = *far_hazard.aided;
+    err << "  through the optical aid: "
+        << (a.nohd_m > 0.0 ? "the hazard reaches " + formatNumber("%.4g", a.nohd_m) +
+                                 " m toward (" + formatNumber("%.4f", a.direction.x) + ", " +
+                                 formatNumber("%.4f", a.direction.y) + ", " +
+                                 formatNumber("%.4f", a.direction.z) + ") (aided NOHD)"
+                           : std::string("no direction is hazardous beyond the far radius"))
+        << "\n";
   }
   if (s.unconverged_points > 0) {
     err << "  note: " << s.unconverged_points
@@ -462,7 +431,7 @@ FarField sceneFarField(const SceneTarget& target, const Scene& scene, const Memo
   return far;
 }
 
-PlaneMap planeMap(const ObserverField& field, double mpe_w_m2) {
+PlaneMap planeMap(const ObserverField& field, const HazardSpec& hazard) {
   const FieldSpec& spec = field.spec();
   const auto n = spec.nodes();
   PlaneMap m;
@@ -475,11 +444,13 @@ PlaneMap planeMap(const ObserverField& field, double mpe_w_m2) {
   const std::size_t count = static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]);
   for (auto* channel : {&m.irradiance_w_m2, &m.hazard_ratio, &m.level, &m.status})
     channel->reserve(count);
+  if (hazard.aid) m.aided_hazard_ratio.reserve(count);
   for (int j = 0; j < n[1]; ++j)
     for (int i = 0; i < n[0]; ++i) {
       const double e = field.irradiance(i, j, 0);
       m.irradiance_w_m2.push_back(static_cast<float>(e));
-      m.hazard_ratio.push_back(static_cast<float>(e / mpe_w_m2));
+      m.hazard_ratio.push_back(static_cast<float>(hazard.ratio(e)));
+      if (hazard.aid) m.aided_hazard_ratio.push_back(static_cast<float>(hazard.aidedRatio(e)));
       m.level.push_back(static_cast<float>(field.level(i, j, 0)));
       m.status.push_back(static_cast<float>(static_cast<int>(field.status(i, j, 0))));
     }
@@ -515,7 +486,8 @@ RunInfo runInfo(const Scene& scene, const std::string& scene_file, std::string_v
   info.power_w = scene.laser.power_w;
   info.exposure_s = scene.hazard.exposure_s;
   info.mpe_w_m2 = scene.hazard.mpe_w_m2;
-  info.mpe_rule = mpeCitation(scene.hazard.mpe);
+  info.mpe_rule = hazardCitation(scene.hazard);
+  info.aid_gain = scene.hazard.aid ? scene.hazard.aid->gain : 0.0;
   return info;
 }
 
@@ -588,12 +560,12 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   const SceneTarget target = sceneTarget(
       scene, scene.observers ? fieldSpec(scene) : planeFieldSpec(scene, scene.planes.front()));
   std::optional<FarField> far;
-  FarReach far_hazard;
+  FarHazard far_hazard;
   if (scene.far_field.enabled) {
     far.emplace(
         sceneFarField(target, scene, watch, "the far field", args.quiet ? nullptr : &err,
                               args.terminal, exchange));
-    far_hazard = farReach(*far, info.mpe_w_m2);
+    far_hazard = farHazard(*far, scene.hazard);
   }
   nlohmann::json j;
   // The target as the first lattice's problem describes it (all share the same one).
@@ -615,18 +587,19 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
       writeBlocksVtu(vtu->stream(), field, info.mpe_w_m2);
       writeTargetVtp(vtp->stream(), integrator, 2);
     }
-    const HazardZone zone = hazardZone(field, scene, targetCentre(integrator.target()));
+    const HazardZone zone = hazardZone(field, scene.hazard, targetCentre(integrator.target()));
     j = summaryJson(field, zone, info, integrator.cullStats());
     describeTarget(box.problem);
-    j["hazard"] = hazardJson(scene, &zone);
+    j["hazard"] = hazardJson(scene.hazard, &zone);
     if (!args.quiet) {
       std::string beyond_box;
       if (far) {
-        beyond_box = "; beyond " + formatNumber("%.4g", far->spec().far_radius_m) +
-                     " m the far field bounds it: " +
-                     (far_hazard.nohd_m > 0.0
-                          ? "it reaches " + formatNumber("%.4g", far_hazard.nohd_m) + " m"
-                          : std::string("no direction is hazardous there"));
+        beyond_box =
+            "; beyond " + formatNumber("%.4g", far->spec().far_radius_m) +
+            " m the far field bounds it: " +
+            (far_hazard.farthest().nohd_m > 0.0
+                 ? "it reaches " + formatNumber("%.4g", far_hazard.farthest().nohd_m) + " m"
+                 : std::string("no direction is hazardous there"));
       }
       printVolume(err, field, scene, zone, info, args.uniform, beyond_box);
     }
@@ -638,7 +611,7 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
          {"scene_fnv1a64", info.scene_fnv1a64},
          {"scheme", info.scheme},
          {"integration_scheme", info.integration_scheme}};
-    j["hazard"] = hazardJson(scene, nullptr);
+    j["hazard"] = hazardJson(scene.hazard, nullptr);
   }
 
   if (!scene.planes.empty()) {
@@ -651,11 +624,11 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
       const ObserverField& field = *r.field;
       requireFinite(field, "plane " + plane.name);
       if (writer) {
-        writeExr(exrs[p]->stream(), planeMap(field, info.mpe_w_m2),
+        writeExr(exrs[p]->stream(), planeMap(field, scene.hazard),
                  {info.program_version, info.wavelength_nm, info.mpe_w_m2});
       }
       const HazardZone zone =
-          hazardZone(field, scene, targetCentre(r.problem.integrator.target()));
+          hazardZone(field, scene.hazard, targetCentre(r.problem.integrator.target()));
       planes.push_back(planeJson(plane, field, zone));
       describeTarget(r.problem);
       if (!args.quiet) {
@@ -673,14 +646,22 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   }
   if (far && writer) {
     const double mpe = info.mpe_w_m2;
+    const double mu = scene.hazard.atmosphere.extinction_per_m;
     // 2:1 lat-long, about as fine as the cube faces' centres, at most 4096 × 2048 pixels.
-    const LatLongMap map = latLongMap(*far, std::min(far->spec().face_pixels, 2048), mpe);
+    const int height = std::min(far->spec().face_pixels, 2048);
+    const LatLongMap map = latLongMap(*far, height, mpe, mu);
+    std::vector<ExrChannel> channels = {{"intensity_w_sr", &map.intensity_w_sr},
+                                        {"nohd_m", &map.nohd_m}};
+    LatLongMap aided;
+    if (scene.hazard.aid) {
+      aided = latLongMap(*far, height, mpe / scene.hazard.aid->gain, mu);
+      channels.emplace_back("aided_nohd_m", &aided.nohd_m);
+    }
     writeLatLongExr(far_exr->stream(),
                     {map.width, map.height, far->ball().centre_m, far->spec().far_radius_m},
-                    {{"intensity_w_sr", &map.intensity_w_sr}, {"nohd_m", &map.nohd_m}},
-                    {info.program_version, info.wavelength_nm, mpe});
+                    channels, {info.program_version, info.wavelength_nm, mpe});
     writeHazardSurfaceVtp(far_vtp->stream(),
-                          hazardSurface(*far, std::min(far->spec().face_pixels, 128), mpe));
+                          hazardSurface(*far, std::min(far->spec().face_pixels, 128), mpe, mu));
     j["far_field"] = farFieldJson(*far, far_hazard);
     if (!args.quiet) printFarField(err, *far, far_hazard);
   }

@@ -60,7 +60,7 @@ FarField sceneFarField(const SceneTarget& target, const Scene& scene, const Memo
                        PointExchange* exchange = nullptr);
 
 /// @brief A plane's field as the map `glint run` writes: lattice row j along v, column i along
-/// u; hazard_ratio = irradiance / @p mpe_w_m2.
-PlaneMap planeMap(const ObserverField& field, double mpe_w_m2);
+/// u; hazard_ratio and aided_hazard_ratio as @p hazard has them.
+PlaneMap planeMap(const ObserverField& field, const HazardSpec& hazard);
 
 }  // namespace glint

@@ -239,5 +239,57 @@ TEST(BatchFarField, EachScenarioMatchesGlintRunAndTheSummaryNamesTheFarthest) {
   fs::remove_all(dir);
 }
 
+// A pulsed laser in fog seen through binoculars: each scenario's result gives the aided figures
+// beside the unaided ones (34.3 × the ratio), the per-pulse exposure, and the far field's aided
+// NOHD; scenarios.csv and summary.json carry them.
+TEST(BatchHazard, PulsesFogAndBinocularsReachEveryScenarioAndTheSummary) {
+  const fs::path dir = fs::temp_directory_path() / "glint_batch_hazard";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "scene.json") << R"({
+    "laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "wavelength_nm": 1064,
+              "pulse": {"energy_j": 10.0, "duration_s": 1e-8, "repetition_rate_hz": 10},
+              "beam": {"profile": "flat_top", "radius_m": 0.5}},
+    "atmosphere": {"visibility_m": 5000},
+    "optical_aid": {"aperture_m": 0.05, "magnification": 7, "transmission": 0.7},
+    "materials": {"mirror": {"specular_reflectance": 0.9, "sigma": 0.01}},
+    "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [-1, 1, 0], "radius": 0.05,
+                 "material": "mirror", "segments": 8}],
+    "observers": {"min": [-1, 0.5, -0.25], "max": [0, 1.5, 0.25], "voxel_m": 0.25,
+                  "block_m": 1.0, "tolerance": 0.05},
+    "far_field": {"tolerance": 0.05, "face_pixels": 64}})";
+  std::ofstream(dir / "study.json") << R"({"scene": "scene.json", "sweep": {"yaw_deg": [0, 20]}})";
+  const Outcome batch =
+      glint({"batch", (dir / "study.json").string(), "-o", (dir / "out").string(), "-q"});
+  ASSERT_EQ(batch.status, 0) << batch.err;
+  for (int s = 0; s < 2; ++s) {
+    const auto rec = nlohmann::json::parse(
+        bytes(dir / "out" / "scenarios" / ("s00000" + std::to_string(s)) / "result.json"));
+    const auto& box = rec.at("regions").at(0);
+    const double ratio = box.at("peak_hazard_ratio").get<double>();
+    EXPECT_NEAR(box.at("aided_peak_hazard_ratio").get<double>(), 34.3 * ratio, 1e-9 * ratio);
+    EXPECT_GE(box.at("aided_hazardous_points").get<std::int64_t>(),
+              box.at("hazardous_points").get<std::int64_t>());
+    EXPECT_GT(box.at("peak_radiant_exposure_j_m2_per_pulse").get<double>(), 0.0);
+    const auto& far = rec.at("far_field");
+    EXPECT_GT(far.at("aided_max_nohd_m").get<double>(), far.at("max_nohd_m").get<double>())
+        << far.dump();
+  }
+  const auto summary = nlohmann::json::parse(bytes(dir / "out" / "summary.json"));
+  EXPECT_EQ(summary.at("hazard").at("pulse").at("rule").get<int>(), 3);
+  EXPECT_NEAR(summary.at("hazard").at("optical_aid").at("gain").get<double>(), 34.3, 1e-12);
+  EXPECT_GT(summary.at("hazard").at("atmosphere").at("extinction_per_m").get<double>(), 0.0);
+  EXPECT_TRUE(summary.at("regions").at(0).contains("aided_peak_hazard_ratio"));
+  EXPECT_TRUE(summary.at("far_field").contains("aided_max_nohd_m"));
+  std::istringstream csv(bytes(dir / "out" / "scenarios.csv"));
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_NE(header.find(",box_aided_peak_hazard_ratio,box_aided_hazard_volume_m3,"),
+            std::string::npos)
+      << header;
+  EXPECT_NE(header.find(",far_aided_max_nohd_m,"), std::string::npos) << header;
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace glint

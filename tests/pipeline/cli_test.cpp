@@ -153,14 +153,22 @@ TEST_F(CliTest, PointsWritesOneRowPerObserverInInputOrder) {
   std::istringstream csv(readFile(path("out.csv")));
   std::string line;
   std::getline(csv, line);
-  EXPECT_EQ(line, "x,y,z,irradiance_w_m2,error_estimate_w_m2,evaluations,converged");
+  EXPECT_EQ(line, "x,y,z,irradiance_w_m2,error_estimate_w_m2,evaluations,converged,hazard_ratio");
   std::vector<std::string> rows;
   while (std::getline(csv, line)) rows.push_back(line);
   ASSERT_EQ(rows.size(), 3u);
   EXPECT_EQ(rows[0].rfind("-3,0,0.1,", 0), 0u) << rows[0];
   EXPECT_EQ(rows[1].rfind("0.1,-7.25,0.5,", 0), 0u) << rows[1];
   EXPECT_EQ(rows[2].rfind("25,3,-0.25,", 0), 0u) << rows[2];
-  for (const auto& row : rows) EXPECT_EQ(row.substr(row.size() - 2), ",1") << "converged: " << row;
+  for (const auto& row : rows) {
+    std::vector<std::string> cells;
+    std::stringstream cs(row);
+    for (std::string c; std::getline(cs, c, ',');) cells.push_back(c);
+    ASSERT_EQ(cells.size(), 8u) << row;
+    EXPECT_EQ(cells[6], "1") << "converged: " << row;
+    // 1064 nm for 10 s: MPE 50 W/m² (ANSI Z136.1-2014 Table 5a, 50 C_C W/m²).
+    EXPECT_DOUBLE_EQ(std::stod(cells[7]), std::stod(cells[3]) / 50.0) << row;
+  }
   EXPECT_NE(r.err.find("glint points: 3 observers"), std::string::npos) << "summary: " << r.err;
 }
 
@@ -181,11 +189,11 @@ TEST_F(CliTest, UniformOptionRunsTheUniformTwin) {
   std::string line;
   std::getline(csv, line);
   std::getline(csv, line);
-  // Columns: x,y,z,E,err,evaluations,converged — 4² sub-facets per facet seen.
+  // Columns: x,y,z,E,err,evaluations,converged,hazard_ratio — 4² sub-facets per facet seen.
   std::vector<std::string> cells;
   std::stringstream cs(line);
   for (std::string c; std::getline(cs, c, ',');) cells.push_back(c);
-  ASSERT_EQ(cells.size(), 7u) << line;
+  ASSERT_EQ(cells.size(), 8u) << line;
   EXPECT_EQ(std::stol(cells[5]) % 16, 0) << line;
 }
 

@@ -6,6 +6,9 @@
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "observers/point_set.h"
 #include "pipeline/points_file.h"
@@ -192,6 +195,163 @@ TEST(Examples, FinnedMissileRunsThroughGlintRun) {
   EXPECT_GT(summary["planes"][0]["peak_hazard_ratio"].get<double>(), 1.0);
   EXPECT_TRUE(std::filesystem::exists(out / "eye_level.exr"));
   std::filesystem::remove_all(out);
+}
+
+}  // namespace
+}  // namespace glint
+
+namespace glint {
+namespace {
+
+// Runs `glint <command> <example> args...` with the example's scene edited by @p edit, in a
+// fresh folder; returns the outcome and the folder (removed by the caller).
+struct EditedRun {
+  test::Outcome outcome;
+  std::filesystem::path dir;
+};
+EditedRun runEdited(const std::string& name, const std::string& scene_file,
+                    const std::function<void(nlohmann::json&)>& edit,
+                    const std::vector<std::string>& command) {
+  auto scene = nlohmann::json::parse(std::ifstream(example(scene_file)));
+  if (edit) edit(scene);
+  EditedRun r;
+  r.dir = std::filesystem::temp_directory_path() / name;
+  std::filesystem::remove_all(r.dir);
+  std::filesystem::create_directories(r.dir);
+  std::ofstream(r.dir / "scene.json") << scene.dump();
+  std::vector<std::string> args = {command.front(), (r.dir / "scene.json").string()};
+  args.insert(args.end(), command.begin() + 1, command.end());
+  r.outcome = test::glint(args);
+  return r;
+}
+
+std::vector<std::vector<double>> readCsvNumbers(const std::filesystem::path& path,
+                                                std::string& header) {
+  std::ifstream in(path);
+  std::getline(in, header);
+  std::vector<std::vector<double>> rows;
+  for (std::string line; std::getline(in, line);) {
+    std::vector<double> row;
+    std::stringstream cells(line);
+    for (std::string c; std::getline(cells, c, ',');) row.push_back(std::stod(c));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// examples/mirror_fog.json: fog of 500 m visibility (Kim: μ = 3.912 / 500 m, grey) on the laser's
+// 100.3 m to the mirror and on each observer's r back: E falls by exp(−μ (100.3 m + r)) from the
+// same scene in vacuum, to within the mirror's ±5 cm of path (μ × 0.1 m = 8e-4) and the two
+// integrations' tolerance (1e-3 each).
+TEST(Examples, FogAttenuatesTheMirrorsGlintOnBothLegsByBeerLambert) {
+  const std::string points = example("mirror_fog_points.csv");
+  const EditedRun fog =
+      runEdited("glint_fog", "mirror_fog.json", {},
+                {"points", "--points", points, "--out",
+                 (std::filesystem::temp_directory_path() / "glint_fog.csv").string(), "-q"});
+  ASSERT_EQ(fog.outcome.status, 0) << fog.outcome.err;
+  const EditedRun vacuum =
+      runEdited("glint_vacuum", "mirror_fog.json", [](nlohmann::json& j) { j.erase("atmosphere"); },
+                {"points", "--points", points, "--out",
+                 (std::filesystem::temp_directory_path() / "glint_vacuum.csv").string(), "-q"});
+  ASSERT_EQ(vacuum.outcome.status, 0) << vacuum.outcome.err;
+  std::string header;
+  const auto f = readCsvNumbers(std::filesystem::temp_directory_path() / "glint_fog.csv", header);
+  const auto v =
+      readCsvNumbers(std::filesystem::temp_directory_path() / "glint_vacuum.csv", header);
+  const double mu = 3.912 / 500.0;
+  ASSERT_EQ(f.size(), 5u);
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    const double r = f[i][1];  // from the mirror's centre (0.3, 0, 0.3) along +y
+    const double expected = std::exp(-mu * (100.3 + r));
+    EXPECT_NEAR(f[i][3] / v[i][3], expected, 3e-3 * expected) << "observer at y = " << f[i][1];
+  }
+  EXPECT_GT(f[2][7], 1.0) << "hazardous at 60 m in fog";
+  EXPECT_LT(f[3][7], 1.0) << "not at 100 m in fog";
+  EXPECT_GT(v[3][7], 1.0) << "hazardous at 100 m in vacuum";
+  for (const auto& p : {fog.dir, vacuum.dir}) std::filesystem::remove_all(p);
+}
+
+// examples/pulsed_nd_yag.json: 0.6 J, 10 ns at 10 Hz for 10 s, the MPE set by rule 3 (2.0e-2
+// J/m² × 100^-0.25 a pulse); `glint points` gives each observer's radiant exposure per pulse,
+// E / 10 Hz, and its ratio E / (MPE per pulse × 10 Hz).
+TEST(Examples, PulsedNdYagIsJudgedPerPulseInPointsAndRun) {
+  const double mpe_pulse_j_m2 = 2.0e-2 / std::sqrt(10.0);
+  const auto csv = std::filesystem::temp_directory_path() / "glint_pulsed.csv";
+  const EditedRun points =
+      runEdited("glint_pulsed_points", "pulsed_nd_yag.json", {},
+                {"points", "--points", example("cylinder_186.csv"), "--out", csv.string(), "-q"});
+  ASSERT_EQ(points.outcome.status, 0) << points.outcome.err;
+  std::string header;
+  const auto rows = readCsvNumbers(csv, header);
+  EXPECT_EQ(header,
+            "x,y,z,irradiance_w_m2,error_estimate_w_m2,evaluations,converged,hazard_ratio,"
+            "radiant_exposure_j_m2_per_pulse");
+  double peak_ratio = 0.0;
+  for (const auto& row : rows) {
+    EXPECT_NEAR(row[8], row[3] / 10.0, 1e-15 * row[3]) << "E / f";
+    EXPECT_NEAR(row[7], row[8] / mpe_pulse_j_m2, 1e-12 * row[7]) << "H / MPE per pulse";
+    peak_ratio = std::max(peak_ratio, row[7]);
+  }
+  EXPECT_GT(peak_ratio, 0.0);
+
+  const EditedRun run = runEdited(
+      "glint_pulsed_run", "pulsed_nd_yag.json",
+      [](nlohmann::json& j) {
+        j["observers"]["voxel_m"] = 0.5;
+        j["observers"]["block_m"] = 2.0;
+      },
+      {"run", "-o", (std::filesystem::temp_directory_path() / "glint_pulsed_run" / "out").string(),
+       "-q"});
+  ASSERT_EQ(run.outcome.status, 0) << run.outcome.err;
+  const auto hazard =
+      nlohmann::json::parse(std::ifstream(run.dir / "out" / "summary.json")).at("hazard");
+  EXPECT_EQ(hazard.at("pulse").at("rule").get<int>(), 3) << hazard.dump();
+  EXPECT_NEAR(hazard.at("pulse").at("mpe_j_m2_per_pulse").get<double>(), mpe_pulse_j_m2, 1e-15);
+  EXPECT_NEAR(hazard.at("mpe_w_m2").get<double>(), 10.0 * mpe_pulse_j_m2, 1e-14);
+  EXPECT_NEAR(hazard.at("peak_radiant_exposure_j_m2_per_pulse").get<double>(),
+              hazard.at("peak_hazard_ratio").get<double>() * mpe_pulse_j_m2, 1e-12);
+  EXPECT_GT(hazard.at("nominal_hazard_zone").at("volume_m3").get<double>(), 0.0);
+  for (const auto& p : {points.dir, run.dir}) std::filesystem::remove_all(p);
+}
+
+// examples/cylinder_binoculars.json: 7×50 binoculars, τ = 0.7: gain 0.7 × 49 = 34.3. The aided
+// ratio is the unaided one × 34.3 everywhere, and the aided zone holds the unaided one.
+TEST(Examples, BinocularsScaleTheAidedRatioAndWidenTheZone) {
+  const auto csv = std::filesystem::temp_directory_path() / "glint_aided.csv";
+  const EditedRun points =
+      runEdited("glint_aided_points", "cylinder_binoculars.json", {},
+                {"points", "--points", example("cylinder_186.csv"), "--out", csv.string(), "-q"});
+  ASSERT_EQ(points.outcome.status, 0) << points.outcome.err;
+  std::string header;
+  for (const auto& row : readCsvNumbers(csv, header)) {
+    EXPECT_NEAR(row[8], 34.3 * row[7], 1e-12 * row[8]) << "aided = 34.3 × unaided";
+  }
+  EXPECT_EQ(header.substr(header.size() - 31), "hazard_ratio,aided_hazard_ratio") << header;
+
+  const EditedRun run = runEdited(
+      "glint_aided_run", "cylinder_binoculars.json",
+      [](nlohmann::json& j) {
+        j["observers"]["voxel_m"] = 0.5;
+        j["observers"]["block_m"] = 2.0;
+      },
+      {"run", "-o", (std::filesystem::temp_directory_path() / "glint_aided_run" / "out").string(),
+       "-q"});
+  ASSERT_EQ(run.outcome.status, 0) << run.outcome.err;
+  const auto summary = nlohmann::json::parse(std::ifstream(run.dir / "out" / "summary.json"));
+  const auto& hazard = summary.at("hazard");
+  EXPECT_NEAR(hazard.at("optical_aid").at("gain").get<double>(), 34.3, 1e-12);
+  EXPECT_NEAR(hazard.at("aided_peak_hazard_ratio").get<double>(),
+              34.3 * hazard.at("peak_hazard_ratio").get<double>(), 1e-9);
+  const auto& unaided = hazard.at("nominal_hazard_zone");
+  const auto& aided = hazard.at("aided_nominal_hazard_zone");
+  // At these 0.5 m voxels the naked eye's zone (peak ratio about 1) may fall between lattice
+  // points; the aided one spans the box.
+  EXPECT_GT(aided.at("volume_m3").get<double>(), 50.0) << hazard.dump();
+  EXPECT_GE(aided.at("volume_m3").get<double>(), unaided.at("volume_m3").get<double>());
+  EXPECT_TRUE(aided.at("reaches_box_edge").get<bool>()) << "34.3× reaches beyond the 8 m box";
+  EXPECT_TRUE(summary.at("far_field").contains("aided_max_nohd_m")) << summary.dump();
+  for (const auto& p : {points.dir, run.dir}) std::filesystem::remove_all(p);
 }
 
 }  // namespace

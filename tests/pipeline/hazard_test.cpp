@@ -19,10 +19,10 @@ using nlohmann::json;
 
 PulseSpec train(double duration_s, double rate_hz) { return {1e-3, duration_s, rate_hz}; }
 
-// The worked example of ANSI Z136.1-2014 (appendix B's Q-switched Nd:YAG): 1064 nm, 10 ns pulses
-// at 10 Hz viewed for 10 s. Rule 1: 2.0e-6 J/cm² (Table 5a, 1050–1400 nm below 13 µs, C_C = 1);
-// rule 2: 5 mW/cm² × 10 s over 100 pulses = 5e-4 J/cm²; rule 3: 2.0e-6 × 100^-0.25 =
-// 6.3e-7 J/cm², the limit.
+// The textbook Q-switched Nd:YAG: 1064 nm, 10 ns pulses at 10 Hz viewed for 10 s, worked by
+// hand from the standard's rows. Rule 1: 2.0e-6 J/cm² (Table 5a, 1050–1400 nm below 13 µs, C_C =
+// 1); rule 2: 5 mW/cm² × 10 s over 100 pulses = 5e-4 J/cm²; rule 3: 2.0e-6 × 100^-0.25 = 6.3e-7
+// J/cm², the limit.
 TEST(PulseTrainMpe, QSwitchedNdYagAtTenHertzForTenSecondsIsSetByRuleThree) {
   const PulseTrainMpe m = pulseTrainMpe(1064.0, train(10e-9, 10.0), 10.0);
   EXPECT_DOUBLE_EQ(m.pulses, 100.0);

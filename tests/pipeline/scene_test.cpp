@@ -76,10 +76,10 @@ TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
   const std::vector<Case> cases = {
       {[](json& j) { j["laser"]["colour"] = "green"; },
        "scene.json: /laser/colour: unknown key (expected one of: position, direction, power_w, "
-       "wavelength_nm, exposure_s, beam)"},
+       "wavelength_nm, exposure_s, pulse, beam)"},
       {[](json& j) { j["extra"] = 1; },
-       "scene.json: /extra: unknown key (expected one of: description, laser, materials, "
-       "objects, accuracy, observers, planes, far_field)"},
+       "scene.json: /extra: unknown key (expected one of: description, laser, atmosphere, "
+       "optical_aid, materials, objects, accuracy, observers, planes, far_field)"},
       {[](json& j) { j["laser"].erase("power_w"); },
        "scene.json: /laser/power_w: missing (required)"},
       {[](json& j) {
