@@ -287,6 +287,13 @@ int removeStaleTemporaries(const std::filesystem::path& folder) {
     // Only a process that provably no longer exists: pids are reused, and a live one may be
     // another glint writing into the same folder.
     if (::kill(pid, 0) == 0 || errno != ESRCH) continue;
+    // A folder: a staged AMR data set (export/vtk_files.h), removed whole; remove_all()
+    // removes links inside it, never what they point to.
+    std::error_code ignored;
+    if (it->symlink_status(ignored).type() == std::filesystem::file_type::directory) {
+      if (std::filesystem::remove_all(it->path(), ignored) > 0) ++removed;
+      continue;
+    }
     if (::unlink(it->path().c_str()) == 0) ++removed;  // a link itself, never its target
   }
   return removed;

@@ -62,7 +62,8 @@ class AtomicFile {
 void installInterruptCleanup();
 
 /// @brief Removes the temporaries of processes that no longer exist from @p folder (links and
-/// files alike are unlinked, never followed). Returns how many were removed.
+/// files alike are unlinked, never followed; a staging folder of theirs goes whole). Returns
+/// how many were removed.
 int removeStaleTemporaries(const std::filesystem::path& folder);
 
 }  // namespace glint

@@ -1,14 +1,12 @@
 #pragma once
 /// @file
-/// @brief The files of `glint run`: the OpenVDB volume and the VTK XML files for ParaView.
+/// @brief The files of `glint run`: the OpenVDB volume (the VTK XML files: export/vtk_files.h).
 
 #include <cstdint>
 #include <ostream>
 #include <string>
 #include <vector>
 
-#include "facets/integrator.h"
-#include "observers/far_field.h"
 #include "observers/field.h"
 
 namespace glint {
@@ -43,23 +41,6 @@ std::vector<float> hazardRatio(const std::vector<float>& irradiance_w_m2, double
 /// irradiance grid was 1.4 GB of the 2 km example's peak).
 void writeVdb(std::ostream& out, ObserverField field, const RunInfo& info);
 
-/// @brief VTK ImageData (.vti) of the box: point data `irradiance_w_m2` (Float32, 0 where
-/// not computed), `hazard_ratio` (as for the VDB), `refinement_level` and `status`, sampled
-/// every @p stride lattice points.
-void writeVti(std::ostream& out, const ObserverField& field, int stride, double mpe_w_m2);
-
-/// @brief VTK UnstructuredGrid (.vtu) of the octree's final blocks as hexahedra: cell data
-/// `refinement_level` and `status` (1 computed, 2 interpolated, 3 proven below the floor),
-/// point data `irradiance_w_m2` (and `hazard_ratio` where @p mpe_w_m2 > 0) at the corners.
-void writeBlocksVtu(std::ostream& out, const ObserverField& field, double mpe_w_m2);
-
-/// @brief VTK PolyData (.vtp) of the lit target: its coarse facets split @p level times on the
-/// true surface, cell data `incident_power_w` (beam power received) and `coarse_facet`.
-void writeTargetVtp(std::ostream& out, const FacetIntegrator& integrator, int level);
-
-/// @brief VTK PolyData (.vtp) of the far field's hazard boundary (hazardSurface()): quads,
-/// point data `nohd_m` (0 where the hazard ends inside the far radius), `intensity_w_sr` and
-/// `beyond_far_radius` (1 where the point lies at its hazard distance, 0 on the far radius).
-void writeHazardSurfaceVtp(std::ostream& out, const HazardSurface& surface);
+// The VTK XML files (.vti, .vtu, .vtp, .vthb): export/vtk_files.h.
 
 }  // namespace glint

@@ -13,6 +13,7 @@
 #include "export/atomic_file.h"
 #include "export/exr_map.h"
 #include "export/field_files.h"
+#include "export/vtk_files.h"
 #include "glint/version.h"
 #include "pipeline/input_error.h"
 #include "pipeline/json_reader.h"
@@ -531,6 +532,8 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     vtu = open("blocks.vtu");
     vtp = open("target.vtp");
   }
+  std::optional<StagedAmr> amr;  // irradiance.vthb and its folder, committed with the files
+  if (scene.observers) written.push_back("irradiance.vthb");
   AtomicFile *far_exr = nullptr, *far_vtp = nullptr;
   if (scene.far_field.enabled) {
     far_exr = open("far_field.exr");
@@ -586,6 +589,7 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
       writeVti(vti->stream(), field, vtiStride(spec), info.mpe_w_m2);
       writeBlocksVtu(vtu->stream(), field, info.mpe_w_m2);
       writeTargetVtp(vtp->stream(), integrator, 2);
+      amr.emplace(writeAmr(dir / "irradiance.vthb", field, info.mpe_w_m2));
     }
     const HazardZone zone = hazardZone(field, scene.hazard, targetCentre(integrator.target()));
     j = summaryJson(field, zone, info, integrator.cullStats());
@@ -669,6 +673,7 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   summary->stream() << j.dump(2) << "\n";
   watch.check("writing the outputs");  // a file written short of memory is not committed
   for (const auto& f : files) f->commit();
+  if (amr) amr->commit();
   if (args.quiet) return;
   std::string list;
   for (const std::string& w : written) list += (list.empty() ? "" : ", ") + w;

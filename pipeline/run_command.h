@@ -29,9 +29,9 @@ struct RunArgs {
   std::optional<IntegrationScheme> scheme;  ///< overrides the scene's accuracy.scheme
 };
 
-/// @brief Runs the command: writes irradiance.vdb, irradiance.vti, blocks.vtu and target.vtp
-/// for the box, `<name>.exr` for each plane, and summary.json into the output folder, each
-/// whole or not at all.
+/// @brief Runs the command: writes irradiance.vdb, irradiance.vti, irradiance.vthb (and its
+/// folder), blocks.vtu and target.vtp for the box, `<name>.exr` for each plane, and
+/// summary.json into the output folder, each whole or not at all.
 /// @throw InputError, OutputError on bad input or an unwritable folder.
 /// Under MPI (@p exchange with more than one rank) every rank computes the same fields, sharing
 /// their points; rank 0 alone reports and writes, the same bytes as one process would.

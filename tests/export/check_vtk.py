@@ -4,6 +4,9 @@ and the other outputs of the same run:
   point per lattice point of the summary;
 - its irradiance equals the VDB's voxel for voxel at the peak and at sampled points (active
   and inactive), read with OpenVDB's Python module;
+- irradiance.vthb, the adaptive field as an overlapping AMR read with every level, has one
+  level per resolution of the octree's final blocks (blocks.vtu) and holds the VTI's values
+  at its points;
 - contours of the irradiance at 10 % of the peak and of the hazard ratio at 1 (the nominal
   hazard zone's surface) are non-empty in irradiance.vti and blocks.vtu;
 - target.vtp's incident power sums to the beam power the target intercepts, computed here
@@ -75,6 +78,56 @@ peak = summary["peak_irradiance_w_m2"]
 assert abs(vti_at(*peak_ijk) - peak) <= 1e-6 * peak, (vti_at(*peak_ijk), peak)
 print(f"irradiance.vti: {len(samples)} points equal the VDB's ({active} active), peak "
       f"{vti_at(*peak_ijk):.6g} W/m^2 at {peak_ijk}")
+
+# --- The AMR (irradiance.vthb): every level read (ParaView reads level 0 only unless told:
+# DefaultNumberOfLevels), one per resolution of the octree, each holding the lattice's values.
+amr_reader = OpenDataFile(f"{out}/irradiance.vthb")
+amr_reader.DefaultNumberOfLevels = 64
+amr_reader.UpdatePipeline()
+# servermanager.Fetch cannot move an AMR to the client; the built-in session's reader holds it.
+amr = amr_reader.GetClientSideObject().GetOutputDataObject(0)
+assert amr.IsA("vtkOverlappingAMR"), amr.GetClassName()
+block_voxels = round(box["block_m"] / voxel)
+blocks_reader = OpenDataFile(f"{out}/blocks.vtu")
+blocks_reader.UpdatePipeline()
+blocks = servermanager.Fetch(blocks_reader)
+finest = 0
+for c in range(blocks.GetNumberOfCells()):
+    b = blocks.GetCell(c).GetBounds()
+    # A finest block (2 voxels a side) is written as its 8 voxels: an edge of 1 is one of 2.
+    shortest = max(2, min(round((b[2 * a + 1] - b[2 * a]) / voxel) for a in range(3)))
+    finest = max(finest, round(math.log2(block_voxels / shortest)))
+assert amr.GetNumberOfLevels() == finest + 1, (amr.GetNumberOfLevels(), finest + 1)
+assert amr.GetNumberOfLevels() >= 2, "the example must refine for the AMR to have levels"
+compared = 0
+for lev in range(amr.GetNumberOfLevels()):
+    step = max(1, block_voxels >> (lev + 1))
+    spacing = [0.0, 0.0, 0.0]
+    amr.GetSpacing(lev, spacing)
+    assert all(abs(h - step * voxel) <= 1e-12 * voxel for h in spacing), (lev, spacing)
+    for b in range(amr.GetNumberOfDataSets(lev)):
+        grid = amr.GetDataSet(lev, b)
+        values = grid.GetPointData().GetArray("irradiance_w_m2")
+        ratio = grid.GetPointData().GetArray("hazard_ratio")
+        assert values is not None and ratio is not None, (lev, b)
+        for p in rng.sample(range(grid.GetNumberOfPoints()), min(5, grid.GetNumberOfPoints())):
+            ijk = index_of(grid.GetPoint(p))
+            assert values.GetValue(p) == vti_at(*ijk), (lev, b, ijk, values.GetValue(p), vti_at(*ijk))
+            compared += 1
+# The peak is on the finest level that covers it, as on the VTI.
+peak_found = False
+for lev in range(amr.GetNumberOfLevels()):
+    for b in range(amr.GetNumberOfDataSets(lev)):
+        grid = amr.GetDataSet(lev, b)
+        p = grid.FindPoint(summary["peak_at_m"])
+        if p >= 0 and index_of(grid.GetPoint(p)) == peak_ijk:
+            value = grid.GetPointData().GetArray("irradiance_w_m2").GetValue(p)
+            assert value == vti_at(*peak_ijk), (lev, value, vti_at(*peak_ijk))
+            peak_found = True
+assert peak_found, "no AMR level has a point at the peak"
+print(f"irradiance.vthb: {amr.GetNumberOfLevels()} levels "
+      f"({[amr.GetNumberOfDataSets(lev) for lev in range(amr.GetNumberOfLevels())]} blocks), "
+      f"{compared} points equal the VTI's, the peak included")
 
 # --- Contours: the hazard zone's surface and the bright region.
 for name in ("irradiance.vti", "blocks.vtu"):

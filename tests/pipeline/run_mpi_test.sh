@@ -41,6 +41,9 @@ PY
     summary.json)
       diff <(grep -v '"seconds"' "$work/one/$f") <(grep -v '"seconds"' "$work/mpi/$f") ||
         { echo "FAIL: $f differs between 1 and 2 ranks" >&2; exit 1; } ;;
+    irradiance)  # the AMR's blocks (irradiance.vthb names them)
+      diff -r "$work/one/$f" "$work/mpi/$f" > /dev/null ||
+        { echo "FAIL: $f/ differs between 1 and 2 ranks" >&2; exit 1; } ;;
     *)
       cmp "$work/one/$f" "$work/mpi/$f" ||
         { echo "FAIL: $f differs between 1 and 2 ranks" >&2; exit 1; } ;;
