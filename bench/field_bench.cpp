@@ -388,14 +388,16 @@ int main(int argc, char** argv) {
 
   std::printf(
       "%-18s %6s %7s %9s | %9s %10s %8s | %9s %10s %8s | %6s %6s | %9s %9s | %6s %6s %6s | %s\n",
-      "scene", "voxel", "tol.", "points", "adapt.pts", "adapt.eval", "adapt.s", "dense.pts", "dense.eval",
-      "dense.s", "eval×", "time×", "max.err", "allowed", "V1%", "V10%", "V50%", "bright skipped");
+      "scene", "voxel", "tol.", "points", "adapt.pts", "adapt.eval", "adapt.s", "dense.pts",
+      "dense.eval", "dense.s", "eval×", "time×", "max.err", "allowed", "V1%", "V10%", "V50%",
+      "bright skipped");
   for (const Row& r : rows) {
     const FieldComparison& c = r.comparison;
     std::printf(
         "%-18s %6.3f %7.3g %9lld | %9lld %10.3e %8.1f | %9lld %10.3e %8.1f | %6.1f %6.1f | %9.3g "
         "%9.3g | %6.4f %6.4f %6.4f | %lld\n",
-        r.scene.c_str(), r.spec.voxel_m, r.spec.tolerance, static_cast<long long>(r.adaptive.lattice_points),
+        r.scene.c_str(), r.spec.voxel_m, r.spec.tolerance,
+        static_cast<long long>(r.adaptive.lattice_points),
         static_cast<long long>(r.adaptive.evaluated_points),
         static_cast<double>(r.adaptive.evaluations), r.adaptive.seconds,
         static_cast<long long>(r.dense.evaluated_points), static_cast<double>(r.dense.evaluations),

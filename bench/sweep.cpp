@@ -86,9 +86,9 @@ Row measure(const FacetIntegrator& fi, const std::vector<Vec3>& points, const Po
             const std::vector<double>& ref, double floor_w_m2) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::vector<ObserverResult> r = evaluatePoints(fi, points, scheme);
-  const char* name = scheme.uniform                                            ? "uniform"
+  const char* name = scheme.uniform                                   ? "uniform"
                      : fi.options().scheme == IntegrationScheme::Lobe ? "lobe"
-                                                                                : "adaptive";
+                                                                      : "adaptive";
   Row row{name, 0, 0, seconds(t0), 0, 0, 0};
   double evals = 0.0, sq = 0.0;
   for (std::size_t i = 0; i < r.size(); ++i) {
@@ -199,12 +199,12 @@ int main(int argc, char** argv) {
   for (const Row& l : rows) {
     if (l.scheme != "lobe") continue;
     if (const Row* best = cheapest_as_accurate("adaptive", l, &Row::seconds)) {
-      std::printf("lobe at %-7g max error %.2e: %.0f vs %.0f evaluations (paper at %g): %.1fx "
-                  "fewer, %.1fx faster\n",
-                  l.parameter, l.max_error, l.evaluations_per_observer,
-                  best->evaluations_per_observer, best->parameter,
-                  best->evaluations_per_observer / l.evaluations_per_observer,
-                  best->seconds / l.seconds);
+      std::printf(
+          "lobe at %-7g max error %.2e: %.0f vs %.0f evaluations (paper at %g): %.1fx "
+          "fewer, %.1fx faster\n",
+          l.parameter, l.max_error, l.evaluations_per_observer, best->evaluations_per_observer,
+          best->parameter, best->evaluations_per_observer / l.evaluations_per_observer,
+          best->seconds / l.seconds);
     } else {
       std::printf("lobe at %-7g max error %.2e: no run of the paper's scheme is as accurate\n",
                   l.parameter, l.max_error);

@@ -4,15 +4,15 @@
 #include <ImathVec.h>
 #include <ImfAttribute.h>
 #include <ImfChannelList.h>
+#include <ImfDoubleAttribute.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
-#include <ImfInputFile.h>
 #include <ImfIO.h>
+#include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStandardAttributes.h>
 #include <ImfStringAttribute.h>
 #include <ImfVecAttribute.h>
-#include <ImfDoubleAttribute.h>
 
 #include <algorithm>
 #include <stdexcept>
@@ -54,7 +54,8 @@ void writeChannels(std::ostream& out, Imf::Header& header, int width, int height
   }
   for (const ExrChannel& c : channels) {
     if (c.values == nullptr || c.values->size() != n)
-      throw std::invalid_argument("writeExr: channel " + c.name + " must hold width × height values");
+      throw std::invalid_argument("writeExr: channel " + c.name +
+                                  " must hold width × height values");
   }
   header.compression() = Imf::ZIP_COMPRESSION;
   for (const ExrChannel& c : channels) header.channels().insert(c.name, Imf::Channel(Imf::FLOAT));
@@ -73,8 +74,8 @@ void writeChannels(std::ostream& out, Imf::Header& header, int width, int height
                   rows_down[c].begin() + static_cast<std::ptrdiff_t>(y * w));
     }
     frame.insert(channels[c].name,
-                 Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(rows_down[c].data()),
-                            sizeof(float), sizeof(float) * w));
+                 Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(rows_down[c].data()), sizeof(float),
+                            sizeof(float) * w));
   }
   StdOStream stream(out);
   Imf::OutputFile file(stream, header);

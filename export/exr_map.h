@@ -25,10 +25,10 @@ struct PlaneGrid {
 /// @brief The map `glint run` writes for a plane. Arrays are indexed [j × width + i].
 struct PlaneMap : PlaneGrid {
   std::vector<float> irradiance_w_m2;
-  std::vector<float> hazard_ratio;  ///< irradiance / MPE
+  std::vector<float> hazard_ratio;        ///< irradiance / MPE
   std::vector<float> aided_hazard_ratio;  ///< irradiance × aid gain / MPE; empty without an aid
-  std::vector<float> level;         ///< refinement level (0 = coarsest block)
-  std::vector<float> status;        ///< VoxelStatus: why a 0 is 0 (proven below floor, ...)
+  std::vector<float> level;               ///< refinement level (0 = coarsest block)
+  std::vector<float> status;              ///< VoxelStatus: why a 0 is 0 (proven below floor, ...)
 };
 
 /// @brief One FLOAT channel: width × height values indexed [j × width + i].

@@ -15,8 +15,8 @@ namespace glint {
 struct RunInfo {
   std::string program_version;
   std::string scene_file;
-  std::string scene_fnv1a64;  ///< FNV-1a hash of the scene file's bytes
-  std::string scheme;         ///< "adaptive" or "uniform"
+  std::string scene_fnv1a64;       ///< FNV-1a hash of the scene file's bytes
+  std::string scheme;              ///< "adaptive" or "uniform"
   std::string integration_scheme;  ///< per observer: "paper", "cubature" or "lobe"
   double wavelength_nm = 0.0;
   double power_w = 0.0;

@@ -35,7 +35,8 @@ void stampContentUuid(std::string& file) {
   // Only what is recognisably the UUID field is replaced.
   for (std::size_t i = 0; i < kUuidSize; ++i) {
     const bool dash = i == 8 || i == 13 || i == 18 || i == 23;
-    if (dash != (uuid[i] == '-') || (!dash && std::isxdigit(static_cast<unsigned char>(uuid[i])) == 0))
+    if (dash != (uuid[i] == '-') ||
+        (!dash && std::isxdigit(static_cast<unsigned char>(uuid[i])) == 0))
       return;
   }
   std::fill(file.begin() + kUuidAt, file.begin() + kUuidAt + kUuidSize, '0');

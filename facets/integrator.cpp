@@ -181,8 +181,7 @@ RuleResult ruleIrradiance(const SurfaceMap& map, const SubFacet& f, const Vec3& 
   auto apply = [&](std::span<const TriangleNode> rule) {
     double sum = 0.0;
     for (const TriangleNode& node : rule) {
-      const Vec3 b =
-          node.bary[0] * f.bary[0] + node.bary[1] * f.bary[1] + node.bary[2] * f.bary[2];
+      const Vec3 b = node.bary[0] * f.bary[0] + node.bary[1] * f.bary[1] + node.bary[2] * f.bary[2];
       const SurfacePoint p = map.at(b);
       ++r.evaluations;
       if (!p.valid) {
@@ -212,7 +211,7 @@ struct LobePiece {
   // A magnitude: the bound until refined, then |refined − estimate| (or the embedded error).
   double error = 0.0;
   std::array<double, 4> child_estimate{};
-  std::uint32_t nodes = 0;      // offset of its 15 nodes in the pool, once sampled
+  std::uint32_t nodes = 0;  // offset of its 15 nodes in the pool, once sampled
   bool sampled = false;
   bool refined_ok = false;      // value and error known (by its children, or embedded)
   bool children_known = false;  // child_estimate and nodes 6–14 hold its children's
@@ -453,8 +452,8 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
       // A candidate split by boundBall() has its corners from 1→4 subdivision; the pieces
       // here are those of the surface map, over the same barycentric triangle.
       if (lit.facet.depth > 0) {
-        leaf.facet = maps_[lit.facet.coarse].subFacet(lit.facet.bary, lit.facet.depth,
-                                                      lit.facet.rim_edges);
+        leaf.facet =
+            maps_[lit.facet.coarse].subFacet(lit.facet.bary, lit.facet.depth, lit.facet.rim_edges);
         g = maps_[lit.facet.coarse].geometry(*target_, leaf.facet);
       }
       leaf.sampled = false;
@@ -705,8 +704,8 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
       // error estimate, and the children's sum its value.
       account(piece, -1);
       const auto& b = piece.facet.bary;
-      const std::array<Vec3, 6> node_bary{b[0], b[1], b[2], 0.5 * (b[0] + b[1]),
-                                          0.5 * (b[1] + b[2]), 0.5 * (b[2] + b[0])};
+      const std::array<Vec3, 6> node_bary{
+          b[0], b[1], b[2], 0.5 * (b[0] + b[1]), 0.5 * (b[1] + b[2]), 0.5 * (b[2] + b[0])};
       if (!piece.sampled) {
         piece.nodes = static_cast<std::uint32_t>(ws.lobe_nodes.size());
         ws.lobe_nodes.resize(ws.lobe_nodes.size() + kLobeNodes);
@@ -717,9 +716,9 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
         result.evaluations += 6;
         const LobeNode* n = &ws.lobe_nodes[piece.nodes];
         const double small = negligible();
-        const LobeEstimate e =
-            lobeRule(PieceSampler(map, b, x, beam, material), {n, n + 1, n + 2, n + 3, n + 4, n + 5},
-                     parameterArea(piece.facet), sigma, small, /*embedded=*/true);
+        const LobeEstimate e = lobeRule(
+            PieceSampler(map, b, x, beam, material), {n, n + 1, n + 2, n + 3, n + 4, n + 5},
+            parameterArea(piece.facet), sigma, small, /*embedded=*/true);
         result.evaluations += e.evaluations;
         piece.sampled = true;
         piece.estimate = e.irradiance_w_m2;

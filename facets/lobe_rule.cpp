@@ -114,8 +114,8 @@ struct P2 {
   std::array<double, 6> n, ds, dt;
   explicit P2(const Vec2& x) {
     const double l0 = 1.0 - x.x - x.y, l1 = x.x, l2 = x.y;
-    n = {l0 * (2 * l0 - 1), l1 * (2 * l1 - 1), l2 * (2 * l2 - 1), 4 * l0 * l1, 4 * l1 * l2,
-         4 * l2 * l0};
+    n = {l0 * (2 * l0 - 1), l1 * (2 * l1 - 1), l2 * (2 * l2 - 1),
+         4 * l0 * l1,       4 * l1 * l2,       4 * l2 * l0};
     ds = {1 - 4 * l0, 4 * l1 - 1, 0.0, 4 * (l0 - l1), 4 * l2, -4 * l2};
     dt = {1 - 4 * l0, 0.0, 4 * l2 - 1, -4 * l1, 4 * l1, 4 * (l0 - l2)};
   }
@@ -236,8 +236,8 @@ class GaussianLobe {
     // A convex part at distance d from the Gaussian's centre lies in a half plane that far
     // out: its mass is at most Q(d), which needs no Owen's T.
     const double d = distanceToOrigin(std::span<const Vec2>(y.data(), part.n));
-    upper_log_ = -least_ / (2.0 * s2_) + std::log(2.0 * kPi * upperTail(d)) -
-                 0.5 * std::log(l1_ * l2_);
+    upper_log_ =
+        -least_ / (2.0 * s2_) + std::log(2.0 * kPi * upperTail(d)) - 0.5 * std::log(l1_ * l2_);
     skipped_ = upper_log_ < skip_below_log;
     mom_ = skipped_ ? NormalMoments{}
                     : standardNormalOverPolygon(std::span<const Vec2>(y.data(), part.n));
@@ -590,8 +590,8 @@ NormalMoments standardNormalOverPolygon(std::span<const Vec2> ccw) {
   return m;
 }
 
-LobeNode lobeNode(const SurfaceMap& map, const Vec3& bary, const Vec3& observer_m,
-                  const Beam& beam, const Material& material) {
+LobeNode lobeNode(const SurfaceMap& map, const Vec3& bary, const Vec3& observer_m, const Beam& beam,
+                  const Material& material) {
   return lobeNode(map.at(bary), observer_m, beam, material);
 }
 
@@ -620,8 +620,8 @@ LobeNode lobeNode(const SurfacePoint& p, const Vec3& observer_m, const Beam& bea
     node.slope = h / hn - p.normal;
     const double s = glm::dot(node.slope, node.slope);
     const double sigma = material.lobe.sigma;
-    node.specular = material.specular_reflectance * scale * (1.0 + s) * (1.0 + s) /
-                    (8.0 * kPi * sigma * sigma);
+    node.specular =
+        material.specular_reflectance * scale * (1.0 + s) * (1.0 + s) / (8.0 * kPi * sigma * sigma);
   }
   return node;
 }

@@ -15,8 +15,8 @@
 /// second-order product rule, with no sample ever needing to land on the peak.
 
 #include <array>
-#include <limits>
 #include <glm/vec2.hpp>
+#include <limits>
 #include <span>
 
 #include "facets/beam.h"
@@ -81,8 +81,8 @@ struct LobeNode {
 
 /// @brief The integrand's parts at barycentric coordinates @p bary of @p map's coarse facet,
 /// for an observer at @p observer_m (both in the facet's object frame).
-LobeNode lobeNode(const SurfaceMap& map, const Vec3& bary, const Vec3& observer_m,
-                  const Beam& beam, const Material& material);
+LobeNode lobeNode(const SurfaceMap& map, const Vec3& bary, const Vec3& observer_m, const Beam& beam,
+                  const Material& material);
 
 /// @brief As above, with the surface there already known (@p surface = map.at(bary)).
 LobeNode lobeNode(const SurfacePoint& surface, const Vec3& observer_m, const Beam& beam,

@@ -33,8 +33,7 @@ class Occluder {
   /// @brief Whether nothing of the target lies on the segment from @p from_m to @p to_m
   /// (world coordinates; @p from_m already lifted off its facet), ignoring its first
   /// @p skip_m.
-  [[nodiscard]] bool segmentClear(const Vec3& from_m, const Vec3& to_m,
-                                  double skip_m = 0.0) const;
+  [[nodiscard]] bool segmentClear(const Vec3& from_m, const Vec3& to_m, double skip_m = 0.0) const;
 
   /// @brief Whether nothing lies between @p skip_m and @p distance_m from @p from_m along unit
   /// @p direction.

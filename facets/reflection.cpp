@@ -82,9 +82,8 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
   // Both terms are smooth in a patch that is small against the distance and free of beam
   // edges; the specular term also varies on the scale σ of the lobe. Where cos θi or cos θr
   // may change sign the kernel clips the facet, and there the lobe must be nearly flat too.
-  const bool smooth =
-      reach <= limits.near_field * d &&
-      (limits.clips_beam_edges || !beam.edgeMayCrossBall(g.centre_m, g.radius_m));
+  const bool smooth = reach <= limits.near_field * d &&
+                      (limits.clips_beam_edges || !beam.edgeMayCrossBall(g.centre_m, g.radius_m));
   const bool may_be_clipped = std::abs(angle_i - 0.5 * kPi) <= g.cone_rad + eps_i ||
                               std::abs(angle_o - 0.5 * kPi) <= g.cone_rad + eps_o;
   const bool specular_smooth =

@@ -92,9 +92,8 @@ void SurfaceMap::blended(const Vec3& bary, Vec3& p, Vec3& p_u, Vec3& p_v) const 
     const double phi = t * arc.angle_rad;
     const Vec3 radial = std::cos(phi) * arc.e1 + std::sin(phi) * arc.e2;
     const Vec3 d = arc.center_m + arc.radius_m * radial - (a + t * (b - a));
-    const Vec3 d_t = arc.radius_m * arc.angle_rad *
-                         (-std::sin(phi) * arc.e1 + std::cos(phi) * arc.e2) -
-                     (b - a);
+    const Vec3 d_t =
+        arc.radius_m * arc.angle_rad * (-std::sin(phi) * arc.e1 + std::cos(phi) * arc.e2) - (b - a);
     p += s * s * d;
     // ∂(s² D(t)) = 2 s D ∂s + s² D'(t) ∂t, with s ∂t = ∂b_f − t ∂s.
     const double s_u = kDbDu[e] + kDbDu[f], s_v = kDbDv[e] + kDbDv[f];
@@ -109,8 +108,8 @@ SurfacePoint SurfaceMap::at(const Vec3& bary) const {
     case SurfaceModel::Flat: {
       out.position_m = bary[0] * corner_m_[0] + bary[1] * corner_m_[1] + bary[2] * corner_m_[2];
       out.normal = chord_normal_;
-      out.jacobian_m2 = glm::length(
-          glm::cross(corner_m_[1] - corner_m_[0], corner_m_[2] - corner_m_[0]));
+      out.jacobian_m2 =
+          glm::length(glm::cross(corner_m_[1] - corner_m_[0], corner_m_[2] - corner_m_[0]));
       out.valid = out.jacobian_m2 > 0.0;
       return out;
     }

@@ -235,8 +235,8 @@ MeshStats addMesh(Target& target, const Vec3& origin_m, std::uint32_t material,
     for (int i = 0; i < 3; ++i) {
       f.p[i] = mesh.positions_m.at(tri[i]);
       f.n[i] = mesh.normals.at(tri[i]);
-      finite = finite && std::isfinite(f.p[i].x) && std::isfinite(f.p[i].y) &&
-               std::isfinite(f.p[i].z);
+      finite =
+          finite && std::isfinite(f.p[i].x) && std::isfinite(f.p[i].y) && std::isfinite(f.p[i].z);
     }
     const auto face =
         finite ? tryNormalize(glm::cross(f.p[1] - f.p[0], f.p[2] - f.p[0])) : std::nullopt;

@@ -26,8 +26,8 @@ Gauss1D gaussJacobi(int n, int alpha) {
     j(k, k) = s == 0.0 ? 0.0 : -a * a / (s * (s + 2.0));
     if (k > 0) {
       const double kk = k;
-      const double off = std::sqrt(4.0 * kk * (kk + a) * kk * (kk + a) /
-                                   (s * s * (s + 1.0) * (s - 1.0)));
+      const double off =
+          std::sqrt(4.0 * kk * (kk + a) * kk * (kk + a) / (s * s * (s + 1.0) * (s - 1.0)));
       j(k, k - 1) = j(k - 1, k) = off;
     }
   }

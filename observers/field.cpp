@@ -36,8 +36,7 @@ std::vector<float> activeOnLattice(const openvdb::FloatGrid& grid, const std::ar
     const openvdb::CoordBBox box = it.getBoundingBox();
     for (auto c = box.begin(); c; ++c) {
       const openvdb::Coord& q = *c;
-      if (q.x() < 0 || q.y() < 0 || q.z() < 0 || q.x() >= n[0] || q.y() >= n[1] ||
-          q.z() >= n[2]) {
+      if (q.x() < 0 || q.y() < 0 || q.z() < 0 || q.x() >= n[0] || q.y() >= n[1] || q.z() >= n[2]) {
         ++outside;
         continue;
       }
@@ -152,7 +151,8 @@ std::uint64_t fieldMemoryFloorBytes(const FieldSpec& spec, bool dense) {
   for (int a = 0; a < 3; ++a) {
     points *= n[a];
     const int cells = std::max(1, n[a] - 1);
-    blocks *= spec.plane && a == 2 ? 1.0 : std::ceil(static_cast<double>(cells) / spec.block_voxels);
+    blocks *=
+        spec.plane && a == 2 ? 1.0 : std::ceil(static_cast<double>(cells) / spec.block_voxels);
   }
   const double bytes = dense ? kDenseBytesPerPoint * points : kAdaptiveBytesPerCoarseBlock * blocks;
   return bytes >= 1.8e19 ? std::numeric_limits<std::uint64_t>::max()

@@ -89,7 +89,7 @@ struct FieldStats {
   /// Integrated points whose irradiance is not a finite number (never written to the grids):
   /// none for a scene within pipeline/limits.h; any is an error the caller must report.
   std::int64_t non_finite_points = 0;
-  Vec3 non_finite_at_m{0.0};  ///< one of them
+  Vec3 non_finite_at_m{0.0};         ///< one of them
   std::int64_t blocks_skipped = 0;   ///< proven below the floor
   std::int64_t blocks_accepted = 0;  ///< interpolated
   /// Of those, the blocks that interpolated E·r or E·r² (r from the lit facets' centre)

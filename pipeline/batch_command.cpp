@@ -7,8 +7,8 @@
 #include <cstdio>
 #include <map>
 #include <memory>
-#include <stdexcept>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 
 #include "export/atomic_file.h"
 #include "export/exr_map.h"
@@ -41,7 +41,9 @@ struct StudyLattice {
   std::vector<float> max_w_m2;
   std::vector<std::uint32_t> hazardous;  // scenarios with irradiance ≥ MPE at the point
 
-  [[nodiscard]] std::string scenarioFile() const { return plane ? name + ".exr" : "irradiance.vdb"; }
+  [[nodiscard]] std::string scenarioFile() const {
+    return plane ? name + ".exr" : "irradiance.vdb";
+  }
   [[nodiscard]] double cell() const {  // m² of a plane's pixel, m³ of a box's voxel
     return plane ? spec.voxel_m * spec.voxel_m : spec.voxel_m * spec.voxel_m * spec.voxel_m;
   }
@@ -122,9 +124,8 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
 
   const RunInfo info = runInfo(scene, (dir / "scene.json").string(), scene_json, "adaptive");
 
-  nlohmann::json record = {{"study_fnv1a64", study.fnv1a64},
-                           {"scenario", s.index},
-                           {"parameters", parametersJson(s)}};
+  nlohmann::json record = {
+      {"study_fnv1a64", study.fnv1a64}, {"scenario", s.index}, {"parameters", parametersJson(s)}};
   nlohmann::json results = nlohmann::json::array();
   std::int64_t evaluations = 0, unconverged = 0;
   // The scenario's target, built and culled once for all its lattices.
@@ -242,12 +243,13 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
   if (fnv != study.fnv1a64) {
     if (fresh) return std::nullopt;
     throw InputError(out_dir.string() + ": holds results of another study (or of this study " +
-                     "before it changed): " + (dir / "result.json").string() + " has study " +
-                     fnv + ", this study is " + study.fnv1a64 +
+                     "before it changed): " + (dir / "result.json").string() + " has study " + fnv +
+                     ", this study is " + study.fnv1a64 +
                      ". Use --fresh to discard them, or another --out folder");
   }
   if (!matches) {
-    if (!quiet) err << "glint batch: " << (dir / "result.json").string() << " does not match: redone\n";
+    if (!quiet)
+      err << "glint batch: " << (dir / "result.json").string() << " does not match: redone\n";
     return std::nullopt;
   }
   // Maps read in full before any is added, so a damaged file leaves the aggregates untouched.
@@ -286,9 +288,11 @@ double quantile(std::vector<double> v, double q) {
 nlohmann::json quantilesJson(const std::vector<double>& v) {
   double sum = 0.0;
   for (double x : v) sum += x;
-  return {{"min", quantile(v, 0.0)},  {"p05", quantile(v, 0.05)}, {"p25", quantile(v, 0.25)},
-          {"median", quantile(v, 0.5)}, {"p75", quantile(v, 0.75)}, {"p95", quantile(v, 0.95)},
-          {"max", quantile(v, 1.0)},  {"mean", v.empty() ? 0.0 : sum / static_cast<double>(v.size())}};
+  return {
+      {"min", quantile(v, 0.0)},  {"p05", quantile(v, 0.05)},
+      {"p25", quantile(v, 0.25)}, {"median", quantile(v, 0.5)},
+      {"p75", quantile(v, 0.75)}, {"p95", quantile(v, 0.95)},
+      {"max", quantile(v, 1.0)},  {"mean", v.empty() ? 0.0 : sum / static_cast<double>(v.size())}};
 }
 
 // %.10g: enough for every parameter a study file can hold, and the same text on every rank.
@@ -319,8 +323,8 @@ std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
     auto number = [&](const nlohmann::json& x) { cell(csvNumber(x.get<double>())); };
     number(p.at("time_s"));
     for (const nlohmann::json& x : p.at("offset_m")) number(x);
-    for (const char* key : {"pose_yaw_deg", "pose_pitch_deg", "pose_roll_deg", "yaw_deg",
-                            "pitch_deg", "roll_deg"})
+    for (const char* key :
+         {"pose_yaw_deg", "pose_pitch_deg", "pose_roll_deg", "yaw_deg", "pitch_deg", "roll_deg"})
       number(p.at(key));
     // Empty: as in the scene.
     for (const char* key : {"sigma", "specular_reflectance"})
@@ -396,12 +400,12 @@ void writeLatticeMap(const fs::path& path, const StudyLattice& r, const Study& s
                     {"exposure_s", h.exposure_s},
                     {"mpe_w_m2", h.mpe_w_m2},
                     {"voxel_m", r.spec.voxel_m}};
-    writeLatticeVdb(file.stream(), r.spec,
-                    {{"max_irradiance_w_m2", "W/m^2", &r.max_w_m2},
-                     {"max_hazard_ratio", "1 (irradiance / MPE)", &max_ratio},
-                     {"coverage_probability", "1 (fraction of scenarios at or above the MPE)",
-                      &cover}},
-                    meta);
+    writeLatticeVdb(
+        file.stream(), r.spec,
+        {{"max_irradiance_w_m2", "W/m^2", &r.max_w_m2},
+         {"max_hazard_ratio", "1 (irradiance / MPE)", &max_ratio},
+         {"coverage_probability", "1 (fraction of scenarios at or above the MPE)", &cover}},
+        meta);
   }
   file.commit();
 }
@@ -454,18 +458,18 @@ nlohmann::json summaryJson(const Study& study, const std::vector<StudyLattice>& 
       max_e = std::max(max_e, r.max_w_m2[i]);
     }
     const char* unit = r.plane ? "_m2" : "_m3";
-    rs.push_back({{"name", r.name},
-                  {"kind", r.plane ? "plane" : "box"},
-                  {"file", r.plane ? r.name + ".exr" : "box.vdb"},
-                  {"peak_hazard_ratio", quantilesJson(peak)},
-                  {std::string(r.plane ? "hazardous_area" : "hazard_volume") + unit,
-                   quantilesJson(extent)},
-                  {"scenarios_with_hazard", with_hazard},
-                  {"fraction_of_scenarios_with_hazard",
-                   n > 0 ? static_cast<double>(with_hazard) / static_cast<double>(n) : 0.0},
-                  {"max_irradiance_w_m2", max_e},
-                  {std::string("hazardous_in_any_scenario") + unit, static_cast<double>(ever) * r.cell()},
-                  {std::string("hazardous_in_half_or_more") + unit, static_cast<double>(half) * r.cell()}});
+    rs.push_back(
+        {{"name", r.name},
+         {"kind", r.plane ? "plane" : "box"},
+         {"file", r.plane ? r.name + ".exr" : "box.vdb"},
+         {"peak_hazard_ratio", quantilesJson(peak)},
+         {std::string(r.plane ? "hazardous_area" : "hazard_volume") + unit, quantilesJson(extent)},
+         {"scenarios_with_hazard", with_hazard},
+         {"fraction_of_scenarios_with_hazard",
+          n > 0 ? static_cast<double>(with_hazard) / static_cast<double>(n) : 0.0},
+         {"max_irradiance_w_m2", max_e},
+         {std::string("hazardous_in_any_scenario") + unit, static_cast<double>(ever) * r.cell()},
+         {std::string("hazardous_in_half_or_more") + unit, static_cast<double>(half) * r.cell()}});
     if (h.aid) {
       nlohmann::json& a = rs.back();
       a["aided_peak_hazard_ratio"] = quantilesJson(aided_peak);
@@ -550,7 +554,8 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
     std::error_code ec;
     if (args.fresh) fs::remove_all(out_dir / "scenarios", ec);
     fs::create_directories(out_dir / "scenarios", ec);
-    if (ec) throw OutputError(out_dir.string() + ": cannot create the output folder: " + ec.message());
+    if (ec)
+      throw OutputError(out_dir.string() + ": cannot create the output folder: " + ec.message());
     for (const Scenario& s : study.scenarios) {
       if (auto rec = resumeScenario(study, s, lattices, out_dir, args.fresh, err, args.quiet)) {
         records[s.index] = std::move(*rec);
@@ -584,14 +589,14 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
         if (!args.terminal && !last && now - last_print < std::chrono::seconds(10)) return;
         last_print = now;
         const double elapsed = std::chrono::duration<double>(now - run_start).count();
-        const double left = elapsed / static_cast<double>(finished) *
-                            static_cast<double>(todo.size() - finished);
+        const double left =
+            elapsed / static_cast<double>(finished) * static_cast<double>(todo.size() - finished);
         double peak = 0.0;
         for (const auto& r : records[index].at("regions"))
           peak = std::max(peak, r.at("peak_hazard_ratio").get<double>());
         std::string line = "batch: " + std::to_string(finished) + "/" +
-                           std::to_string(todo.size()) + " scenarios, " +
-                           formatDuration(elapsed) + (last ? "" : ", about " + formatDuration(left) + " left") +
+                           std::to_string(todo.size()) + " scenarios, " + formatDuration(elapsed) +
+                           (last ? "" : ", about " + formatDuration(left) + " left") +
                            "; scenario " + std::to_string(index) + ": peak hazard ratio " +
                            formatNumber("%.3g", peak);
         if (args.terminal) {
@@ -631,9 +636,9 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
         << formatNumber("%.3g", q.at("max").get<double>()) << "; hazard in "
         << r.at("scenarios_with_hazard").get<std::size_t>() << " of " << n
         << " scenarios; hazardous in any scenario "
-        << formatNumber("%.4g", r.at(plane ? "hazardous_in_any_scenario_m2"
-                                           : "hazardous_in_any_scenario_m3")
-                                    .get<double>())
+        << formatNumber(
+               "%.4g", r.at(plane ? "hazardous_in_any_scenario_m2" : "hazardous_in_any_scenario_m3")
+                           .get<double>())
         << " " << unit << "\n";
   }
   err << "  wrote " << out_dir.string() << "/{scenarios.csv, summary.json";

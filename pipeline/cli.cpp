@@ -155,7 +155,9 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
   run_cmd->add_option("--memory", run_memory, memoryHelp())->check(byteSize());
   std::string run_scheme;
   CLI::Option* run_scheme_opt =
-      run_cmd->add_option("--scheme", run_scheme, "Integration scheme (as for points); overrides the scene")
+      run_cmd
+          ->add_option("--scheme", run_scheme,
+                       "Integration scheme (as for points); overrides the scene")
           ->check(CLI::IsMember(integrationSchemeNames()));
 
   BatchArgs batch;
@@ -165,7 +167,8 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
       "maximum-irradiance and coverage-probability maps; under mpirun, shared among the ranks");
   batch_cmd->add_option("study", batch.study_path, "Study file (JSON)")->required();
   batch_cmd->add_option("-o,--out", batch.out_dir, "Output folder (default: out/<study name>)");
-  batch_cmd->add_option("--threads", batch.threads, "Worker threads per process (default: all cores)")
+  batch_cmd
+      ->add_option("--threads", batch.threads, "Worker threads per process (default: all cores)")
       ->check(CLI::Range(1, 4096));
   batch_cmd->add_flag("--fresh", batch.fresh,
                       "Discard the scenarios an earlier run left in the output folder");

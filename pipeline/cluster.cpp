@@ -160,8 +160,7 @@ void reduceToRoot(std::vector<T>& values, MPI_Datatype type, MPI_Op op, int rank
   for (std::size_t at = 0; at < values.size(); at += kPiece) {
     const int n = static_cast<int>(std::min(kPiece, values.size() - at));
     if (rank == 0) {
-      check(MPI_Reduce(MPI_IN_PLACE, values.data() + at, n, type, op, 0, MPI_COMM_WORLD),
-            "reduce");
+      check(MPI_Reduce(MPI_IN_PLACE, values.data() + at, n, type, op, 0, MPI_COMM_WORLD), "reduce");
     } else {
       check(MPI_Reduce(values.data() + at, nullptr, n, type, op, 0, MPI_COMM_WORLD), "reduce");
     }

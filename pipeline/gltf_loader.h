@@ -17,7 +17,7 @@ namespace glint {
 /// @brief What a model file may make glint read.
 struct GltfLimits {
   std::uintmax_t max_file_bytes = std::uintmax_t{512} << 20;  ///< the model and each buffer
-  int max_json_depth = 64;             ///< glTF needs about 8; a deep file is an attack
+  int max_json_depth = 64;  ///< glTF needs about 8; a deep file is an attack
   /// After node instancing; vertices may be three times as many. A target of this size is
   /// already far beyond what a run over observers can afford.
   std::size_t max_triangles = 2'000'000;

@@ -24,7 +24,6 @@ namespace glint {
 
 using nlohmann::json;
 
-
 // JSON-pointer escaping of one reference token (RFC 6901).
 inline std::string escapeToken(std::string_view key) {
   std::string out;

@@ -21,10 +21,10 @@
 
 namespace glint::limits {
 
-inline constexpr double kMaxPowerW = 1e15;       ///< laser.power_w ≤ this
-inline constexpr double kMinLengthM = 1e-6;      ///< beam radius, object sizes, voxel, pixel ≥
-inline constexpr double kMaxLengthM = 1e5;       ///< beam radius, object sizes ≤
-inline constexpr double kMaxCoordinateM = 1e7;   ///< |every coordinate| ≤
-inline constexpr double kMinSigma = 1e-6;        ///< material sigma ≥
+inline constexpr double kMaxPowerW = 1e15;      ///< laser.power_w ≤ this
+inline constexpr double kMinLengthM = 1e-6;     ///< beam radius, object sizes, voxel, pixel ≥
+inline constexpr double kMaxLengthM = 1e5;      ///< beam radius, object sizes ≤
+inline constexpr double kMaxCoordinateM = 1e7;  ///< |every coordinate| ≤
+inline constexpr double kMinSigma = 1e-6;       ///< material sigma ≥
 
 }  // namespace glint::limits

@@ -3,8 +3,8 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -33,9 +33,9 @@ std::optional<std::uint64_t> firstNumber(const char* path) {
 std::uint64_t machineMemoryBytes() {
   const long pages = ::sysconf(_SC_PHYS_PAGES);
   const long page = ::sysconf(_SC_PAGE_SIZE);
-  std::uint64_t bytes = pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) *
-                                                    static_cast<std::uint64_t>(page)
-                                              : std::uint64_t{4} << 30;
+  std::uint64_t bytes = pages > 0 && page > 0
+                            ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page)
+                            : std::uint64_t{4} << 30;
   // A container's limit (cgroup v2, then v1) counts where it is lower than the machine's.
   for (const char* limit :
        {"/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {
@@ -57,14 +57,19 @@ std::optional<std::uint64_t> parseByteSize(std::string_view text) {
   }
   std::string unit = s.substr(used);
   for (char& c : unit) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  if (unit.size() > 1 && unit.back() == 'B') unit.pop_back();   // "GB"
-  if (unit.size() > 1 && unit.back() == 'I') unit.pop_back();   // "GiB"
+  if (unit.size() > 1 && unit.back() == 'B') unit.pop_back();  // "GB"
+  if (unit.size() > 1 && unit.back() == 'I') unit.pop_back();  // "GiB"
   double scale = 1.0;
-  if (unit == "K") scale = 1024.0;
-  else if (unit == "M") scale = 1024.0 * 1024.0;
-  else if (unit == "G") scale = 1024.0 * 1024.0 * 1024.0;
-  else if (unit == "T") scale = 1024.0 * 1024.0 * 1024.0 * 1024.0;
-  else if (!unit.empty() && unit != "B") return std::nullopt;
+  if (unit == "K")
+    scale = 1024.0;
+  else if (unit == "M")
+    scale = 1024.0 * 1024.0;
+  else if (unit == "G")
+    scale = 1024.0 * 1024.0 * 1024.0;
+  else if (unit == "T")
+    scale = 1024.0 * 1024.0 * 1024.0 * 1024.0;
+  else if (!unit.empty() && unit != "B")
+    return std::nullopt;
   const double bytes = x * scale;
   if (!(bytes >= 1.0 && bytes < 1.8e19)) return std::nullopt;
   return static_cast<std::uint64_t>(bytes);

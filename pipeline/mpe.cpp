@@ -85,8 +85,7 @@ Mpe retinalNearIr(double nm, double t) {
                         "1050-1400 nm, 1.3e-5 to 10 s: 90 C_C t^0.75 J/m^2");
   }
   // 10 to 3e4 s: 5.0 C_C × 10⁻³ W/cm²
-  return fromIrradiance(50.0 * cc, t, MpeLimit::Thermal,
-                        "1050-1400 nm, 10 to 3e4 s: 50 C_C W/m^2");
+  return fromIrradiance(50.0 * cc, t, MpeLimit::Thermal, "1050-1400 nm, 10 to 3e4 s: 50 C_C W/m^2");
 }
 
 // Corneal and lens thermal, 1.4 µm to 1 mm: a constant radiant exposure up to `flat_until_s`,

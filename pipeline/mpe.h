@@ -18,7 +18,8 @@ struct Mpe {
   double irradiance_w_m2 = 0.0;        ///< MPE as mean irradiance over the exposure
   double radiant_exposure_j_m2 = 0.0;  ///< the same limit as energy per area (irradiance × t)
   MpeLimit limit = MpeLimit::Thermal;
-  std::string rule;  ///< the table row that applied, e.g. "400-700 nm, 5e-6-10 s: 18 C_A t^0.75 J/m²"
+  std::string
+      rule;  ///< the table row that applied, e.g. "400-700 nm, 5e-6-10 s: 18 C_A t^0.75 J/m²"
 };
 
 /// @brief The ocular MPE for intrabeam (point-source) viewing of a single exposure of

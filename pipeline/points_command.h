@@ -15,15 +15,15 @@ namespace glint {
 struct PointsArgs {
   std::string scene_path;
   std::string points_path;
-  std::string out_path = "-";          ///< "-" writes the table to standard output
-  std::optional<double> tolerance;     ///< overrides the scene's accuracy.tolerance
-  std::optional<int> uniform_level;    ///< the uniform twin instead of adaptive refinement
-  std::optional<NormalModel> normals;  ///< overrides the scene's accuracy.normals
+  std::string out_path = "-";               ///< "-" writes the table to standard output
+  std::optional<double> tolerance;          ///< overrides the scene's accuracy.tolerance
+  std::optional<int> uniform_level;         ///< the uniform twin instead of adaptive refinement
+  std::optional<NormalModel> normals;       ///< overrides the scene's accuracy.normals
   std::optional<IntegrationScheme> scheme;  ///< overrides the scene's accuracy.scheme
-  int threads = 0;                     ///< 0: all cores
-  bool quiet = false;                  ///< no progress, no summary
-  bool terminal = false;               ///< standard error is a terminal (progress redraws)
-  std::uint64_t memory_bytes = 0;      ///< the memory budget; 0: defaultMemoryBudgetBytes()
+  int threads = 0;                          ///< 0: all cores
+  bool quiet = false;                       ///< no progress, no summary
+  bool terminal = false;                    ///< standard error is a terminal (progress redraws)
+  std::uint64_t memory_bytes = 0;           ///< the memory budget; 0: defaultMemoryBudgetBytes()
 };
 
 /// @brief Runs the command. Inputs are validated and the output file opened before any work.

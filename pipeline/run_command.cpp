@@ -82,12 +82,9 @@ void printUnconverged(std::ostream& err, const FieldStats& s, const HazardZone& 
 }
 
 nlohmann::json targetJson(const CullStats& cull) {
-  return {{"coarse_facets", cull.coarse_facets},
-          {"lit", cull.lit},
-          {"facing_away", cull.facing_away},
-          {"outside_beam", cull.outside_beam},
-          {"shadowed", cull.shadowed},
-          {"degenerate", cull.degenerate},
+  return {{"coarse_facets", cull.coarse_facets}, {"lit", cull.lit},
+          {"facing_away", cull.facing_away},     {"outside_beam", cull.outside_beam},
+          {"shadowed", cull.shadowed},           {"degenerate", cull.degenerate},
           {"occlusion_rays", cull.occlusion}};
 }
 
@@ -186,9 +183,8 @@ void printVolume(std::ostream& err, const ObserverField& field, const Scene& sce
       << " proven below the floor, " << s.excluded_points << " inside the target\n";
   if (!uniform) {
     err << "  blocks: " << s.blocks_skipped << " skipped, " << s.blocks_accepted << " accepted ("
-        << s.blocks_accepted_spread << " as E·r or E·r²), "
-        << s.blocks_refined << " refined, " << s.blocks_finest << " at the finest level ("
-        << s.levels + 1 << " levels)\n";
+        << s.blocks_accepted_spread << " as E·r or E·r²), " << s.blocks_refined << " refined, "
+        << s.blocks_finest << " at the finest level (" << s.levels + 1 << " levels)\n";
   }
   err << "  evaluations: " << formatNumber("%.4g", static_cast<double>(s.evaluations)) << " in "
       << formatDuration(s.seconds) << "\n";
@@ -242,7 +238,8 @@ FieldResult computeObserverField(const SceneTarget& target, const Scene& scene,
   WorkCounter counter;
   counter.stop = &watch.stopFlag();
   std::unique_ptr<ProgressReporter> progress;
-  if (!args.quiet) progress = std::make_unique<ProgressReporter>(err, args.terminal, what, 0, counter);
+  if (!args.quiet)
+    progress = std::make_unique<ProgressReporter>(err, args.terminal, what, 0, counter);
   try {
     r.field = std::make_unique<ObserverField>(
         args.uniform
@@ -294,11 +291,12 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
                       {"pixel_m", spec.voxel_m},
                       {"tolerance", spec.tolerance},
                       {"floor_w_m2", spec.floor_w_m2},
-                      {"points", {{"evaluated", s.evaluated_points},
-                                  {"interpolated", s.interpolated_points},
-                                  {"proven_below_floor", s.below_floor_points},
-                                  {"inside_target", s.excluded_points},
-                                  {"unconverged", s.unconverged_points}}},
+                      {"points",
+                       {{"evaluated", s.evaluated_points},
+                        {"interpolated", s.interpolated_points},
+                        {"proven_below_floor", s.below_floor_points},
+                        {"inside_target", s.excluded_points},
+                        {"unconverged", s.unconverged_points}}},
                       {"evaluations", s.evaluations},
                       {"seconds", s.seconds},
                       {"peak_irradiance_w_m2", s.peak_w_m2},
@@ -469,7 +467,8 @@ void requireFinite(const ObserverField& field, const std::string& region) {
   }
   if (!std::isfinite(s.peak_w_m2) || !(s.peak_w_m2 >= 0.0) ||
       std::isnan(s.unconverged_max_upper_w_m2)) {
-    throw std::runtime_error(region + ": the peak irradiance is not a finite number; nothing "
+    throw std::runtime_error(region +
+                             ": the peak irradiance is not a finite number; nothing "
                              "was written");
   }
 }
@@ -565,8 +564,7 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   std::optional<FarField> far;
   FarHazard far_hazard;
   if (scene.far_field.enabled) {
-    far.emplace(
-        sceneFarField(target, scene, watch, "the far field", args.quiet ? nullptr : &err,
+    far.emplace(sceneFarField(target, scene, watch, "the far field", args.quiet ? nullptr : &err,
                               args.terminal, exchange));
     far_hazard = farHazard(*far, scene.hazard);
   }

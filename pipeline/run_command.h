@@ -25,7 +25,7 @@ struct RunArgs {
   int threads = 0;       ///< 0: all cores
   bool quiet = false;    ///< no progress, no summary
   bool terminal = false;
-  std::uint64_t memory_bytes = 0;  ///< the memory budget; 0: defaultMemoryBudgetBytes()
+  std::uint64_t memory_bytes = 0;           ///< the memory budget; 0: defaultMemoryBudgetBytes()
   std::optional<IntegrationScheme> scheme;  ///< overrides the scene's accuracy.scheme
 };
 

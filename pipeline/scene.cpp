@@ -63,8 +63,9 @@ HazardSpec readExposure(ObjectReader& r, const LaserSpec& laser,
                         const std::optional<PulseSpec>& pulse) {
   HazardSpec h;
   if (!(laser.wavelength_nm >= 400.0 && laser.wavelength_nm <= 1.0e6)) {
-    r.fail("wavelength_nm", "must be in 400 nm to 1 mm, the range of the MPE table (ANSI "
-                            "Z136.1 / IEC 60825-1) that glint's hazard uses");
+    r.fail("wavelength_nm",
+           "must be in 400 nm to 1 mm, the range of the MPE table (ANSI "
+           "Z136.1 / IEC 60825-1) that glint's hazard uses");
   }
   h.pulse = pulse;
   h.exposure_default = !laser.exposure_s.has_value();
@@ -229,7 +230,7 @@ MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder, const Gl
   const std::string file = r.string("file");
   m.file = folder / file;
   const std::size_t surface = r.choice("surface", {"pn", "quadric_fit", "flat"}, 0);
-  m.surface = surface == 0 ? MeshSurface::PN
+  m.surface = surface == 0   ? MeshSurface::PN
               : surface == 1 ? MeshSurface::QuadricFit
                              : MeshSurface::Flat;
   m.crease_angle_deg = r.number("crease_angle_deg", m.crease_angle_deg);
@@ -355,8 +356,8 @@ double blockSize(ObjectReader& r, const char* block_key, const char* lattice_key
   const double ratio = block_m / lattice_m;
   const double power = std::round(std::log2(ratio));
   if (!(ratio >= 1.0) || std::abs(ratio - std::exp2(power)) > 1e-9 * ratio || power > 12) {
-    r.fail(block_key, std::string("must be ") + lattice_key +
-                          " times a power of two (1, 2, 4, ..., 4096)");
+    r.fail(block_key,
+           std::string("must be ") + lattice_key + " times a power of two (1, 2, 4, ..., 4096)");
   }
   return lattice_m * std::exp2(power);
 }
@@ -379,8 +380,8 @@ ObserversSpec readObservers(ObjectReader r) {
   for (int a = 0; a < 3; ++a) {
     if (!(o.max_m[a] > o.min_m[a])) r.fail("max", "must exceed min on every axis");
   }
-  o.voxel_m = inRange(r, "voxel_m", r.number("voxel_m"), limits::kMinLengthM,
-                      limits::kMaxLengthM, "m");
+  o.voxel_m =
+      inRange(r, "voxel_m", r.number("voxel_m"), limits::kMinLengthM, limits::kMaxLengthM, "m");
   const Vec3 extent = o.max_m - o.min_m;
   const double longest = std::max({extent.x, extent.y, extent.z});
   // Bounds the lattice (and the dense twin) to what a 32-bit OpenVDB index and memory allow.
@@ -395,11 +396,11 @@ ObserversSpec readObservers(ObjectReader r) {
 PlaneSpec readPlane(ObjectReader r, const std::vector<PlaneSpec>& earlier) {
   PlaneSpec p;
   p.name = r.string("name");
-  const bool safe = !p.name.empty() && p.name.size() <= 64 &&
-                    std::all_of(p.name.begin(), p.name.end(), [](char c) {
-                      return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' ||
-                             c == '-';
-                    });
+  const bool safe =
+      !p.name.empty() && p.name.size() <= 64 &&
+      std::all_of(p.name.begin(), p.name.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '-';
+      });
   if (!safe) r.fail("name", "must be 1 to 64 letters, digits, '_' or '-' (it names the .exr file)");
   for (const PlaneSpec& e : earlier) {
     if (e.name == p.name) r.fail("name", "\"" + p.name + "\" names two planes");
@@ -421,8 +422,8 @@ PlaneSpec readPlane(ObjectReader r, const std::vector<PlaneSpec>& earlier) {
         p.height_m <= 2.0 * limits::kMaxCoordinateM)) {
     r.fail("size_m", "must be > 0 and at most 2e7 m");
   }
-  p.pixel_m = inRange(r, "pixel_m", r.number("pixel_m"), limits::kMinLengthM,
-                      limits::kMaxLengthM, "m");
+  p.pixel_m =
+      inRange(r, "pixel_m", r.number("pixel_m"), limits::kMinLengthM, limits::kMaxLengthM, "m");
   if (std::max(p.width_m, p.height_m) / p.pixel_m > 65536.0)
     r.fail("pixel_m", "gives more than 65536 pixels along an axis");
   p.block_m = blockSize(r, "block_m", "pixel_m", p.pixel_m);
@@ -483,9 +484,9 @@ Scene parseScene(std::string_view text, const std::string& source,
     r.fail("objects", "must be a non-empty array of objects");
   }
   for (std::size_t i = 0; i < objects.size(); ++i) {
-    scene.objects.push_back(readObject(
-        ObjectReader(objects[i], "/objects/" + std::to_string(i), source), scene.materials, base,
-        mesh_limits));
+    scene.objects.push_back(
+        readObject(ObjectReader(objects[i], "/objects/" + std::to_string(i), source),
+                   scene.materials, base, mesh_limits));
   }
 
   if (r.has("accuracy")) scene.accuracy = readAccuracy(r.object("accuracy"));
@@ -494,8 +495,8 @@ Scene parseScene(std::string_view text, const std::string& source,
     const json& planes = r.require("planes");
     if (!planes.is_array()) r.fail("planes", "must be an array of planes");
     for (std::size_t i = 0; i < planes.size(); ++i) {
-      scene.planes.push_back(readPlane(
-          ObjectReader(planes[i], "/planes/" + std::to_string(i), source), scene.planes));
+      scene.planes.push_back(
+          readPlane(ObjectReader(planes[i], "/planes/" + std::to_string(i), source), scene.planes));
     }
   }
   if (r.has("far_field")) scene.far_field = readFarField(r.object("far_field"));
@@ -520,8 +521,7 @@ std::string readUserFile(const std::filesystem::path& path, const std::string& w
     if (text.size() + got > max_bytes) {
       char limit[32];
       std::snprintf(limit, sizeof limit, "%.3g", static_cast<double>(max_bytes) / (1 << 20));
-      throw InputError(name + ": longer than " + limit + " MiB, more than a " + what +
-                       " may be");
+      throw InputError(name + ": longer than " + limit + " MiB, more than a " + what + " may be");
     }
     text.append(chunk.data(), got);
   }

@@ -64,9 +64,9 @@ struct MeshSpec {
   double crease_angle_deg = 30.0;  ///< for normals the file does not give
   /// Rotated and scaled, relative to transform.translation_m (the object's centre_m).
   std::shared_ptr<const TriangleMesh> mesh;
-  std::size_t normals_computed = 0;     ///< triangle corners given crease-angle normals
-  std::size_t primitives_skipped = 0;   ///< points and lines in the file
-  std::size_t mirrored_instances = 0;   ///< node instances with a negative determinant
+  std::size_t normals_computed = 0;    ///< triangle corners given crease-angle normals
+  std::size_t primitives_skipped = 0;  ///< points and lines in the file
+  std::size_t mirrored_instances = 0;  ///< node instances with a negative determinant
 };
 
 /// @brief One object (key `objects/<i>`).
@@ -75,9 +75,9 @@ struct ObjectSpec {
   Vec3 center_m{0.0};
   Vec3 axis{0.0, 0.0, 1.0};  ///< unit: cylinder `axis` or disk `normal`
   double radius_m = 0.0;
-  double length_m = 0.0;       ///< cylinder only
-  std::uint32_t material = 0;  ///< index into Scene::materials
-  int segments = 16;           ///< coarse facets around the circumference
+  double length_m = 0.0;         ///< cylinder only
+  std::uint32_t material = 0;    ///< index into Scene::materials
+  int segments = 16;             ///< coarse facets around the circumference
   std::optional<MeshSpec> mesh;  ///< mesh only; centre_m is its translation
 };
 

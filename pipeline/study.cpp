@@ -72,8 +72,8 @@ std::vector<Pose> readTrajectory(ObjectReader r) {
   if (!list.is_array() || list.empty()) r.fail("poses", "must be a non-empty array of poses");
   std::vector<Pose> keys;
   for (std::size_t i = 0; i < list.size(); ++i) {
-    keys.push_back(readPose(ObjectReader(list[i], r.at("poses") + "/" + std::to_string(i),
-                                         r.source())));
+    keys.push_back(
+        readPose(ObjectReader(list[i], r.at("poses") + "/" + std::to_string(i), r.source())));
     if (i > 0 && !(keys[i].time_s > keys[i - 1].time_s))
       r.fail("poses", "times must increase from pose to pose (pose " + std::to_string(i) + ")");
   }
@@ -91,13 +91,15 @@ std::vector<Pose> readTrajectory(ObjectReader r) {
     while (seg + 2 < keys.size() && t > keys[seg + 1].time_s) ++seg;
     const Pose& a = keys[seg];
     const Pose& b = keys[std::min(seg + 1, keys.size() - 1)];
-    const double w = b.time_s > a.time_s ? std::clamp((t - a.time_s) / (b.time_s - a.time_s), 0.0, 1.0) : 0.0;
+    const double w =
+        b.time_s > a.time_s ? std::clamp((t - a.time_s) / (b.time_s - a.time_s), 0.0, 1.0) : 0.0;
     auto mix = [w](double x, double y) { return x + w * (y - x); };
     out.push_back({t, a.offset_m + w * (b.offset_m - a.offset_m), mix(a.yaw_deg, b.yaw_deg),
                    mix(a.pitch_deg, b.pitch_deg), mix(a.roll_deg, b.roll_deg)});
   }
   // The last key pose belongs to the trajectory even when step_s does not land on it.
-  if (out.back().time_s < keys.back().time_s - 1e-9 * std::max(1.0, span)) out.push_back(keys.back());
+  if (out.back().time_s < keys.back().time_s - 1e-9 * std::max(1.0, span))
+    out.push_back(keys.back());
   return out;
 }
 
@@ -154,8 +156,8 @@ Study parseStudy(std::string_view text, const std::string& source,
 
   Vec3 sum(0.0);
   for (const ObjectSpec& o : study.base.objects) sum += o.center_m;
-  study.pivot_m = r.has("pivot") ? r.vec3("pivot")
-                                 : sum / static_cast<double>(study.base.objects.size());
+  study.pivot_m =
+      r.has("pivot") ? r.vec3("pivot") : sum / static_cast<double>(study.base.objects.size());
 
   std::vector<double> yaw{0.0}, pitch{0.0}, roll{0.0};
   std::vector<std::optional<double>> sigma{std::nullopt}, reflectance{std::nullopt};
@@ -254,7 +256,9 @@ std::string scenarioSceneJson(const Study& study, const Scenario& s) {
   // The scenario's own angles first, then its pose's.
   const glm::dquat turn = yawPitchRoll(s.pose.yaw_deg, s.pose.pitch_deg, s.pose.roll_deg) *
                           yawPitchRoll(s.yaw_deg, s.pitch_deg, s.roll_deg);
-  auto vec = [](const json& j) { return Vec3(j[0].get<double>(), j[1].get<double>(), j[2].get<double>()); };
+  auto vec = [](const json& j) {
+    return Vec3(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
+  };
   for (std::size_t i = 0; i < scene["objects"].size(); ++i) {
     json& o = scene["objects"][i];
     const ObjectSpec& base = study.base.objects[i];

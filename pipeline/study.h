@@ -51,7 +51,7 @@ struct Study {
   std::filesystem::path scene_path;  ///< the base scene (relative to the study file)
   std::string scene_text;            ///< its bytes
   Scene base;
-  Vec3 pivot_m{0.0};  ///< centre of the target's turns (default: mean of object centres)
+  Vec3 pivot_m{0.0};     ///< centre of the target's turns (default: mean of object centres)
   std::string material;  ///< the material the σ and reflectance sweeps change ("": all)
   double jitter_sigma_rad = 0.0;
   std::uint64_t jitter_seed = 0;

@@ -68,7 +68,8 @@ PatchGeometry SurfaceCache::geometry(const Target& target, const SurfaceMap& map
 
 SubFacet SurfaceCache::subFacet(const SurfaceMap& map, const std::array<Vec3, 3>& bary,
                                 std::uint8_t depth, std::uint8_t rim_edges) {
-  return map.subFacet(bary, depth, rim_edges, {at(map, bary[0]), at(map, bary[1]), at(map, bary[2])});
+  return map.subFacet(bary, depth, rim_edges,
+                      {at(map, bary[0]), at(map, bary[1]), at(map, bary[2])});
 }
 
 std::array<SubFacet, 4> SurfaceCache::split(const SurfaceMap& map, const SubFacet& f) {

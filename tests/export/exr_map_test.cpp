@@ -68,8 +68,8 @@ TEST(ExrMap, ChannelsAreFloatAndKeepValuesBeyondHalfRange) {
                                              sizeof(float), 3 * sizeof(float)));
   frame.insert("hazard_ratio", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(ratio.data()),
                                           sizeof(float), 3 * sizeof(float)));
-  frame.insert("level", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(level.data()),
-                                   sizeof(float), 3 * sizeof(float)));
+  frame.insert("level", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(level.data()), sizeof(float),
+                                   3 * sizeof(float)));
   frame.insert("status", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(status.data()),
                                     sizeof(float), 3 * sizeof(float)));
   file.setFrameBuffer(frame);
@@ -79,7 +79,8 @@ TEST(ExrMap, ChannelsAreFloatAndKeepValuesBeyondHalfRange) {
     for (int i = 0; i < 3; ++i) {
       const std::size_t image = static_cast<std::size_t>(3 * y + i);
       const std::size_t lattice = static_cast<std::size_t>(3 * (1 - y) + i);
-      EXPECT_EQ(irradiance[image], map.irradiance_w_m2[lattice]) << "bit for bit, " << i << "," << y;
+      EXPECT_EQ(irradiance[image], map.irradiance_w_m2[lattice])
+          << "bit for bit, " << i << "," << y;
       EXPECT_EQ(ratio[image], map.hazard_ratio[lattice]) << i << "," << y;
       EXPECT_EQ(level[image], map.level[lattice]) << i << "," << y;
       EXPECT_EQ(status[image], map.status[lattice]) << i << "," << y;

@@ -150,7 +150,7 @@ TEST_P(CrossCheck, ConvergedObserversAreWithinTheirToleranceOfABruteForceReferen
   options.scheme = GetParam();
   int converged = 0, lit = 0;
   std::vector<std::int64_t> evaluations;
-  double worst = 0.0;  // achieved error over what was allowed
+  double worst = 0.0;      // achieved error over what was allowed
   int estimate_below = 0;  // converged observers whose own error estimate is below their error
   for (int k = 0; k < kCases; ++k) {
     const CrossCheckCase c = drawCase(rng, k);

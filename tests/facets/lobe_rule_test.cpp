@@ -34,17 +34,19 @@ double density(const Vec2& y) { return std::exp(-0.5 * glm::dot(y, y)) / (2.0 * 
 
 TEST(StandardNormalOverPolygon, MomentsMatchQuadratureInsideAcrossAndFarOutside) {
   // Triangles holding the origin, cut by it, thin, and deep in the tail (mass 3e-5 and 1e-19).
-  const std::vector<std::array<Vec2, 3>> triangles{
-      {Vec2(-1, -1), Vec2(2, -0.5), Vec2(0.3, 1.5)}, {Vec2(1, 1), Vec2(3, 1), Vec2(1, 2)},
-      {Vec2(-3, 0.2), Vec2(3, 0.2), Vec2(0, 0.25)},  {Vec2(2, -0.1), Vec2(4, 0.1), Vec2(3, 3)},
-      {Vec2(8, -1), Vec2(10, 0), Vec2(8, 1)}};
+  const std::vector<std::array<Vec2, 3>> triangles{{Vec2(-1, -1), Vec2(2, -0.5), Vec2(0.3, 1.5)},
+                                                   {Vec2(1, 1), Vec2(3, 1), Vec2(1, 2)},
+                                                   {Vec2(-3, 0.2), Vec2(3, 0.2), Vec2(0, 0.25)},
+                                                   {Vec2(2, -0.1), Vec2(4, 0.1), Vec2(3, 3)},
+                                                   {Vec2(8, -1), Vec2(10, 0), Vec2(8, 1)}};
   for (const auto& t : triangles) {
     const NormalMoments m = standardNormalOverPolygon(t);
     // The centroid rule's error is O(h²) of the density's curvature: 2000² pieces leave ~1e-7
     // of the mass, more where the density is steep (the last, tail triangle).
     const int n = 2000;
     const double mass = bruteTriangle(t[0], t[1], t[2], n, density);
-    const double mx = bruteTriangle(t[0], t[1], t[2], n, [](const Vec2& y) { return y.x * density(y); });
+    const double mx =
+        bruteTriangle(t[0], t[1], t[2], n, [](const Vec2& y) { return y.x * density(y); });
     const double myy =
         bruteTriangle(t[0], t[1], t[2], n, [](const Vec2& y) { return y.y * y.y * density(y); });
     EXPECT_NEAR(m.mass / mass, 1.0, 1e-5) << "triangle from " << t[0].x << "," << t[0].y;
@@ -141,18 +143,18 @@ TEST(StandardNormalOverPolygon, SmallPolygonsFarInTheTailKeepMassMeanAndCovarian
 TEST(StandardNormalOverPolygon, IsContinuousAsTheOriginCrossesAVertexOrAnEdge) {
   // Rounding must not decide which side of a vertex the origin is on: the mass moves by no
   // more than the density times the displacement times the triangle's extent.
-  const NormalMoments at = standardNormalOverPolygon(std::array<Vec2, 3>{
-      Vec2(0, 0), Vec2(3, 0.5), Vec2(1, 4)});
+  const NormalMoments at =
+      standardNormalOverPolygon(std::array<Vec2, 3>{Vec2(0, 0), Vec2(3, 0.5), Vec2(1, 4)});
   for (double e : {1e-17, -1e-17, 1e-12, -1e-12}) {
     for (double f : {1e-17, -1e-17, 0.0}) {
-      const NormalMoments m = standardNormalOverPolygon(std::array<Vec2, 3>{
-          Vec2(e, f), Vec2(3, 0.5), Vec2(1, 4)});
+      const NormalMoments m =
+          standardNormalOverPolygon(std::array<Vec2, 3>{Vec2(e, f), Vec2(3, 0.5), Vec2(1, 4)});
       EXPECT_NEAR(m.mass, at.mass, 1e-11) << "vertex at " << e << "," << f;
     }
   }
   // The origin exactly on an edge holds half of a symmetric polygon's mass.
-  const NormalMoments half = standardNormalOverPolygon(std::array<Vec2, 4>{
-      Vec2(-40, 0), Vec2(40, 0), Vec2(40, 40), Vec2(-40, 40)});
+  const NormalMoments half = standardNormalOverPolygon(
+      std::array<Vec2, 4>{Vec2(-40, 0), Vec2(40, 0), Vec2(40, 40), Vec2(-40, 40)});
   EXPECT_NEAR(half.mass, 0.5, 1e-15) << "the upper half plane";
 }
 

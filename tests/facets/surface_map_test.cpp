@@ -1,10 +1,11 @@
+#include "facets/surface_map.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
 
 #include "facets/detail/surface_cache.h"
-#include "facets/surface_map.h"
 #include "facets/tessellate.h"
 #include "facets/triangle_rule.h"
 
@@ -192,8 +193,8 @@ TEST(SurfaceCache, ReturnsBitForBitWhatItMemoisesAndForgetsOnAnotherTarget) {
   for (int pass = 0; pass < 2; ++pass) {  // the second pass is answered from the memo
     for (std::uint32_t i = 0; i < cyl.facetCount(); i += 7) {
       const SurfaceMap map(cyl, i);
-      std::vector<SubFacet> pieces{map.subFacet(coarseSubFacet(cyl, i).bary, 0,
-                                                coarseSubFacet(cyl, i).rim_edges)};
+      std::vector<SubFacet> pieces{
+          map.subFacet(coarseSubFacet(cyl, i).bary, 0, coarseSubFacet(cyl, i).rim_edges)};
       for (std::size_t k = 0; k < pieces.size(); ++k) {
         const SubFacet f = pieces[k];
         const PatchGeometry want = map.geometry(cyl, f);
@@ -209,8 +210,8 @@ TEST(SurfaceCache, ReturnsBitForBitWhatItMemoisesAndForgetsOnAnotherTarget) {
           for (int j = 0; j < 3; ++j) {
             EXPECT_EQ(children[c].corner_m[j], want_children[c].corner_m[j])
                 << "facet " << i << " depth " << int(f.depth) << " child " << c;
-            EXPECT_TRUE(same_point(cache.at(map, children[c].bary[j]),
-                                   map.at(children[c].bary[j])));
+            EXPECT_TRUE(
+                same_point(cache.at(map, children[c].bary[j]), map.at(children[c].bary[j])));
           }
           pieces.push_back(children[c]);
         }

@@ -35,11 +35,11 @@ TEST_P(SurfaceScheme, CylinderMatchesTheMirrorLineFocus) {
       options(1e-4));
   IntegratorWorkspace ws;
   // Far, and 5 cm off the surface (where the point-source form needs small pieces).
-  for (const Vec3& obs : {Vec3(-3.0, 0.0, 0.2), Vec3(-3.0 * std::cos(0.8), 3.0 * std::sin(0.8), 0.2),
-                          Vec3(-10.0 * std::cos(1.6), 10.0 * std::sin(1.6), 0.2),
-                          Vec3(-10.0 * std::cos(2.6), 10.0 * std::sin(2.6), 0.2),
-                          Vec3(-0.55, 0.0, 0.1),
-                          Vec3(-0.55 * std::cos(0.3), 0.55 * std::sin(0.3), -0.4)}) {
+  for (const Vec3& obs :
+       {Vec3(-3.0, 0.0, 0.2), Vec3(-3.0 * std::cos(0.8), 3.0 * std::sin(0.8), 0.2),
+        Vec3(-10.0 * std::cos(1.6), 10.0 * std::sin(1.6), 0.2),
+        Vec3(-10.0 * std::cos(2.6), 10.0 * std::sin(2.6), 0.2), Vec3(-0.55, 0.0, 0.1),
+        Vec3(-0.55 * std::cos(0.3), 0.55 * std::sin(0.3), -0.4)}) {
     {
       const double dist = glm::length(Vec3(obs.x, obs.y, 0.0));
       const double deg = std::atan2(obs.y, -obs.x) * 180.0 / kPi;
@@ -57,7 +57,9 @@ TEST_P(SurfaceScheme, SphereMatchesTheMirrorFocalLines) {
   const Beam beam = flatTop(Vec3(0), Vec3(0, 0, -1), e0, 1.0);
   const FacetIntegrator fi = test::singleObject(
       mirror(rho, 0.005), beam,
-      [&](Target& t, std::uint32_t m, Vec3 ref) { addSphere(t, {Vec3(0), radius}, m, 16, ref); },
+      [&](Target& t, std::uint32_t m, Vec3 ref) {
+        addSphere(t, {Vec3(0), radius}, m, 16, ref);
+      },
       options(1e-4, 1e-16));
   IntegratorWorkspace ws;
   // The focal-line form holds far from the sphere (its glint's offset from the centre is
@@ -65,8 +67,8 @@ TEST_P(SurfaceScheme, SphereMatchesTheMirrorFocalLines) {
   for (double d : {1000.0}) {
     for (double deg : {20.0, 60.0, 90.0, 120.0, 160.0}) {
       const double t = deg * kPi / 180.0;
-      const Vec3 obs = d * Vec3(std::sin(t) * std::cos(0.5), std::sin(t) * std::sin(0.5),
-                                std::cos(t));
+      const Vec3 obs =
+          d * Vec3(std::sin(t) * std::cos(0.5), std::sin(t) * std::sin(0.5), std::cos(t));
       const ObserverResult r = fi.adaptive(obs, ws);
       // Tolerance 1e-4 and the lobe's O(σ²): 2e-4, as for the paper's scheme.
       EXPECT_NEAR(r.irradiance_w_m2 / test::mirrorSphere(rho, e0, radius, obs), 1.0, 2e-4)

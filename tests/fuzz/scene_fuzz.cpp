@@ -9,9 +9,9 @@
 #include <optional>
 #include <string_view>
 
+#include "fuzz_limits.h"
 #include "pipeline/input_error.h"
 #include "pipeline/scene.h"
-#include "fuzz_limits.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const std::optional<std::filesystem::path> folder{GLINT_FUZZ_GLTF_DIR};

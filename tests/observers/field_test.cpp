@@ -1,6 +1,5 @@
 // The adaptive observer field against its uniform dense twin on the same lattice.
 #include "observers/field.h"
-#include "observers/field_compare.h"
 
 #include <gtest/gtest.h>
 
@@ -8,6 +7,7 @@
 #include <cstdio>
 #include <string>
 
+#include "observers/field_compare.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
 
@@ -200,8 +200,7 @@ TEST(ObserverPlane, PlaneThroughASmallMirrorIsRefinedAroundIt) {
   const ObserverField d = computeDenseField(p.integrator, spec, p.excluded);
   const HazardAgreement h = hazardAgreement(a, d, scene.hazard.mpe_w_m2);
   ASSERT_GT(h.dense_hazardous, 10) << "the premise: the pencil crosses the slice";
-  EXPECT_EQ(h.missed, 0) << "dense " << h.dense_hazardous << ", adaptive "
-                         << h.adaptive_hazardous;
+  EXPECT_EQ(h.missed, 0) << "dense " << h.dense_hazardous << ", adaptive " << h.adaptive_hazardous;
   Comparison c;
   c.fields = compareFields(a, d);
   c.adaptive = a.stats();
@@ -346,10 +345,11 @@ TEST(ObserverPlane, TiltedWallFindsTheNarrowGlintAsDense) {
 }
 
 TEST(ObserverPlane, HorizontalSliceAgreesWithTheBoxAtTheSameHeight) {
-  // A plane z = 0.25 (in the lit band) through the lattice of a box around the σ = 0.03 cylinder: the quadtree's
-  // points and the octree's at that height must agree within both fields' accuracy.
+  // A plane z = 0.25 (in the lit band) through the lattice of a box around the σ = 0.03 cylinder:
+  // the quadtree's points and the octree's at that height must agree within both fields' accuracy.
   const std::string box_json = sceneJson(
-      R"({"profile": "flat_top", "radius_m": 2.0})", R"({"specular_reflectance": 0.9, "sigma": 0.03})",
+      R"({"profile": "flat_top", "radius_m": 2.0})",
+      R"({"specular_reflectance": 0.9, "sigma": 0.03})",
       R"({"shape": "cylinder", "center": [0, 0, 0], "axis": [0, 0, 1], "radius": 0.5, "length": 1.0, "material": "m", "segments": 12})",
       R"({"min": [-3, -3, 0], "max": [3, 3, 1], "voxel_m": 0.25, "block_m": 1.0,
           "tolerance": 0.01, "floor_w_m2": 1e-2})");
@@ -374,7 +374,8 @@ TEST(ObserverPlane, HorizontalSliceAgreesWithTheBoxAtTheSameHeight) {
   const int k = 1;  // z = 0 + 1 × 0.25
   ASSERT_DOUBLE_EQ(box_spec.position(0, 0, k).z, 0.25);
   const auto n = spec.nodes();
-  const double allowed = 2.0 * (0.01 * std::max(box.stats().peak_w_m2, slice.stats().peak_w_m2) + 1e-2);
+  const double allowed =
+      2.0 * (0.01 * std::max(box.stats().peak_w_m2, slice.stats().peak_w_m2) + 1e-2);
   double worst = 0.0;
   int compared = 0;
   for (int i = 0; i < n[0]; ++i)

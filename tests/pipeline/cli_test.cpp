@@ -272,8 +272,8 @@ TEST_F(CliTest, MemoryIsBudgetedFromTheFirstByte) {
       << points.err;
 
   nlohmann::json scene = nlohmann::json::parse(readFile(example("disk_glint.json")));
-  scene["observers"] = {{"min", {-2000, -2000, -2000}}, {"max", {2000, 2000, 2000}},
-                        {"voxel_m", 0.0625}};
+  scene["observers"] = {
+      {"min", {-2000, -2000, -2000}}, {"max", {2000, 2000, 2000}}, {"voxel_m", 0.0625}};
   const std::string huge = write("huge.json", scene.dump());
   const Outcome refused = glint({"run", huge, "-o", path("huge"), "--memory", "16G"});
   EXPECT_EQ(refused.status, 2) << refused.err;
@@ -285,8 +285,8 @@ TEST_F(CliTest, MemoryIsBudgetedFromTheFirstByte) {
   // 125 000 coarse blocks with nothing to evaluate: a floor of 179 MB starts; the run itself
   // needs about 450 MB, so at 250 MB it is stopped by the watch, in the built program (this
   // test process's own memory must not count).
-  scene["observers"] = {{"min", {-50, -110, -50}}, {"max", {50, -10, 50}},
-                        {"voxel_m", 0.125}, {"block_m", 2.0}};
+  scene["observers"] = {
+      {"min", {-50, -110, -50}}, {"max", {50, -10, 50}}, {"voxel_m", 0.125}, {"block_m", 2.0}};
   const std::string big = write("big.json", scene.dump());
   const std::string cmd = std::string(GLINT_EXE) + " run " + big + " -o " + path("big") +
                           " --memory 250M 2> " + path("err.txt");

@@ -182,8 +182,9 @@ TEST(Examples, FinnedMissileRunsThroughGlintRun) {
   const std::filesystem::path out =
       std::filesystem::temp_directory_path() / "glint_finned_missile_run";
   std::filesystem::remove_all(out);
-  const auto r = test::glint({"run", std::string(GLINT_TEST_DATA_DIR) + "/finned_missile_coarse.json",
-                              "-o", out.string(), "--quiet"});
+  const auto r =
+      test::glint({"run", std::string(GLINT_TEST_DATA_DIR) + "/finned_missile_coarse.json", "-o",
+                   out.string(), "--quiet"});
   ASSERT_EQ(r.status, 0) << r.err;
   const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
   EXPECT_TRUE(summary["target"]["occlusion_rays"].get<bool>());

@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-
 #include <nlohmann/json.hpp>
 
 #include "pipeline/input_error.h"
@@ -338,7 +337,8 @@ TEST(SceneObservers, BoxLoadsWithDefaultsAndRefusesBadValues) {
     bad["observers"][key] = value;
     return refusal(bad);
   };
-  EXPECT_EQ(refused("voxel_m", 0.0), "scene.json: /observers/voxel_m: must be in [1e-06, 100000] m");
+  EXPECT_EQ(refused("voxel_m", 0.0),
+            "scene.json: /observers/voxel_m: must be in [1e-06, 100000] m");
   EXPECT_EQ(refused("block_m", 0.3),
             "scene.json: /observers/block_m: must be voxel_m times a power of two (1, 2, 4, "
             "..., 4096)");

@@ -49,7 +49,8 @@ TEST(Study, SweepsMultiplyInNestedOrderWithJitterInnermost) {
     EXPECT_EQ(c.index, i);
     EXPECT_EQ(c.jitter_sample, static_cast<int>(i % 2)) << "scenario " << i;
     ASSERT_TRUE(c.sigma.has_value());
-    EXPECT_NEAR(*c.sigma, 0.01 + 0.01 * static_cast<double>((i / 2) % 3), 1e-15) << "scenario " << i;
+    EXPECT_NEAR(*c.sigma, 0.01 + 0.01 * static_cast<double>((i / 2) % 3), 1e-15)
+        << "scenario " << i;
     EXPECT_EQ(c.yaw_deg, 10.0 * static_cast<double>(i / 6)) << "scenario " << i;
   }
   // Common random numbers: sample k has the same pointing error for every other parameter.
@@ -86,9 +87,9 @@ TEST(Study, TurnsAMeshAboutThePivotWithItsOwnRotation) {
                  "material": "m"}],
     "planes": [{"name": "p", "origin": [-5, -1, 0], "u_axis": [1, 0, 0], "v_axis": [0, 1, 0],
                 "size_m": [1, 1], "pixel_m": 0.5}]})";
-  const Study s = parseStudy(
-      R"({"scene": "mesh_scene.json", "pivot": [0, 0, 3], "sweep": {"yaw_deg": [90]}})",
-      "study.json", dir);
+  const Study s =
+      parseStudy(R"({"scene": "mesh_scene.json", "pivot": [0, 0, 3], "sweep": {"yaw_deg": [90]}})",
+                 "study.json", dir);
   const Scene scene = scenarioScene(s, s.scenarios[0]);
   ASSERT_TRUE(scene.objects[0].mesh);
   expectNear(scene.objects[0].center_m, Vec3(0, 2, 3), 1e-12, "the translation about the pivot");
@@ -121,8 +122,10 @@ TEST(Study, PointingJitterIsSeededGaussianAndReproducible) {
   const double sigma = 2e-3;
   const int n = 4000;
   const Study s = study(R"("pointing_jitter": {"sigma_rad": 2e-3, "samples": 4000, "seed": 11})");
-  const Study again = study(R"("pointing_jitter": {"sigma_rad": 2e-3, "samples": 4000, "seed": 11})");
-  const Study other = study(R"("pointing_jitter": {"sigma_rad": 2e-3, "samples": 4000, "seed": 12})");
+  const Study again =
+      study(R"("pointing_jitter": {"sigma_rad": 2e-3, "samples": 4000, "seed": 11})");
+  const Study other =
+      study(R"("pointing_jitter": {"sigma_rad": 2e-3, "samples": 4000, "seed": 12})");
   double sum = 0.0, sum2 = 0.0;
   int differ = 0;
   for (int k = 0; k < n; ++k) {
@@ -152,8 +155,8 @@ TEST(Study, MaterialSweepChangesOnlyTheNamedMaterial) {
   const Study s = study(R"("sweep": {"specular_reflectance": [0.5, 0.7], "material": "polished"})");
   ASSERT_EQ(s.scenarios.size(), 2u);
   EXPECT_DOUBLE_EQ(scenarioScene(s, s.scenarios[1]).materials[0].specular_reflectance, 0.7);
-  EXPECT_NE(refusal(R"("sweep": {"sigma": [0.1], "material": "matte"})").find(
-                "/sweep/material: the scene has no material \"matte\""),
+  EXPECT_NE(refusal(R"("sweep": {"sigma": [0.1], "material": "matte"})")
+                .find("/sweep/material: the scene has no material \"matte\""),
             std::string::npos);
 }
 

@@ -51,8 +51,7 @@ inline double mirrorCylinder(double rho, double e0, double radius, const Vec3& o
 
 // A Lambertian disk of radius R lit at cos θi by irradiance e0, seen on its axis at height h:
 // E = ∫ (ρd/π) e0 cos θi cos θr / d² dA = 2 ρd e0 cos θi (1 − h / √(R² + h²)).
-inline double lambertianDiskOnAxis(double rho_d, double e0, double cos_i, double radius,
-                                   double h) {
+inline double lambertianDiskOnAxis(double rho_d, double e0, double cos_i, double radius, double h) {
   return 2.0 * rho_d * e0 * cos_i * (1.0 - h / std::hypot(radius, h));
 }
 
