@@ -47,11 +47,6 @@ constexpr double kAmrPointBudget = 16.7e6;
 // Each AMR block is a file: a folder of many thousands is slow to open and to copy.
 constexpr std::size_t kAmrFileBudget = 10000;
 
-// irradiance / MPE as hazardRatio() (export/field_files.h) forms it: in double, stored as float.
-float ratioOf(float irradiance_w_m2, double mpe_w_m2) {
-  return static_cast<float>(static_cast<double>(irradiance_w_m2) / mpe_w_m2);
-}
-
 // ZLib-compressed arrays, inline (see the header: appended data is unreadable under expat 2.6),
 // with 64-bit headers so an array may pass 4 GB.
 void configure(vtkXMLWriter& writer) {
@@ -97,6 +92,18 @@ vtkNew<Array> namedArray(const char* name, vtkIdType tuples, int components = 1)
   a->SetNumberOfComponents(components);
   a->SetNumberOfTuples(tuples);
   return a;
+}
+
+// Adds `hazard_ratio` beside the @p n irradiance values @p e where there is an MPE: irradiance /
+// MPE as hazardRatio() (export/field_files.h) forms it, in double, stored as float.
+void addHazardRatio(vtkPointData& data, const float* e, vtkIdType n, double mpe_w_m2) {
+  if (!(mpe_w_m2 > 0.0)) return;
+  auto ratio = namedArray<vtkFloatArray>("hazard_ratio", n);
+  float* r = ratio->GetPointer(0);
+  for (vtkIdType q = 0; q < n; ++q) {
+    r[q] = static_cast<float>(static_cast<double>(e[q]) / mpe_w_m2);
+  }
+  data.AddArray(ratio);
 }
 
 // Cells from offsets (starting at 0, one past each cell) and connectivity, 64-bit.
@@ -262,12 +269,7 @@ void writeVti(std::ostream& out, const ObserverField& field, int stride, double 
   image->SetSpacing(h, h, h);
   vtkPointData* data = image->GetPointData();
   data->AddArray(irradiance);
-  if (mpe_w_m2 > 0.0) {
-    auto ratio = namedArray<vtkFloatArray>("hazard_ratio", count);
-    float* r = ratio->GetPointer(0);
-    for (vtkIdType q = 0; q < count; ++q) r[q] = ratioOf(e[q], mpe_w_m2);
-    data->AddArray(ratio);
-  }
+  addHazardRatio(*data, e, count, mpe_w_m2);
   data->AddArray(level);
   data->AddArray(status);
   data->SetActiveScalars("irradiance_w_m2");
@@ -318,11 +320,7 @@ void writeBlocksVtu(std::ostream& out, const ObserverField& field, double mpe_w_
   auto e = namedArray<vtkFloatArray>("irradiance_w_m2", n_points);
   std::copy(irradiance.begin(), irradiance.end(), e->GetPointer(0));
   grid->GetPointData()->AddArray(e);
-  if (mpe_w_m2 > 0.0) {
-    auto ratio = namedArray<vtkFloatArray>("hazard_ratio", n_points);
-    for (vtkIdType q = 0; q < n_points; ++q) ratio->SetValue(q, ratioOf(irradiance[q], mpe_w_m2));
-    grid->GetPointData()->AddArray(ratio);
-  }
+  addHazardRatio(*grid->GetPointData(), irradiance.data(), n_points, mpe_w_m2);
   grid->GetPointData()->SetActiveScalars("irradiance_w_m2");
   const auto n_cells = static_cast<vtkIdType>(level.size());
   auto lv = namedArray<vtkIntArray>("refinement_level", n_cells);
@@ -495,11 +493,7 @@ StagedAmr writeAmr(const std::filesystem::path& vthb_path, const ObserverField& 
             v[p] = ia.isValueOn(c) ? ia.getValue(c) : 0.0f;
           }
       grid->GetPointData()->AddArray(e);
-      if (mpe_w_m2 > 0.0) {
-        auto ratio = namedArray<vtkFloatArray>("hazard_ratio", count);
-        for (vtkIdType q = 0; q < count; ++q) ratio->SetValue(q, ratioOf(v[q], mpe_w_m2));
-        grid->GetPointData()->AddArray(ratio);
-      }
+      addHazardRatio(*grid->GetPointData(), v, count, mpe_w_m2);
       grid->GetPointData()->SetActiveScalars("irradiance_w_m2");
       amr->SetDataSet(static_cast<unsigned>(l), static_cast<unsigned>(b), grid);
     }

@@ -254,7 +254,8 @@ FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& 
   return {ball, spec, distance_m, std::move(faces)};
 }
 
-LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2, double extinction_per_m) {
+LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2, double extinction_per_m,
+                      double aided_mpe_w_m2) {
   LatLongMap m;
   m.height = height;
   m.width = 2 * height;
@@ -274,14 +275,21 @@ LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2, double
     double& c = cell[static_cast<std::size_t>(j) * w + static_cast<std::size_t>(i)];
     c = std::max(c, hazardSafe(intensity_w_sr));
   });
+  // The hazard distance toward the pixel where it lies beyond the far radius there, else 0.
+  const double source_m = field.ball().radius_m;
+  auto reach = [&](double intensity, double threshold_w_m2, const Vec3& d) {
+    const double nohd = hazardDistance(intensity, threshold_w_m2, extinction_per_m, source_m);
+    return nohd >= farRadiusToward(field.spec(), d)
+               ? static_cast<float>(std::min<double>(nohd, FLT_MAX))
+               : 0.0f;
+  };
   m.nohd_m.resize(cell.size());
+  if (aided_mpe_w_m2 > 0.0) m.aided_nohd_m.resize(cell.size());
   for (std::size_t p = 0; p < cell.size(); ++p) {
     const Vec3 d = latLongDirection(p, m.width, height);
     m.intensity_w_sr[p] = static_cast<float>(std::min<double>(cell[p], FLT_MAX));
-    const double nohd = hazardDistance(cell[p], mpe_w_m2, extinction_per_m, field.ball().radius_m);
-    m.nohd_m[p] = nohd >= farRadiusToward(field.spec(), d)
-                      ? static_cast<float>(std::min<double>(nohd, FLT_MAX))
-                      : 0.0f;
+    m.nohd_m[p] = reach(cell[p], mpe_w_m2, d);
+    if (aided_mpe_w_m2 > 0.0) m.aided_nohd_m[p] = reach(cell[p], aided_mpe_w_m2, d);
   }
   return m;
 }

@@ -182,9 +182,11 @@ struct LatLongMap {
   /// hazardDistance(I, MPE, μ) where that is at least the far radius toward the pixel's centre; 0
   /// where the hazard, if any, ends nearer.
   std::vector<float> nohd_m;
+  /// As nohd_m for the threshold @p aided_mpe_w_m2 (an optical aid's); empty without one.
+  std::vector<float> aided_nohd_m;
 };
 LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2,
-                      double extinction_per_m = 0.0);
+                      double extinction_per_m = 0.0, double aided_mpe_w_m2 = 0.0);
 
 /// @brief The hazard boundary as a closed surface about the lit centre: a cube-sphere of
 /// cells_per_face² quads per face, each vertex at the distance √(I/MPE) of its direction where

@@ -276,8 +276,8 @@ void checkRegionMemory(const FieldSpec& spec, const std::string& what, const Run
 }
 
 // A plane's lattice points stand for pixel_m² each.
-double hazardousArea(const ObserverField& field, const HazardZone& zone) {
-  return static_cast<double>(zone.above_mpe.points) * field.spec().voxel_m * field.spec().voxel_m;
+double hazardousArea(const ObserverField& field, const ObserverField::Exceedance& zone) {
+  return static_cast<double>(zone.points) * field.spec().voxel_m * field.spec().voxel_m;
 }
 
 nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
@@ -302,11 +302,10 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
                       {"peak_irradiance_w_m2", s.peak_w_m2},
                       {"peak_at_m", {s.peak_at_m.x, s.peak_at_m.y, s.peak_at_m.z}},
                       {"peak_hazard_ratio", zone.peak_ratio},
-                      {"hazardous_area_m2", hazardousArea(field, zone)}};
+                      {"hazardous_area_m2", hazardousArea(field, zone.above_mpe)}};
   if (zone.aided_above_mpe) {
     j["aided_peak_hazard_ratio"] = zone.aided_peak_ratio;
-    j["aided_hazardous_area_m2"] =
-        static_cast<double>(zone.aided_above_mpe->points) * spec.voxel_m * spec.voxel_m;
+    j["aided_hazardous_area_m2"] = hazardousArea(field, *zone.aided_above_mpe);
   }
   if (s.unconverged_points > 0) j["unconverged"] = unconvergedJson(s, zone);
   if (r.points > 0) {
@@ -640,7 +639,7 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
             << formatNumber("%.4g", static_cast<double>(s.evaluations)) << " evaluations in "
             << formatDuration(s.seconds) << "; peak hazard ratio "
             << formatNumber("%.3g", zone.peak_ratio) << ", hazardous area "
-            << formatNumber("%.4g", hazardousArea(field, zone)) << " m²\n";
+            << formatNumber("%.4g", hazardousArea(field, zone.above_mpe)) << " m²\n";
         printUnconverged(err, s, zone, "  ");
       }
     }
@@ -651,14 +650,11 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     const double mu = scene.hazard.atmosphere.extinction_per_m;
     // 2:1 lat-long, about as fine as the cube faces' centres, at most 4096 × 2048 pixels.
     const int height = std::min(far->spec().face_pixels, 2048);
-    const LatLongMap map = latLongMap(*far, height, mpe, mu);
+    const LatLongMap map =
+        latLongMap(*far, height, mpe, mu, scene.hazard.aid ? mpe / scene.hazard.aid->gain : 0.0);
     std::vector<ExrChannel> channels = {{"intensity_w_sr", &map.intensity_w_sr},
                                         {"nohd_m", &map.nohd_m}};
-    LatLongMap aided;
-    if (scene.hazard.aid) {
-      aided = latLongMap(*far, height, mpe / scene.hazard.aid->gain, mu);
-      channels.emplace_back("aided_nohd_m", &aided.nohd_m);
-    }
+    if (scene.hazard.aid) channels.emplace_back("aided_nohd_m", &map.aided_nohd_m);
     writeLatLongExr(far_exr->stream(),
                     {map.width, map.height, far->ball().centre_m, far->spec().far_radius_m},
                     channels, {info.program_version, info.wavelength_nm, mpe});

@@ -111,14 +111,16 @@ TEST(Examples, FinnedMissileOcclusionOnlyEverRemovesLight) {
 }
 
 // The README's first command runs examples/cylinder.json at 0.1 m (minutes); the same scene
-// at 0.5 m voxels shows the same things in seconds. `edit` changes the scene before the run.
+// (or another example's, @p scene_file) at 0.5 m voxels shows the same things in seconds. `edit`
+// changes the scene before the run.
 struct CoarseRun {
   test::Outcome run;
   nlohmann::json summary;
 };
-CoarseRun runCoarseDefaultExample(const std::string& name,
-                                  const std::function<void(nlohmann::json&)>& edit = {}) {
-  auto scene = nlohmann::json::parse(std::ifstream(example("cylinder.json")));
+CoarseRun runCoarseExample(const std::string& name,
+                           const std::function<void(nlohmann::json&)>& edit = {},
+                           const std::string& scene_file = "cylinder.json") {
+  auto scene = nlohmann::json::parse(std::ifstream(example(scene_file)));
   scene["observers"]["voxel_m"] = 0.5;
   scene["observers"]["block_m"] = 2.0;
   if (edit) edit(scene);
@@ -138,7 +140,7 @@ TEST(Examples, DefaultExampleShowsAHazardZoneInsideItsBoxWithoutWarning) {
   // A hazard zone that ends inside the box, and every point converged: those on the shadow's
   // edge lines (y = ±0.5 m, where the lit and the visible side meet in a line) too, since no
   // piece that cannot both see the laser and be seen is kept there.
-  const CoarseRun r = runCoarseDefaultExample("glint_default_example");
+  const CoarseRun r = runCoarseExample("glint_default_example");
   ASSERT_EQ(r.run.status, 0) << r.run.err;
   const auto& hazard = r.summary["hazard"];
   const auto& zone = hazard["nominal_hazard_zone"];
@@ -160,11 +162,10 @@ TEST(Examples, UnconvergedPointsWarnOnlyWhereTheirBoundReachesTheMpe) {
   // (a warning: they may be hazardous); at 60 mW, 1e-5 of it, the same bounds are 1e-5 as
   // large and the run can say that none of them is hazardous (a note).
   for (const double power_w : {6000.0, 0.06}) {
-    const CoarseRun r =
-        runCoarseDefaultExample("glint_unconverged_example", [&](nlohmann::json& scene) {
-          scene["laser"]["power_w"] = power_w;
-          scene["accuracy"]["max_evaluations"] = 100;
-        });
+    const CoarseRun r = runCoarseExample("glint_unconverged_example", [&](nlohmann::json& scene) {
+      scene["laser"]["power_w"] = power_w;
+      scene["accuracy"]["max_evaluations"] = 100;
+    });
     ASSERT_EQ(r.run.status, 0) << r.run.err;
     ASSERT_TRUE(r.summary.contains("unconverged")) << "the premise, at " << power_w << " W";
     const bool may = power_w > 1.0;
@@ -296,24 +297,17 @@ TEST(Examples, PulsedNdYagIsJudgedPerPulseInPointsAndRun) {
   }
   EXPECT_GT(peak_ratio, 0.0);
 
-  const EditedRun run = runEdited(
-      "glint_pulsed_run", "pulsed_nd_yag.json",
-      [](nlohmann::json& j) {
-        j["observers"]["voxel_m"] = 0.5;
-        j["observers"]["block_m"] = 2.0;
-      },
-      {"run", "-o", (std::filesystem::temp_directory_path() / "glint_pulsed_run" / "out").string(),
-       "-q"});
-  ASSERT_EQ(run.outcome.status, 0) << run.outcome.err;
-  const auto hazard =
-      nlohmann::json::parse(std::ifstream(run.dir / "out" / "summary.json")).at("hazard");
+  const CoarseRun run = runCoarseExample("glint_pulsed_run", {}, "pulsed_nd_yag.json");
+  ASSERT_EQ(run.run.status, 0) << run.run.err;
+  const nlohmann::json& summary = run.summary;
+  const auto& hazard = summary.at("hazard");
   EXPECT_EQ(hazard.at("pulse").at("rule").get<int>(), 3) << hazard.dump();
   EXPECT_NEAR(hazard.at("pulse").at("mpe_j_m2_per_pulse").get<double>(), mpe_pulse_j_m2, 1e-15);
   EXPECT_NEAR(hazard.at("mpe_w_m2").get<double>(), 10.0 * mpe_pulse_j_m2, 1e-14);
   EXPECT_NEAR(hazard.at("peak_radiant_exposure_j_m2_per_pulse").get<double>(),
               hazard.at("peak_hazard_ratio").get<double>() * mpe_pulse_j_m2, 1e-12);
   EXPECT_GT(hazard.at("nominal_hazard_zone").at("volume_m3").get<double>(), 0.0);
-  for (const auto& p : {points.dir, run.dir}) std::filesystem::remove_all(p);
+  std::filesystem::remove_all(points.dir);
 }
 
 // examples/cylinder_binoculars.json: 7×50 binoculars, τ = 0.7: gain 0.7 × 49 = 34.3. The aided
@@ -330,16 +324,9 @@ TEST(Examples, BinocularsScaleTheAidedRatioAndWidenTheZone) {
   }
   EXPECT_EQ(header.substr(header.size() - 31), "hazard_ratio,aided_hazard_ratio") << header;
 
-  const EditedRun run = runEdited(
-      "glint_aided_run", "cylinder_binoculars.json",
-      [](nlohmann::json& j) {
-        j["observers"]["voxel_m"] = 0.5;
-        j["observers"]["block_m"] = 2.0;
-      },
-      {"run", "-o", (std::filesystem::temp_directory_path() / "glint_aided_run" / "out").string(),
-       "-q"});
-  ASSERT_EQ(run.outcome.status, 0) << run.outcome.err;
-  const auto summary = nlohmann::json::parse(std::ifstream(run.dir / "out" / "summary.json"));
+  const CoarseRun run = runCoarseExample("glint_aided_run", {}, "cylinder_binoculars.json");
+  ASSERT_EQ(run.run.status, 0) << run.run.err;
+  const nlohmann::json& summary = run.summary;
   const auto& hazard = summary.at("hazard");
   EXPECT_NEAR(hazard.at("optical_aid").at("gain").get<double>(), 34.3, 1e-12);
   EXPECT_NEAR(hazard.at("aided_peak_hazard_ratio").get<double>(),
@@ -352,7 +339,7 @@ TEST(Examples, BinocularsScaleTheAidedRatioAndWidenTheZone) {
   EXPECT_GE(aided.at("volume_m3").get<double>(), unaided.at("volume_m3").get<double>());
   EXPECT_TRUE(aided.at("reaches_box_edge").get<bool>()) << "34.3× reaches beyond the 8 m box";
   EXPECT_TRUE(summary.at("far_field").contains("aided_max_nohd_m")) << summary.dump();
-  for (const auto& p : {points.dir, run.dir}) std::filesystem::remove_all(p);
+  std::filesystem::remove_all(points.dir);
 }
 
 }  // namespace
