@@ -654,7 +654,7 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
         latLongMap(*far, height, mpe, mu, scene.hazard.aid ? mpe / scene.hazard.aid->gain : 0.0);
     std::vector<ExrChannel> channels = {{"intensity_w_sr", &map.intensity_w_sr},
                                         {"nohd_m", &map.nohd_m}};
-    if (scene.hazard.aid) channels.emplace_back("aided_nohd_m", &map.aided_nohd_m);
+    if (scene.hazard.aid) channels.push_back({"aided_nohd_m", &map.aided_nohd_m});
     writeLatLongExr(far_exr->stream(),
                     {map.width, map.height, far->ball().centre_m, far->spec().far_radius_m},
                     channels, {info.program_version, info.wavelength_nm, mpe});
