@@ -110,8 +110,9 @@ nlohmann::json parametersJson(const Scenario& s) {
 std::string runScenario(const Study& study, const Scenario& s, std::vector<StudyLattice>& lattices,
                         const fs::path& out_dir, const MemoryWatch& watch) {
   const auto start = Clock::now();
+  // The scene from the base scene in memory; its file is the scenario's record.
+  const Scene scene = scenarioScene(study, s);
   const std::string scene_json = scenarioSceneJson(study, s);
-  const Scene scene = scenarioScene(study, s, scene_json);
   const double mpe = scene.hazard.mpe_w_m2;
   const fs::path dir = out_dir / "scenarios" / scenarioDirName(s.index);
   std::error_code ec;

@@ -535,6 +535,27 @@ std::string fnv1a64Hex(std::string_view bytes) {
   return buf;
 }
 
+void recheckScene(const Scene& scene) {
+  // Through the readers of the file's own keys, so that a rule is written once and a value
+  // made in memory is refused with the words and JSON pointer the same value in a file gets.
+  auto vec = [](const Vec3& v) { return json::array({v.x, v.y, v.z}); };
+  for (const MaterialSpec& m : scene.materials) {
+    const json j = {{"specular_reflectance", m.specular_reflectance},
+                    {"diffuse_reflectance", m.diffuse_reflectance},
+                    {"sigma", m.sigma}};
+    (void)readMaterial(ObjectReader(j, "/materials/" + escapeToken(m.name), scene.source), m.name);
+  }
+  for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+    const ObjectSpec& o = scene.objects[i];
+    const std::string at = "/objects/" + std::to_string(i);
+    // ObjectReader keeps a reference: the JSON must outlive it.
+    const char* key = o.mesh ? "translation" : "center";
+    const json j = {{key, vec(o.center_m)}};
+    ObjectReader r(j, o.mesh ? at + "/transform" : at, scene.source);
+    (void)position(r, key);
+  }
+}
+
 Scene loadScene(const std::filesystem::path& path) {
   return parseScene(readUserFile(path, "scene file"), path.string(), path.parent_path());
 }

@@ -155,6 +155,11 @@ Scene parseScene(std::string_view json_text, const std::string& source,
                  const std::optional<std::filesystem::path>& folder = std::nullopt,
                  const GltfLimits& mesh_limits = {});
 
+/// @brief Checks the values of @p scene that code may change after parsing (a study's scenario
+/// moves and turns objects, turns the laser, changes materials) by the scene file's own rules.
+/// @throw InputError naming scene.source and the JSON pointer, as parseScene() words it.
+void recheckScene(const Scene& scene);
+
 /// @brief Applies the command line's overrides of @p accuracy (`--normals`, `--scheme`) under the
 /// scene file's rule: flat normals are the paper scheme's model only, so flat normals without a
 /// named scheme select it, and flat normals with another scheme are refused.

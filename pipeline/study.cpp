@@ -1,6 +1,7 @@
 #include "pipeline/study.h"
 
 #include <cmath>
+#include <memory>
 
 #include "pipeline/json_reader.h"
 #include "pipeline/progress.h"
@@ -129,6 +130,73 @@ std::pair<double, double> jitterAngles(std::uint64_t seed, int k, double sigma_r
 
 json vecJson(const Vec3& v) { return json::array({v.x, v.y, v.z}); }
 
+// The scenario's own angles first, then its pose's.
+glm::dquat scenarioTurn(const Scenario& s) {
+  return yawPitchRoll(s.pose.yaw_deg, s.pose.pitch_deg, s.pose.roll_deg) *
+         yawPitchRoll(s.yaw_deg, s.pitch_deg, s.roll_deg);
+}
+
+Vec3 scenarioCentre(const Study& study, const Scenario& s, const glm::dquat& turn,
+                    const ObjectSpec& base) {
+  return study.pivot_m + s.pose.offset_m + turn * (base.center_m - study.pivot_m);
+}
+
+// The laser's direction d with the pointing error of Scenario::jitter_u_rad, jitter_v_rad, not
+// normalised: the scene normalises it once, as its reader does the file's vector, so that the
+// scene in memory and the one its file gives agree to the last bit.
+Vec3 jitteredDirection(const Vec3& d, const Scenario& s) {
+  const Vec3 eu = anyPerpendicular(d);
+  const Vec3 ev = glm::cross(d, eu);
+  return d + std::tan(s.jitter_u_rad) * eu + std::tan(s.jitter_v_rad) * ev;
+}
+
+std::string scenarioDescription(const Study& study, const Scenario& s) {
+  const std::string what = "scenario " + std::to_string(s.index) + " of " + study.source;
+  const std::string& base = study.base.description;
+  return base.empty() ? what : base + " [" + what + "]";
+}
+
+// A mesh's triangles turned by @p turn about its frame's origin (the object's centre).
+std::shared_ptr<const TriangleMesh> turnedMesh(const TriangleMesh& mesh, const glm::dquat& turn) {
+  auto out = std::make_shared<TriangleMesh>(mesh);
+  for (Vec3& p : out->positions_m) p = turn * p;
+  // A zero normal (none given, none filled) stays zero, as the scene reader leaves it.
+  for (Vec3& n : out->normals) n = tryNormalize(turn * n).value_or(Vec3(0.0));
+  return out;
+}
+
+// The base scene with the scenario's changes, made in memory: the meshes the base scene loaded
+// are turned, never read again. Without @p turn_meshes the meshes stay as loaded (enough to
+// check the scenario's values, for every scenario before any work).
+Scene applyScenario(const Study& study, const Scenario& s, bool turn_meshes) {
+  Scene scene = study.base;
+  scene.source = study.source + " scenario " + std::to_string(s.index);
+  scene.description = scenarioDescription(study, s);
+  const glm::dquat turn = scenarioTurn(s);
+  const bool turned = turn != glm::dquat(1.0, 0.0, 0.0, 0.0);
+  for (ObjectSpec& o : scene.objects) {
+    const ObjectSpec base = o;
+    o.center_m = scenarioCentre(study, s, turn, base);
+    if (o.mesh) {
+      o.mesh->transform.translation_m = o.center_m;
+      o.mesh->transform.rotation = turn * base.mesh->transform.rotation;
+      if (turned && turn_meshes) o.mesh->mesh = turnedMesh(*base.mesh->mesh, turn);
+    } else if (o.shape != ShapeKind::Sphere) {   // a sphere's axis means nothing
+      o.axis = *tryNormalize(turn * base.axis);  // as the reader normalises the file's
+    }
+  }
+  for (MaterialSpec& m : scene.materials) {
+    if (!study.material.empty() && m.name != study.material) continue;
+    if (s.sigma) m.sigma = *s.sigma;
+    if (s.specular_reflectance) m.specular_reflectance = *s.specular_reflectance;
+  }
+  if (s.jitter_sample >= 0) {
+    scene.laser.direction = *tryNormalize(jitteredDirection(study.base.laser.direction, s));
+  }
+  recheckScene(scene);
+  return scene;
+}
+
 }  // namespace
 
 Vec3 rotateYawPitchRoll(const Vec3& v, double yaw_deg, double pitch_deg, double roll_deg) {
@@ -243,7 +311,7 @@ Study parseStudy(std::string_view text, const std::string& source,
                 study.scenarios.push_back(s);
               }
   study.fnv1a64 = fnv1a64Hex(std::string(text) + '\0' + study.scene_text);
-  for (const Scenario& s : study.scenarios) (void)scenarioScene(study, s);
+  for (const Scenario& s : study.scenarios) (void)applyScenario(study, s, false);
   return study;
 }
 
@@ -253,16 +321,11 @@ Study loadStudy(const std::filesystem::path& path) {
 
 std::string scenarioSceneJson(const Study& study, const Scenario& s) {
   json scene = json::parse(study.scene_text);
-  // The scenario's own angles first, then its pose's.
-  const glm::dquat turn = yawPitchRoll(s.pose.yaw_deg, s.pose.pitch_deg, s.pose.roll_deg) *
-                          yawPitchRoll(s.yaw_deg, s.pitch_deg, s.roll_deg);
-  auto vec = [](const json& j) {
-    return Vec3(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
-  };
+  const glm::dquat turn = scenarioTurn(s);
   for (std::size_t i = 0; i < scene["objects"].size(); ++i) {
     json& o = scene["objects"][i];
     const ObjectSpec& base = study.base.objects[i];
-    const Vec3 c = study.pivot_m + s.pose.offset_m + turn * (base.center_m - study.pivot_m);
+    const Vec3 c = scenarioCentre(study, s, turn, base);
     if (base.mesh) {
       // The mesh's frame turns with the scenario; its file is named absolutely, so that the
       // scenario's scene.json stands on its own.
@@ -276,7 +339,7 @@ std::string scenarioSceneJson(const Study& study, const Scenario& s) {
     }
     o["center"] = vecJson(c);
     for (const char* key : {"axis", "normal"}) {
-      if (o.contains(key)) o[key] = vecJson(turn * vec(o[key]));
+      if (o.contains(key)) o[key] = vecJson(turn * base.axis);
     }
   }
   for (auto& [name, m] : scene["materials"].items()) {
@@ -285,24 +348,12 @@ std::string scenarioSceneJson(const Study& study, const Scenario& s) {
     if (s.specular_reflectance) m["specular_reflectance"] = *s.specular_reflectance;
   }
   if (s.jitter_sample >= 0) {
-    const Vec3 d = glm::normalize(vec(scene["laser"]["direction"]));
-    const Vec3 eu = anyPerpendicular(d);
-    const Vec3 ev = glm::cross(d, eu);
-    scene["laser"]["direction"] =
-        vecJson(glm::normalize(d + std::tan(s.jitter_u_rad) * eu + std::tan(s.jitter_v_rad) * ev));
+    scene["laser"]["direction"] = vecJson(jitteredDirection(study.base.laser.direction, s));
   }
-  const std::string what = "scenario " + std::to_string(s.index) + " of " + study.source;
-  const std::string base = scene.value("description", std::string());
-  scene["description"] = base.empty() ? what : base + " [" + what + "]";
+  scene["description"] = scenarioDescription(study, s);
   return scene.dump(2) + "\n";
 }
 
-Scene scenarioScene(const Study& study, const Scenario& s, std::string_view scene_json) {
-  return parseScene(scene_json, study.source + " scenario " + std::to_string(s.index));
-}
-
-Scene scenarioScene(const Study& study, const Scenario& s) {
-  return scenarioScene(study, s, scenarioSceneJson(study, s));
-}
+Scene scenarioScene(const Study& study, const Scenario& s) { return applyScenario(study, s, true); }
 
 }  // namespace glint

@@ -70,14 +70,14 @@ Study parseStudy(std::string_view json_text, const std::string& source,
                  const std::filesystem::path& dir);
 
 /// @brief The scene file of one scenario: the base scene's JSON with objects turned and moved,
-/// materials and the laser's direction changed (`glint run` can run it alone).
+/// materials and the laser's direction changed, the record a scenario's folder keeps
+/// (`glint run` can run it alone; parsed, it is scenarioScene()'s scene).
 std::string scenarioSceneJson(const Study& study, const Scenario& scenario);
 
-/// @brief The validated scene of one scenario.
+/// @brief The validated scene of one scenario, made from the base scene in memory: its loaded
+/// meshes turned, not read again; named "<study> scenario <index>" in messages.
 /// @throw InputError naming the scenario when its changes make the scene invalid.
 Scene scenarioScene(const Study& study, const Scenario& scenario);
-/// @brief The same, from the scenario's scene file text already made.
-Scene scenarioScene(const Study& study, const Scenario& scenario, std::string_view scene_json);
 
 /// @brief The rotation of a pose's angles applied to @p v (see Pose).
 Vec3 rotateYawPitchRoll(const Vec3& v, double yaw_deg, double pitch_deg, double roll_deg);

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "pipeline/input_error.h"
+#include "pipeline/scene.h"
 #include "support/refusal.h"
 
 namespace glint {
@@ -99,6 +100,79 @@ TEST(Study, TurnsAMeshAboutThePivotWithItsOwnRotation) {
   }
   EXPECT_NEAR(nose_y, 1.5, 1e-6) << "the nose tip, turned from +x to +y";
   EXPECT_NEAR(nose_x, 0.0, 1e-6);
+}
+
+TEST(Study, ScenarioMadeInMemoryIsTheSceneItsFileDescribes) {
+  // Every change a study makes, to every kind of object: the scene made from the base scene in
+  // memory must be the scene its record scene.json parses to, to the last bit (so `glint run`
+  // of that file repeats the scenario exactly), but for a turned mesh's vertices: turned once
+  // more rather than with the product of the turns, they agree to rounding (a few ulps).
+  const std::string dir = ::testing::TempDir();
+  std::ofstream(dir + "/mixed_scene.json") << R"({
+    "description": "four shapes",
+    "laser": {"position": [0, -100, 3], "direction": [0, 1, 0.1], "power_w": 1,
+              "wavelength_nm": 532, "beam": {"profile": "flat_top", "radius_m": 1}},
+    "materials": {"m": {"specular_reflectance": 0.5, "sigma": 0.1},
+                  "n": {"specular_reflectance": 0.3, "diffuse_reflectance": 0.1, "sigma": 0.2}},
+    "objects": [{"shape": "mesh", "file": ")" GLINT_EXAMPLES_DIR R"(/targets/finned_missile.glb",
+                 "transform": {"translation": [2, 0, 3], "yaw_pitch_roll_deg": [10, 0, 90],
+                               "scale": [1, 1, 2]},
+                 "crease_angle_deg": 40, "material": "m"},
+                {"shape": "cylinder", "center": [0, 1, 2], "axis": [0, 0, 2], "radius": 0.3,
+                 "length": 2, "material": "n"},
+                {"shape": "disk", "center": [1, 1, 1], "normal": [1, 1, 0], "radius": 0.2,
+                 "material": "m"},
+                {"shape": "sphere", "center": [-1, 0, 4], "radius": 0.5, "material": "n"}],
+    "planes": [{"name": "p", "origin": [-5, -1, 0], "u_axis": [1, 0, 0], "v_axis": [0, 1, 0],
+                "size_m": [1, 1], "pixel_m": 0.5}]})";
+  const Study s = parseStudy(
+      R"({"scene": "mixed_scene.json", "sweep": {"yaw_deg": [0, 35], "pitch_deg": [-20],
+          "sigma": [0.05], "specular_reflectance": [0.6], "material": "m"},
+          "pointing_jitter": {"sigma_rad": 1e-3, "samples": 2, "seed": 3},
+          "trajectory": {"poses": [{"time_s": 0, "offset_m": [0, 0, 0], "roll_deg": 0},
+                                   {"time_s": 1, "offset_m": [3, -1, 2], "roll_deg": 15}]}})",
+      "study.json", dir);
+  ASSERT_EQ(s.scenarios.size(), 2u * 2u * 2u);
+  const double tol = 1e-12;  // mesh vertices (metres, of order 1..10) and their normals
+  for (const Scenario& c : s.scenarios) {
+    const std::string what = "scenario " + std::to_string(c.index);
+    const Scene memory = scenarioScene(s, c);
+    const Scene file = parseScene(scenarioSceneJson(s, c), "scene.json", dir);
+    EXPECT_EQ(memory.description, file.description) << what;
+    expectNear(memory.laser.direction, file.laser.direction, 0.0, what + " laser");
+    ASSERT_EQ(memory.materials.size(), file.materials.size());
+    for (std::size_t m = 0; m < file.materials.size(); ++m) {
+      EXPECT_EQ(memory.materials[m].name, file.materials[m].name) << what;
+      EXPECT_EQ(memory.materials[m].sigma, file.materials[m].sigma) << what;
+      EXPECT_EQ(memory.materials[m].specular_reflectance, file.materials[m].specular_reflectance)
+          << what;
+      EXPECT_EQ(memory.materials[m].diffuse_reflectance, file.materials[m].diffuse_reflectance)
+          << what;
+    }
+    ASSERT_EQ(memory.objects.size(), file.objects.size());
+    for (std::size_t i = 0; i < file.objects.size(); ++i) {
+      const ObjectSpec& a = memory.objects[i];
+      const ObjectSpec& b = file.objects[i];
+      const std::string obj = what + " object " + std::to_string(i);
+      expectNear(a.center_m, b.center_m, 0.0, obj + " centre");
+      if (!b.mesh) {
+        expectNear(a.axis, b.axis, 0.0, obj + " axis");
+        continue;
+      }
+      ASSERT_TRUE(a.mesh) << obj;
+      const TriangleMesh& ma = *a.mesh->mesh;
+      const TriangleMesh& mb = *b.mesh->mesh;
+      ASSERT_EQ(ma.positions_m.size(), mb.positions_m.size()) << obj;
+      ASSERT_EQ(ma.triangles, mb.triangles) << obj << ": the same normals filled in";
+      double worst_p = 0.0, worst_n = 0.0;
+      for (std::size_t v = 0; v < mb.positions_m.size(); ++v) {
+        worst_p = std::max(worst_p, glm::length(ma.positions_m[v] - mb.positions_m[v]));
+        worst_n = std::max(worst_n, glm::length(ma.normals[v] - mb.normals[v]));
+      }
+      EXPECT_LT(worst_p, tol) << obj << " vertex positions";
+      EXPECT_LT(worst_n, tol) << obj << " vertex normals";
+    }
+  }
 }
 
 TEST(Study, TrajectoryIsSampledEveryStepBetweenItsPoses) {
