@@ -63,14 +63,6 @@ class GridByGridWriter : private openvdb::io::Archive {
 
 }  // namespace
 
-std::vector<float> hazardRatio(const std::vector<float>& irradiance_w_m2, double mpe_w_m2) {
-  std::vector<float> ratio(irradiance_w_m2.size());
-  for (std::size_t i = 0; i < ratio.size(); ++i) {
-    ratio[i] = static_cast<float>(static_cast<double>(irradiance_w_m2[i]) / mpe_w_m2);
-  }
-  return ratio;
-}
-
 void writeVdb(std::ostream& out, ObserverField field, const RunInfo& info) {
   const FieldSpec& spec = field.spec();
   const FieldStats& stats = field.stats();
@@ -83,10 +75,10 @@ void writeVdb(std::ostream& out, ObserverField field, const RunInfo& info) {
   meta.insertMeta("irradiance_unit", openvdb::StringMetadata("W/m^2"));
   meta.insertMeta("wavelength_nm", openvdb::DoubleMetadata(info.wavelength_nm));
   meta.insertMeta("power_w", openvdb::DoubleMetadata(info.power_w));
-  const bool hazard = info.mpe_w_m2 > 0.0;
-  const bool aided = hazard && info.aid_gain > 0.0;
-  if (aided) meta.insertMeta("optical_aid_gain", openvdb::DoubleMetadata(info.aid_gain));
-  if (hazard) {
+  if (info.optical_aid_gain > 0.0) {
+    meta.insertMeta("optical_aid_gain", openvdb::DoubleMetadata(info.optical_aid_gain));
+  }
+  if (info.mpe_w_m2 > 0.0) {
     meta.insertMeta("exposure_s", openvdb::DoubleMetadata(info.exposure_s));
     meta.insertMeta("mpe_w_m2", openvdb::DoubleMetadata(info.mpe_w_m2));
     meta.insertMeta("mpe_rule", openvdb::StringMetadata(info.mpe_rule));
@@ -99,32 +91,25 @@ void writeVdb(std::ostream& out, ObserverField field, const RunInfo& info) {
   meta.insertMeta("peak_irradiance_w_m2", openvdb::DoubleMetadata(stats.peak_w_m2));
 
   FieldGrids& g = field.grids();
-  GridByGridWriter file(out, meta, 3 + (hazard ? 1 : 0) + (aided ? 1 : 0));
+  GridByGridWriter file(out, meta, 3 + static_cast<int>(info.scaled.size()));
   // A shallow copy (the same tree) carries the irradiance's metadata: the grid itself goes on
-  // to become the hazard ratio.
+  // to become each scaled grid in turn.
   {
     auto irradiance = g.irradiance->copyGrid();
     irradiance->insertMeta("units", openvdb::StringMetadata("W/m^2"));
     file.write(irradiance);
   }
-  if (hazard) {
-    openvdb::FloatGrid::Ptr ratio = std::move(g.irradiance);
-    for (auto it = ratio->beginValueOn(); it; ++it) {
-      it.setValue(static_cast<float>(static_cast<double>(*it) / info.mpe_w_m2));
+  double scale = 1.0;  // what the grid's values are, per W/m² of irradiance
+  for (const ScaledArray& a : info.scaled) {
+    const double factor = a.per_w_m2 / scale;
+    for (auto it = g.irradiance->beginValueOn(); it; ++it) {
+      it.setValue(static_cast<float>(static_cast<double>(*it) * factor));
     }
-    ratio->setName("hazard_ratio");
-    ratio->insertMeta("units", openvdb::StringMetadata("1 (irradiance / MPE)"));
-    file.write(ratio);
-    if (aided) {  // once written, the ratio grid goes on to become the aided one
-      auto aided_ratio = ratio->copyGrid();
-      for (auto it = ratio->beginValueOn(); it; ++it) {
-        it.setValue(static_cast<float>(static_cast<double>(*it) * info.aid_gain));
-      }
-      aided_ratio->setName("aided_hazard_ratio");
-      aided_ratio->insertMeta("units",
-                              openvdb::StringMetadata("1 (irradiance x optical aid gain / MPE)"));
-      file.write(aided_ratio);
-    }
+    scale = a.per_w_m2;
+    auto grid = g.irradiance->copyGrid();
+    grid->setName(a.name);
+    grid->insertMeta("units", openvdb::StringMetadata(a.units));
+    file.write(grid);
   }
   g.irradiance.reset();
   {

@@ -94,16 +94,18 @@ vtkNew<Array> namedArray(const char* name, vtkIdType tuples, int components = 1)
   return a;
 }
 
-// Adds `hazard_ratio` beside the @p n irradiance values @p e where there is an MPE: irradiance /
-// MPE as hazardRatio() (export/field_files.h) forms it, in double, stored as float.
-void addHazardRatio(vtkPointData& data, const float* e, vtkIdType n, double mpe_w_m2) {
-  if (!(mpe_w_m2 > 0.0)) return;
-  auto ratio = namedArray<vtkFloatArray>("hazard_ratio", n);
-  float* r = ratio->GetPointer(0);
-  for (vtkIdType q = 0; q < n; ++q) {
-    r[q] = static_cast<float>(static_cast<double>(e[q]) / mpe_w_m2);
+// Adds each of @p scaled beside the @p n irradiance values @p e: irradiance × per_w_m2, formed
+// in double, stored as float (the VDB's and the EXR's values).
+void addScaledArrays(vtkPointData& data, const float* e, vtkIdType n,
+                     const std::vector<ScaledArray>& scaled) {
+  for (const ScaledArray& s : scaled) {
+    auto array = namedArray<vtkFloatArray>(s.name.c_str(), n);
+    float* out = array->GetPointer(0);
+    for (vtkIdType q = 0; q < n; ++q) {
+      out[q] = static_cast<float>(static_cast<double>(e[q]) * s.per_w_m2);
+    }
+    data.AddArray(array);
   }
-  data.AddArray(ratio);
 }
 
 // Cells from offsets (starting at 0, one past each cell) and connectivity, 64-bit.
@@ -237,7 +239,8 @@ std::filesystem::path stagingName(const std::filesystem::path& target) {
 
 }  // namespace
 
-void writeVti(std::ostream& out, const ObserverField& field, int stride, double mpe_w_m2) {
+void writeVti(std::ostream& out, const ObserverField& field, int stride,
+              const std::vector<ScaledArray>& scaled) {
   const FieldSpec& spec = field.spec();
   const auto n = spec.nodes();
   std::array<int, 3> m{};
@@ -269,7 +272,7 @@ void writeVti(std::ostream& out, const ObserverField& field, int stride, double 
   image->SetSpacing(h, h, h);
   vtkPointData* data = image->GetPointData();
   data->AddArray(irradiance);
-  addHazardRatio(*data, e, count, mpe_w_m2);
+  addScaledArrays(*data, e, count, scaled);
   data->AddArray(level);
   data->AddArray(status);
   data->SetActiveScalars("irradiance_w_m2");
@@ -277,7 +280,8 @@ void writeVti(std::ostream& out, const ObserverField& field, int stride, double 
   writeTo(out, *writer, image, "the box's ImageData (.vti)");
 }
 
-void writeBlocksVtu(std::ostream& out, const ObserverField& field, double mpe_w_m2) {
+void writeBlocksVtu(std::ostream& out, const ObserverField& field,
+                    const std::vector<ScaledArray>& scaled) {
   const FieldSpec& spec = field.spec();
   auto ia = field.grids().irradiance->getConstAccessor();
   std::vector<double> points;
@@ -320,7 +324,7 @@ void writeBlocksVtu(std::ostream& out, const ObserverField& field, double mpe_w_
   auto e = namedArray<vtkFloatArray>("irradiance_w_m2", n_points);
   std::copy(irradiance.begin(), irradiance.end(), e->GetPointer(0));
   grid->GetPointData()->AddArray(e);
-  addHazardRatio(*grid->GetPointData(), irradiance.data(), n_points, mpe_w_m2);
+  addScaledArrays(*grid->GetPointData(), irradiance.data(), n_points, scaled);
   grid->GetPointData()->SetActiveScalars("irradiance_w_m2");
   const auto n_cells = static_cast<vtkIdType>(level.size());
   auto lv = namedArray<vtkIntArray>("refinement_level", n_cells);
@@ -449,7 +453,7 @@ void StagedAmr::commit() {
 }
 
 StagedAmr writeAmr(const std::filesystem::path& vthb_path, const ObserverField& field,
-                   double mpe_w_m2) {
+                   const std::vector<ScaledArray>& scaled) {
   const FieldSpec& spec = field.spec();
   if (spec.plane) throw std::invalid_argument("writeAmr: a box's field, not a plane's");
   const AmrLayout layout = amrLayout(field);
@@ -493,7 +497,7 @@ StagedAmr writeAmr(const std::filesystem::path& vthb_path, const ObserverField& 
             v[p] = ia.isValueOn(c) ? ia.getValue(c) : 0.0f;
           }
       grid->GetPointData()->AddArray(e);
-      addHazardRatio(*grid->GetPointData(), v, count, mpe_w_m2);
+      addScaledArrays(*grid->GetPointData(), v, count, scaled);
       grid->GetPointData()->SetActiveScalars("irradiance_w_m2");
       amr->SetDataSet(static_cast<unsigned>(l), static_cast<unsigned>(b), grid);
     }

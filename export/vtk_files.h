@@ -11,7 +11,9 @@
 
 #include <filesystem>
 #include <ostream>
+#include <vector>
 
+#include "export/field_files.h"  // ScaledArray
 #include "facets/integrator.h"
 #include "observers/far_field.h"
 #include "observers/field.h"
@@ -19,17 +21,19 @@
 namespace glint {
 
 /// @brief VTK ImageData (.vti) of the box: point data `irradiance_w_m2` (Float32, 0 where
-/// not computed), `hazard_ratio` (Float32, irradiance / MPE, where @p mpe_w_m2 > 0),
-/// `refinement_level` and `status` (Int32), sampled every @p stride lattice points.
+/// not computed), each of @p scaled (Float32: the hazard ratios), `refinement_level` and
+/// `status` (Int32), sampled every @p stride lattice points.
 /// @throw OutputError when VTK's writer fails.
-void writeVti(std::ostream& out, const ObserverField& field, int stride, double mpe_w_m2);
+void writeVti(std::ostream& out, const ObserverField& field, int stride,
+              const std::vector<ScaledArray>& scaled);
 
 /// @brief VTK UnstructuredGrid (.vtu) of the octree's final blocks as hexahedra: cell data
 /// `refinement_level` and `status` (1 computed, 2 interpolated, 3 proven below the floor),
-/// point data `irradiance_w_m2` (and `hazard_ratio` where @p mpe_w_m2 > 0) at the corners,
-/// Float32. A finest block (every lattice point evaluated) is written as its 8 voxels.
+/// point data `irradiance_w_m2` and each of @p scaled at the corners, Float32. A finest block
+/// (every lattice point evaluated) is written as its 8 voxels.
 /// @throw OutputError when VTK's writer fails.
-void writeBlocksVtu(std::ostream& out, const ObserverField& field, double mpe_w_m2);
+void writeBlocksVtu(std::ostream& out, const ObserverField& field,
+                    const std::vector<ScaledArray>& scaled);
 
 /// @brief VTK PolyData (.vtp) of the lit target: its coarse facets split @p level times on the
 /// true surface, cell data `incident_power_w` (Float64, beam power received) and
@@ -70,7 +74,7 @@ class StagedAmr {
 /// @brief The adaptive field as a VTK overlapping AMR data set (vtkOverlappingAMR, written
 /// by vtkXMLUniformGridAMRWriter): @p vthb_path (e.g. `irradiance.vthb`) and the folder of
 /// ImageData blocks beside it that VTK names after its stem (`irradiance/`), point data
-/// `irradiance_w_m2` and `hazard_ratio` (where @p mpe_w_m2 > 0), Float32, with coarse cells
+/// `irradiance_w_m2` and each of @p scaled, Float32, with coarse cells
 /// that a finer level covers blanked (vtkAMRUtilities::BlankCells).
 ///
 /// Levels follow the octree's resolution: level l has spacing block_voxels / 2^(l+1) voxels,
@@ -88,7 +92,7 @@ class StagedAmr {
 /// @return The staged files; nothing is in place until their commit().
 /// @throw OutputError when the staging folder cannot be made or VTK's writer fails.
 [[nodiscard]] StagedAmr writeAmr(const std::filesystem::path& vthb_path, const ObserverField& field,
-                                 double mpe_w_m2);
+                                 const std::vector<ScaledArray>& scaled);
 
 /// @brief The number of AMR levels writeAmr() writes of @p field (for tests and the run's
 /// summary): at most the field's resolution levels, fewer where the budget cuts them.

@@ -172,7 +172,7 @@ nlohmann::json hazardLimitsJson(const HazardSpec& h) {
   }
   j["atmosphere"] = air;
   if (h.aid) {
-    nlohmann::json aid = {{"gain", h.aid->gain}, {"aided_mpe_w_m2", h.mpe_w_m2 / h.aid->gain}};
+    nlohmann::json aid = {{"gain", h.aid->gain}, {"aided_mpe_w_m2", h.aidedMpeW_m2()}};
     if (h.aid->aperture_m) {
       aid["aperture_m"] = *h.aid->aperture_m;
       aid["magnification"] = *h.aid->magnification;
@@ -191,7 +191,7 @@ HazardZone hazardZone(const ObserverField& field, const HazardSpec& h,
   z.aided_peak_ratio = h.aidedRatio(s.peak_w_m2);
   z.peak_pulse_j_m2 = h.pulseRadiantExposureJ_m2(s.peak_w_m2);
   z.above_mpe = field.exceedance(h.mpe_w_m2, target_centre_m);
-  if (h.aid) z.aided_above_mpe = field.exceedance(h.mpe_w_m2 / h.aid->gain, target_centre_m);
+  if (h.aid) z.aided_above_mpe = field.exceedance(h.aidedMpeW_m2(), target_centre_m);
   z.target_centre_m = target_centre_m;
   z.unconverged_ratio_upper =
       std::max(h.ratio(s.unconverged_max_upper_w_m2), h.aidedRatio(s.unconverged_max_upper_w_m2));
@@ -201,7 +201,7 @@ HazardZone hazardZone(const ObserverField& field, const HazardSpec& h,
 FarHazard farHazard(const FarField& field, const HazardSpec& h) {
   const double mu = h.atmosphere.extinction_per_m;
   FarHazard f{farReach(field, h.mpe_w_m2, mu), std::nullopt};
-  if (h.aid) f.aided = farReach(field, h.mpe_w_m2 / h.aid->gain, mu);
+  if (h.aid) f.aided = farReach(field, h.aidedMpeW_m2(), mu);
   return f;
 }
 
@@ -251,6 +251,45 @@ nlohmann::json hazardJson(const HazardSpec& h, const HazardZone* zone) {
     j["aided_nominal_hazard_zone"] = zoneJson(*z.aided_above_mpe, z.target_centre_m);
   }
   return j;
+}
+
+std::vector<ScaledArray> hazardArrays(const HazardSpec& h) {
+  std::vector<ScaledArray> arrays = {{"hazard_ratio", "1 (irradiance / MPE)", 1.0 / h.mpe_w_m2}};
+  if (h.aid) {
+    arrays.push_back({"aided_hazard_ratio", "1 (irradiance x optical aid gain / MPE)",
+                      h.aid->gain / h.mpe_w_m2});
+  }
+  return arrays;
+}
+
+PlaneMap planeMap(const ObserverField& field, const HazardSpec& h) {
+  const FieldSpec& spec = field.spec();
+  const auto n = spec.nodes();
+  PlaneMap m;
+  m.width = n[0];
+  m.height = n[1];
+  m.origin_m = spec.min_m;
+  m.u_axis = spec.axes[0];
+  m.v_axis = spec.axes[1];
+  m.pixel_m = spec.voxel_m;
+  const std::size_t count = static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]);
+  for (auto* channel : {&m.irradiance_w_m2, &m.hazard_ratio, &m.level, &m.status})
+    channel->reserve(count);
+  if (h.aid) m.aided_hazard_ratio.reserve(count);
+  for (int j = 0; j < n[1]; ++j)
+    for (int i = 0; i < n[0]; ++i) {
+      const double e = field.irradiance(i, j, 0);
+      m.irradiance_w_m2.push_back(static_cast<float>(e));
+      m.hazard_ratio.push_back(static_cast<float>(h.ratio(e)));
+      if (h.aid) m.aided_hazard_ratio.push_back(static_cast<float>(h.aidedRatio(e)));
+      m.level.push_back(static_cast<float>(field.level(i, j, 0)));
+      m.status.push_back(static_cast<float>(static_cast<int>(field.status(i, j, 0))));
+    }
+  return m;
+}
+
+double hazardousArea(const ObserverField& field, const ObserverField::Exceedance& zone) {
+  return static_cast<double>(zone.points) * field.spec().voxel_m * field.spec().voxel_m;
 }
 
 }  // namespace glint

@@ -14,7 +14,10 @@
 #include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
+#include "export/exr_map.h"      // PlaneMap
+#include "export/field_files.h"  // ScaledArray
 #include "facets/vec3.h"
 #include "observers/far_field.h"
 #include "observers/field.h"
@@ -113,6 +116,9 @@ struct HazardSpec {
     return irradiance_w_m2 * aidGain() / mpe_w_m2;
   }
   [[nodiscard]] double aidGain() const { return aid ? aid->gain : 1.0; }
+  /// @brief The irradiance at the naked eye that the aid lifts to the MPE: MPE / gain (the
+  /// MPE without an aid).
+  [[nodiscard]] double aidedMpeW_m2() const { return mpe_w_m2 / aidGain(); }
   /// @brief The lowest irradiance that is hazardous to any viewer the scene describes (aided
   /// where the aid gathers more than the eye): what defaults of floors are scaled from.
   [[nodiscard]] double lowestHazardousW_m2() const { return mpe_w_m2 / std::max(1.0, aidGain()); }
@@ -177,6 +183,17 @@ FarHazard farHazard(const FarField& field, const HazardSpec& h);
 /// @brief The far-field hazard's entries of `far_field` in the summaries: `max_nohd_m` and its
 /// direction, the aided ones with an aid.
 nlohmann::json farHazardJson(const FarHazard& hazard);
+
+/// @brief The hazard arrays the volumes carry beside irradiance: `hazard_ratio` (per W/m²:
+/// 1/MPE) and, with an optical aid, `aided_hazard_ratio` (gain/MPE).
+std::vector<ScaledArray> hazardArrays(const HazardSpec& h);
+
+/// @brief A plane's field as the map its EXR holds: lattice row j along v, column i along u;
+/// `hazard_ratio` and (with an aid) `aided_hazard_ratio` as @p h forms them.
+PlaneMap planeMap(const ObserverField& field, const HazardSpec& h);
+
+/// @brief The area (m²) of a plane's lattice points in @p zone: pixel_m² each.
+double hazardousArea(const ObserverField& field, const ObserverField::Exceedance& zone);
 
 /// @brief hazardLimitsJson() with, where there is a @p zone, its peak ratios and the nominal
 /// hazard zone (`nominal_hazard_zone`, and `aided_nominal_hazard_zone` with an aid).

@@ -19,6 +19,7 @@
 #include "pipeline/json_reader.h"
 #include "pipeline/memory_budget.h"
 #include "pipeline/progress.h"
+#include "pipeline/run_report.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
 
@@ -49,178 +50,6 @@ Vec3 targetCentre(const Target& target) {
     }
   }
   return target.facetCount() > 0 ? 0.5 * (lo + hi) : Vec3(0.0);
-}
-
-// What the summary says of the points whose integration stopped short of its tolerance: where
-// they are (status 5 marks each) and whether any could be hazardous.
-nlohmann::json unconvergedJson(const FieldStats& s, const HazardZone& zone) {
-  return {{"points", s.unconverged_points},
-          {"box",
-           {{"min_m", {s.unconverged_min_m.x, s.unconverged_min_m.y, s.unconverged_min_m.z}},
-            {"max_m", {s.unconverged_max_m.x, s.unconverged_max_m.y, s.unconverged_max_m.z}}}},
-          {"max_irradiance_plus_error_w_m2", s.unconverged_max_upper_w_m2},
-          {"max_hazard_ratio_plus_error", zone.unconverged_ratio_upper},
-          {"may_be_hazardous", zone.unconvergedMayBeHazardous()}};
-}
-
-// One line on the points that did not converge: a note where none of them can reach the MPE,
-// else a warning.
-void printUnconverged(std::ostream& err, const FieldStats& s, const HazardZone& zone,
-                      const char* indent) {
-  if (s.unconverged_points == 0) return;
-  const bool may = zone.unconvergedMayBeHazardous();
-  err << indent << (may ? "warning: " : "note: ") << s.unconverged_points
-      << " points did not reach the integration tolerance (status 5), within ("
-      << s.unconverged_min_m.x << ", " << s.unconverged_min_m.y << ", " << s.unconverged_min_m.z
-      << ") .. (" << s.unconverged_max_m.x << ", " << s.unconverged_max_m.y << ", "
-      << s.unconverged_max_m.z << "); at each, irradiance plus its error estimate is at most "
-      << formatNumber("%.3g", s.unconverged_max_upper_w_m2) << " W/m² ("
-      << formatNumber("%.3g", zone.unconverged_ratio_upper) << " × the MPE)"
-      << (may ? ": some may be hazardous; raise accuracy.max_depth or accuracy.max_evaluations"
-              : ", so none of them can be hazardous")
-      << "\n";
-}
-
-nlohmann::json targetJson(const CullStats& cull) {
-  return {{"coarse_facets", cull.coarse_facets}, {"lit", cull.lit},
-          {"facing_away", cull.facing_away},     {"outside_beam", cull.outside_beam},
-          {"shadowed", cull.shadowed},           {"degenerate", cull.degenerate},
-          {"occlusion_rays", cull.occlusion}};
-}
-
-// What became of each mesh's triangles (@p stats in the order of the scene's meshes).
-nlohmann::json meshesJson(const Scene& scene, const std::vector<MeshStats>& stats) {
-  nlohmann::json meshes = nlohmann::json::array();
-  std::size_t k = 0;
-  for (const ObjectSpec& o : scene.objects) {
-    if (!o.mesh) continue;
-    const MeshStats& s = stats[k++];
-    meshes.push_back({{"file", o.mesh->file.string()},
-                      {"triangles", s.triangles},
-                      {"facets", s.facets},
-                      {"degenerate_dropped", s.degenerate_dropped},
-                      {"normals_computed", o.mesh->normals_computed},
-                      {"normals_repaired", s.normals_repaired},
-                      {"quadric_fits", s.quadric_fits},
-                      {"quadric_fit_fallbacks_to_pn", s.fit_fallbacks},
-                      {"crease_edges", s.crease_edges},
-                      {"open_edges", s.open_edges},
-                      {"primitives_skipped", o.mesh->primitives_skipped},
-                      {"mirrored_instances", o.mesh->mirrored_instances}});
-  }
-  return meshes;
-}
-
-nlohmann::json summaryJson(const ObserverField& field, const HazardZone& zone, const RunInfo& info,
-                           const CullStats& cull) {
-  const FieldSpec& spec = field.spec();
-  const FieldStats& s = field.stats();
-  nlohmann::json j;
-  j["program"] = info.program_version;
-  j["scene_file"] = info.scene_file;
-  j["scene_fnv1a64"] = info.scene_fnv1a64;
-  j["scheme"] = info.scheme;
-  j["integration_scheme"] = info.integration_scheme;
-  j["box"] = {{"min_m", {spec.min_m.x, spec.min_m.y, spec.min_m.z}},
-              {"max_m",
-               {spec.position(s.nodes[0] - 1, 0, 0).x, spec.position(0, s.nodes[1] - 1, 0).y,
-                spec.position(0, 0, s.nodes[2] - 1).z}},
-              {"voxel_m", spec.voxel_m},
-              {"block_m", spec.voxel_m * spec.block_voxels},
-              {"lattice_points", {s.nodes[0], s.nodes[1], s.nodes[2]}}};
-  j["tolerance"] = spec.tolerance;
-  j["floor_w_m2"] = spec.floor_w_m2;
-  j["target"] = targetJson(cull);
-  j["points"] = {{"in_box", s.lattice_points},
-                 {"evaluated", s.evaluated_points},
-                 {"interpolated", s.interpolated_points},
-                 {"proven_below_floor", s.below_floor_points},
-                 {"inside_target", s.excluded_points},
-                 {"unconverged", s.unconverged_points}};
-  if (s.unconverged_points > 0) j["unconverged"] = unconvergedJson(s, zone);
-  j["blocks"] = {{"skipped", s.blocks_skipped},
-                 {"accepted", s.blocks_accepted},
-                 {"accepted_interpolating_e_r_or_e_r2", s.blocks_accepted_spread},
-                 {"refined", s.blocks_refined},
-                 {"finest", s.blocks_finest},
-                 {"levels", s.levels + 1}};
-  j["evaluations"] = s.evaluations;
-  j["bound_evaluations"] = s.bound_evaluations;
-  j["seconds"] = s.seconds;
-  j["peak_irradiance_w_m2"] = s.peak_w_m2;
-  j["peak_at_m"] = {s.peak_at_m.x, s.peak_at_m.y, s.peak_at_m.z};
-  nlohmann::json volumes = nlohmann::json::array();
-  for (double fraction : {0.01, 0.1, 0.5}) {
-    const double t = fraction * s.peak_w_m2;
-    volumes.push_back({{"fraction_of_peak", fraction},
-                       {"threshold_w_m2", t},
-                       {"volume_m3", s.peak_w_m2 > 0.0 ? field.volumeAbove(t) : 0.0}});
-  }
-  j["volumes_above"] = volumes;
-  j["memory"] = {{"grid_bytes", s.grid_bytes},
-                 {"active_voxels", s.active_voxels},
-                 {"bytes_per_active_voxel",
-                  s.active_voxels > 0
-                      ? static_cast<double>(s.grid_bytes) / static_cast<double>(s.active_voxels)
-                      : 0.0}};
-  return j;
-}
-
-// The one-screen summary of the volume.
-// @p beyond_box: what the far field says of the hazard beyond the box ("" without one).
-void printVolume(std::ostream& err, const ObserverField& field, const Scene& scene,
-                 const HazardZone& zone, const RunInfo& info, bool uniform,
-                 const std::string& beyond_box) {
-  const FieldSpec& spec = field.spec();
-  const FieldStats& s = field.stats();
-  const double box_points = static_cast<double>(s.lattice_points);
-  err << "glint run: " << info.scheme << ", " << s.nodes[0] << "×" << s.nodes[1] << "×"
-      << s.nodes[2] << " lattice points at " << spec.voxel_m << " m, tolerance " << spec.tolerance
-      << ", floor " << formatNumber("%.3g", spec.floor_w_m2) << " W/m²\n";
-  err << "  points: " << s.evaluated_points << " evaluated ("
-      << formatNumber("%.3g", 100.0 * static_cast<double>(s.evaluated_points) / box_points)
-      << " %), " << s.interpolated_points << " interpolated, " << s.below_floor_points
-      << " proven below the floor, " << s.excluded_points << " inside the target\n";
-  if (!uniform) {
-    err << "  blocks: " << s.blocks_skipped << " skipped, " << s.blocks_accepted << " accepted ("
-        << s.blocks_accepted_spread << " as E·r or E·r²), " << s.blocks_refined << " refined, "
-        << s.blocks_finest << " at the finest level (" << s.levels + 1 << " levels)\n";
-  }
-  err << "  evaluations: " << formatNumber("%.4g", static_cast<double>(s.evaluations)) << " in "
-      << formatDuration(s.seconds) << "\n";
-  err << "  peak irradiance: " << formatNumber("%.6g", s.peak_w_m2) << " W/m² at (" << s.peak_at_m.x
-      << ", " << s.peak_at_m.y << ", " << s.peak_at_m.z << ")\n";
-  err << "  hazard: " << hazardLine(scene.hazard) << "; peak hazard ratio "
-      << formatNumber("%.3g", zone.peak_ratio);
-  if (scene.hazard.aid) err << ", aided " << formatNumber("%.3g", zone.aided_peak_ratio);
-  if (scene.hazard.pulse) {
-    err << "; peak " << formatNumber("%.3g", zone.peak_pulse_j_m2) << " J/m² a pulse";
-  }
-  err << "\n";
-  auto printZone = [&](const ObserverField::Exceedance& r, const char* name) {
-    if (r.points == 0) {
-      err << "  " << name << ": none in the box (no point reaches the MPE)\n";
-      return;
-    }
-    err << "  " << name << ": " << formatNumber("%.4g", r.volume_m3) << " m³, reaching "
-        << formatNumber("%.4g", r.farthest_m) << " m from the target centre, at ("
-        << r.farthest_at_m.x << ", " << r.farthest_at_m.y << ", " << r.farthest_at_m.z << ")\n";
-    if (r.reaches_edge) {
-      err << "  warning: the " << name
-          << " reaches the edge of the observer box and may go on "
-             "beyond it"
-          << (beyond_box.empty() ? ": enlarge the box to see its full extent" : beyond_box) << "\n";
-    }
-  };
-  printZone(zone.above_mpe, "nominal hazard zone (ratio ≥ 1)");
-  if (zone.aided_above_mpe) printZone(*zone.aided_above_mpe, "aided hazard zone (aided ratio ≥ 1)");
-  printUnconverged(err, s, zone, "  ");
-  err << "  memory: " << formatNumber("%.3g", static_cast<double>(s.grid_bytes) / 1e6)
-      << " MB of grids, "
-      << formatNumber("%.3g", s.active_voxels > 0 ? static_cast<double>(s.grid_bytes) /
-                                                        static_cast<double>(s.active_voxels)
-                                                  : 0.0)
-      << " bytes per active voxel\n";
 }
 
 // Computes one observer field (the box or a plane) with its own integrator settings, with
@@ -275,124 +104,6 @@ void checkRegionMemory(const FieldSpec& spec, const std::string& what, const Run
   }
 }
 
-// A plane's lattice points stand for pixel_m² each.
-double hazardousArea(const ObserverField& field, const ObserverField::Exceedance& zone) {
-  return static_cast<double>(zone.points) * field.spec().voxel_m * field.spec().voxel_m;
-}
-
-nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
-                         const HazardZone& zone) {
-  const FieldStats& s = field.stats();
-  const FieldSpec& spec = field.spec();
-  const ObserverField::Exceedance& r = zone.above_mpe;
-  nlohmann::json j = {{"name", plane.name},
-                      {"file", plane.name + ".exr"},
-                      {"pixels", {s.nodes[0], s.nodes[1]}},
-                      {"pixel_m", spec.voxel_m},
-                      {"tolerance", spec.tolerance},
-                      {"floor_w_m2", spec.floor_w_m2},
-                      {"points",
-                       {{"evaluated", s.evaluated_points},
-                        {"interpolated", s.interpolated_points},
-                        {"proven_below_floor", s.below_floor_points},
-                        {"inside_target", s.excluded_points},
-                        {"unconverged", s.unconverged_points}}},
-                      {"evaluations", s.evaluations},
-                      {"seconds", s.seconds},
-                      {"peak_irradiance_w_m2", s.peak_w_m2},
-                      {"peak_at_m", {s.peak_at_m.x, s.peak_at_m.y, s.peak_at_m.z}},
-                      {"peak_hazard_ratio", zone.peak_ratio},
-                      {"hazardous_area_m2", hazardousArea(field, zone.above_mpe)}};
-  if (zone.aided_above_mpe) {
-    j["aided_peak_hazard_ratio"] = zone.aided_peak_ratio;
-    j["aided_hazardous_area_m2"] = hazardousArea(field, *zone.aided_above_mpe);
-  }
-  if (s.unconverged_points > 0) j["unconverged"] = unconvergedJson(s, zone);
-  if (r.points > 0) {
-    j["hazard_farthest_from_target_m"] = r.farthest_m;
-    j["hazard_farthest_at_m"] = {r.farthest_at_m.x, r.farthest_at_m.y, r.farthest_at_m.z};
-  }
-  return j;
-}
-
-nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard) {
-  const FarFieldSpec& spec = field.spec();
-  const FieldStats& s = field.stats();
-  const Vec3& c = field.ball().centre_m;
-  const Vec3& d = field.peak().direction;
-  const double azimuth_deg = std::atan2(d.y, d.x) * 180.0 / kPi;
-  const double elevation_deg = std::asin(std::clamp(d.z, -1.0, 1.0)) * 180.0 / kPi;
-  nlohmann::json j = {
-      {"files", {"far_field.exr", "far_field.vtp"}},
-      {"centre_m", {c.x, c.y, c.z}},
-      {"lit_radius_m", field.ball().radius_m},
-      {"far_radius_m", spec.far_radius_m},
-      {"map_distance_m", field.mapDistance()},
-      {"tolerance", spec.tolerance},
-      {"floor_w_sr", spec.floor_w_sr},
-      {"face_pixels", spec.face_pixels},
-      {"directions",
-       {{"in_map", s.lattice_points},
-        {"evaluated", s.evaluated_points},
-        {"interpolated", s.interpolated_points},
-        {"proven_below_floor", s.below_floor_points},
-        {"unconverged", s.unconverged_points}}},
-      {"evaluations", s.evaluations},
-      {"seconds", s.seconds},
-      {"peak_intensity_w_sr", field.peak().intensity_w_sr},
-      {"peak_direction", {d.x, d.y, d.z}},
-      {"peak_azimuth_deg", azimuth_deg},
-      {"peak_elevation_deg", elevation_deg},
-      {"beam_direction", {spec.beam_direction.x, spec.beam_direction.y, spec.beam_direction.z}},
-      {"far_radius_rule",
-       "lit_radius_m (1 + (3 + g / sigma) / tolerance), g = max(1, 0.43 / sin(psi / 2)), psi "
-       "the angle from beam_direction: far_radius_m beyond 51 degrees, growing into the "
-       "forward cone"}};
-  j.update(farHazardJson(hazard));
-  if (s.unconverged_points > 0) {
-    j["unconverged_max_intensity_plus_error_w_sr"] = s.unconverged_max_upper_w_m2;
-  }
-  return j;
-}
-
-void printFarField(std::ostream& err, const FarField& field, const FarHazard& far_hazard) {
-  const FarReach& hazard = far_hazard.unaided;
-  const FarFieldSpec& spec = field.spec();
-  const FieldStats& s = field.stats();
-  err << "far field: 6 × " << spec.face_pixels + 1 << "² directions, " << s.evaluated_points
-      << " evaluated, " << formatNumber("%.4g", static_cast<double>(s.evaluations))
-      << " evaluations in " << formatDuration(s.seconds) << "; E = I/r² within "
-      << formatNumber("%g", spec.tolerance) << " of the peak beyond "
-      << formatNumber("%.4g", spec.far_radius_m)
-      << " m (farther within 51° of the beam's direction)\n";
-  const Vec3& peak = field.peak().direction;
-  err << "  peak intensity " << formatNumber("%.4g", field.peak().intensity_w_sr)
-      << " W/sr toward (" << formatNumber("%.4f", peak.x) << ", " << formatNumber("%.4f", peak.y)
-      << ", " << formatNumber("%.4f", peak.z) << ")";
-  if (hazard.nohd_m > 0.0) {
-    err << "; the hazard reaches " << formatNumber("%.4g", hazard.nohd_m)
-        << " m from the target centre toward (" << formatNumber("%.4f", hazard.direction.x) << ", "
-        << formatNumber("%.4f", hazard.direction.y) << ", "
-        << formatNumber("%.4f", hazard.direction.z) << ") (far-field NOHD)\n";
-  } else {
-    err << ": no direction is hazardous beyond the far radius\n";
-  }
-  if (far_hazard.aided) {
-    const FarReach& a = *far_hazard.aided;
-    err << "  through the optical aid: "
-        << (a.nohd_m > 0.0 ? "the hazard reaches " + formatNumber("%.4g", a.nohd_m) +
-                                 " m toward (" + formatNumber("%.4f", a.direction.x) + ", " +
-                                 formatNumber("%.4f", a.direction.y) + ", " +
-                                 formatNumber("%.4f", a.direction.z) + ") (aided NOHD)"
-                           : std::string("no direction is hazardous beyond the far radius"))
-        << "\n";
-  }
-  if (s.unconverged_points > 0) {
-    err << "  note: " << s.unconverged_points
-        << " directions did not reach the integration tolerance; intensity plus error at most "
-        << formatNumber("%.3g", s.unconverged_max_upper_w_m2) << " W/sr\n";
-  }
-}
 }  // namespace
 
 FarField sceneFarField(const SceneTarget& target, const Scene& scene, const MemoryWatch& watch,
@@ -429,32 +140,6 @@ FarField sceneFarField(const SceneTarget& target, const Scene& scene, const Memo
   return far;
 }
 
-PlaneMap planeMap(const ObserverField& field, const HazardSpec& hazard) {
-  const FieldSpec& spec = field.spec();
-  const auto n = spec.nodes();
-  PlaneMap m;
-  m.width = n[0];
-  m.height = n[1];
-  m.origin_m = spec.min_m;
-  m.u_axis = spec.axes[0];
-  m.v_axis = spec.axes[1];
-  m.pixel_m = spec.voxel_m;
-  const std::size_t count = static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]);
-  for (auto* channel : {&m.irradiance_w_m2, &m.hazard_ratio, &m.level, &m.status})
-    channel->reserve(count);
-  if (hazard.aid) m.aided_hazard_ratio.reserve(count);
-  for (int j = 0; j < n[1]; ++j)
-    for (int i = 0; i < n[0]; ++i) {
-      const double e = field.irradiance(i, j, 0);
-      m.irradiance_w_m2.push_back(static_cast<float>(e));
-      m.hazard_ratio.push_back(static_cast<float>(hazard.ratio(e)));
-      if (hazard.aid) m.aided_hazard_ratio.push_back(static_cast<float>(hazard.aidedRatio(e)));
-      m.level.push_back(static_cast<float>(field.level(i, j, 0)));
-      m.status.push_back(static_cast<float>(static_cast<int>(field.status(i, j, 0))));
-    }
-  return m;
-}
-
 void requireFinite(const ObserverField& field, const std::string& region) {
   const FieldStats& s = field.stats();
   if (s.non_finite_points > 0) {
@@ -486,7 +171,8 @@ RunInfo runInfo(const Scene& scene, const std::string& scene_file, std::string_v
   info.exposure_s = scene.hazard.exposure_s;
   info.mpe_w_m2 = scene.hazard.mpe_w_m2;
   info.mpe_rule = hazardCitation(scene.hazard);
-  info.aid_gain = scene.hazard.aid ? scene.hazard.aid->gain : 0.0;
+  info.optical_aid_gain = scene.hazard.aid ? scene.hazard.aid->gain : 0.0;
+  info.scaled = hazardArrays(scene.hazard);
   return info;
 }
 
@@ -532,10 +218,11 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   }
   std::optional<StagedAmr> amr;  // irradiance.vthb and its folder, committed with the files
   if (scene.observers) written.push_back("irradiance.vthb");
-  AtomicFile *far_exr = nullptr, *far_vtp = nullptr;
+  AtomicFile *far_exr = nullptr, *far_vtp = nullptr, *far_aided_vtp = nullptr;
   if (scene.far_field.enabled) {
     far_exr = open("far_field.exr");
     far_vtp = open("far_field.vtp");
+    if (scene.hazard.aid) far_aided_vtp = open("far_field_aided.vtp");
   }
   std::vector<AtomicFile*> exrs;
   for (const PlaneSpec& plane : scene.planes) exrs.push_back(open(plane.name + ".exr"));
@@ -583,13 +270,13 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     requireFinite(field, "the observer box");
     const FacetIntegrator& integrator = box.problem.integrator;
     if (writer) {
-      writeVti(vti->stream(), field, vtiStride(spec), info.mpe_w_m2);
-      writeBlocksVtu(vtu->stream(), field, info.mpe_w_m2);
+      writeVti(vti->stream(), field, vtiStride(spec), info.scaled);
+      writeBlocksVtu(vtu->stream(), field, info.scaled);
       writeTargetVtp(vtp->stream(), integrator, 2);
-      amr.emplace(writeAmr(dir / "irradiance.vthb", field, info.mpe_w_m2));
+      amr.emplace(writeAmr(dir / "irradiance.vthb", field, info.scaled));
     }
     const HazardZone zone = hazardZone(field, scene.hazard, targetCentre(integrator.target()));
-    j = summaryJson(field, zone, info, integrator.cullStats());
+    j = volumeSummaryJson(field, zone, info, integrator.cullStats());
     describeTarget(box.problem);
     j["hazard"] = hazardJson(scene.hazard, &zone);
     if (!args.quiet) {
@@ -607,11 +294,7 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     // Last: it consumes the field.
     if (writer) writeVdb(vdb->stream(), std::move(*box.field), info);
   } else {
-    j = {{"program", info.program_version},
-         {"scene_file", info.scene_file},
-         {"scene_fnv1a64", info.scene_fnv1a64},
-         {"scheme", info.scheme},
-         {"integration_scheme", info.integration_scheme}};
+    j = runJson(info);
     j["hazard"] = hazardJson(scene.hazard, nullptr);
   }
 
@@ -632,16 +315,7 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
           hazardZone(field, scene.hazard, targetCentre(r.problem.integrator.target()));
       planes.push_back(planeJson(plane, field, zone));
       describeTarget(r.problem);
-      if (!args.quiet) {
-        const FieldStats& s = field.stats();
-        err << "plane " << plane.name << ": " << s.nodes[0] << "×" << s.nodes[1] << " pixels at "
-            << spec.voxel_m << " m, " << s.evaluated_points << " evaluated, "
-            << formatNumber("%.4g", static_cast<double>(s.evaluations)) << " evaluations in "
-            << formatDuration(s.seconds) << "; peak hazard ratio "
-            << formatNumber("%.3g", zone.peak_ratio) << ", hazardous area "
-            << formatNumber("%.4g", hazardousArea(field, zone.above_mpe)) << " m²\n";
-        printUnconverged(err, s, zone, "  ");
-      }
+      if (!args.quiet) printPlane(err, plane, field, zone);
     }
     j["planes"] = planes;
   }
@@ -651,15 +325,19 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     // 2:1 lat-long, about as fine as the cube faces' centres, at most 4096 × 2048 pixels.
     const int height = std::min(far->spec().face_pixels, 2048);
     const LatLongMap map =
-        latLongMap(*far, height, mpe, mu, scene.hazard.aid ? mpe / scene.hazard.aid->gain : 0.0);
+        latLongMap(*far, height, mpe, mu, scene.hazard.aid ? scene.hazard.aidedMpeW_m2() : 0.0);
     std::vector<ExrChannel> channels = {{"intensity_w_sr", &map.intensity_w_sr},
                                         {"nohd_m", &map.nohd_m}};
     if (scene.hazard.aid) channels.push_back({"aided_nohd_m", &map.aided_nohd_m});
     writeLatLongExr(far_exr->stream(),
                     {map.width, map.height, far->ball().centre_m, far->spec().far_radius_m},
                     channels, {info.program_version, info.wavelength_nm, mpe});
-    writeHazardSurfaceVtp(far_vtp->stream(),
-                          hazardSurface(*far, std::min(far->spec().face_pixels, 128), mpe, mu));
+    const int surface_pixels = std::min(far->spec().face_pixels, 128);
+    writeHazardSurfaceVtp(far_vtp->stream(), hazardSurface(*far, surface_pixels, mpe, mu));
+    if (far_aided_vtp != nullptr) {
+      writeHazardSurfaceVtp(far_aided_vtp->stream(),
+                            hazardSurface(*far, surface_pixels, scene.hazard.aidedMpeW_m2(), mu));
+    }
     j["far_field"] = farFieldJson(*far, far_hazard);
     if (!args.quiet) printFarField(err, *far, far_hazard);
   }

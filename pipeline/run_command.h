@@ -59,8 +59,4 @@ FarField sceneFarField(const SceneTarget& target, const Scene& scene, const Memo
                        const std::string& what, std::ostream* progress_to, bool terminal,
                        PointExchange* exchange = nullptr);
 
-/// @brief A plane's field as the map `glint run` writes: lattice row j along v, column i along
-/// u; hazard_ratio and aided_hazard_ratio as @p hazard has them.
-PlaneMap planeMap(const ObserverField& field, const HazardSpec& hazard);
-
 }  // namespace glint

@@ -50,6 +50,7 @@ RunInfo sampleInfo() {
   info.exposure_s = 10.0;
   info.mpe_w_m2 = 50.0;
   info.mpe_rule = "test";
+  info.scaled = {{"hazard_ratio", "1 (irradiance / MPE)", 1.0 / 50.0}};
   return info;
 }
 
@@ -79,8 +80,9 @@ TEST(VdbFile, GridByGridIsByteForByteWhatOpenVdbWritesOfTheSameGrids) {
 
 TEST(VdbFile, HazardRatioIsTheIrradianceOverTheMpeAndTheOtherGridsAreKept) {
   const ObserverField reference = sampleField();
+  const RunInfo info = sampleInfo();
   std::ostringstream out;
-  writeVdb(out, sampleField(), sampleInfo());
+  writeVdb(out, sampleField(), info);
   std::istringstream in(out.str());
   openvdb::io::Stream reader(in);
   const openvdb::GridPtrVecPtr grids = reader.getGrids();
@@ -102,7 +104,8 @@ TEST(VdbFile, HazardRatioIsTheIrradianceOverTheMpeAndTheOtherGridsAreKept) {
     const openvdb::Coord c = it.getCoord();
     EXPECT_EQ(irradiance->tree().getValue(c), *it) << "irradiance at " << c;
     // Computed in double and stored as float, as the VTK files do.
-    EXPECT_EQ(ratio->tree().getValue(c), static_cast<float>(static_cast<double>(*it) / 50.0))
+    EXPECT_EQ(ratio->tree().getValue(c),
+              static_cast<float>(static_cast<double>(*it) * info.scaled[0].per_w_m2))
         << "hazard ratio at " << c;
   }
   for (const openvdb::Coord c : {openvdb::Coord(3, 3, 3), openvdb::Coord(9, 9, 9),
@@ -112,9 +115,10 @@ TEST(VdbFile, HazardRatioIsTheIrradianceOverTheMpeAndTheOtherGridsAreKept) {
   }
 }
 
-TEST(VdbFile, WithoutAnMpeThereIsNoHazardRatio) {
+TEST(VdbFile, WithoutScaledArraysOnlyTheFieldsGridsAreWritten) {
   RunInfo info = sampleInfo();
   info.mpe_w_m2 = 0.0;
+  info.scaled.clear();
   std::ostringstream out;
   writeVdb(out, sampleField(), info);
   std::istringstream in(out.str());
@@ -122,6 +126,33 @@ TEST(VdbFile, WithoutAnMpeThereIsNoHazardRatio) {
   const openvdb::GridPtrVecPtr grids = reader.getGrids();
   EXPECT_EQ(grids->size(), 3u);
   EXPECT_FALSE(openvdb::findGridByName(*grids, "hazard_ratio")) << "written without an MPE";
+}
+
+TEST(VdbFile, EachScaledGridIsTheIrradianceTimesItsFactorWithinTwoFloatRoundings) {
+  // The aided ratio is the hazard ratio's grid rescaled in place (gain 34.3): two roundings to
+  // float, each within 2^-24 relative.
+  RunInfo info = sampleInfo();
+  info.scaled.push_back({"aided_hazard_ratio", "1 (aided)", 34.3 / 50.0});
+  const ObserverField reference = sampleField();
+  std::ostringstream out;
+  writeVdb(out, sampleField(), info);
+  std::istringstream in(out.str());
+  openvdb::io::Stream reader(in);
+  const openvdb::GridPtrVecPtr grids = reader.getGrids();
+  ASSERT_EQ(grids->size(), 5u) << "irradiance, two scaled grids, level and status";
+  const auto aided = openvdb::gridPtrCast<openvdb::FloatGrid>(
+      openvdb::findGridByName(*grids, "aided_hazard_ratio"));
+  ASSERT_TRUE(aided);
+  EXPECT_EQ(aided->metaValue<std::string>("units"), "1 (aided)");
+  int compared = 0;
+  for (auto it = reference.grids().irradiance->cbeginValueOn(); it; ++it) {
+    const double want = static_cast<double>(*it) * 34.3 / 50.0;
+    EXPECT_NEAR(aided->tree().getValue(it.getCoord()), want,
+                2.0 * 0x1p-24 * std::abs(want) + 1e-300)
+        << "aided ratio at " << it.getCoord();
+    ++compared;
+  }
+  EXPECT_GT(compared, 0);
 }
 
 }  // namespace

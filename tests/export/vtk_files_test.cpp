@@ -31,6 +31,15 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr double kMpe = 50.0;
+constexpr double kAidGain = 34.3;
+// What pipeline/hazard gives the writers for an MPE of 50 W/m² and a 7×50 binocular.
+const std::vector<ScaledArray> kRatios = {{"hazard_ratio", "", 1.0 / kMpe},
+                                          {"aided_hazard_ratio", "", kAidGain / kMpe}};
+
+// A scaled array's value: irradiance × per_w_m2 in double, stored as float.
+float scaled(float e_w_m2, const ScaledArray& a) {
+  return static_cast<float>(static_cast<double>(e_w_m2) * a.per_w_m2);
+}
 
 // A 16-voxel box of two coarse blocks of 8 a side along x (17 × 9 × 9 lattice points):
 // the first refined to level 1 (blocks of 4), one of those to level 2 (blocks of 2); the
@@ -86,7 +95,7 @@ fs::path freshFolder(const std::string& name) {
 TEST(VtkFiles, VtiReadsBackWithVtkAsTheFieldsValuesExactly) {
   const ObserverField field = sampleField();
   std::ostringstream out;
-  writeVti(out, field, 1, kMpe);
+  writeVti(out, field, 1, kRatios);
   ASSERT_EQ(out.str().find("<AppendedData"), std::string::npos)
       << "appended data is unreadable under expat 2.6 (VTK issue 19258)";
 
@@ -109,9 +118,11 @@ TEST(VtkFiles, VtiReadsBackWithVtkAsTheFieldsValuesExactly) {
 
   auto* e = vtkFloatArray::SafeDownCast(image->GetPointData()->GetArray("irradiance_w_m2"));
   auto* r = vtkFloatArray::SafeDownCast(image->GetPointData()->GetArray("hazard_ratio"));
+  auto* aided = vtkFloatArray::SafeDownCast(image->GetPointData()->GetArray("aided_hazard_ratio"));
   auto* level = vtkIntArray::SafeDownCast(image->GetPointData()->GetArray("refinement_level"));
   auto* status = vtkIntArray::SafeDownCast(image->GetPointData()->GetArray("status"));
-  ASSERT_TRUE(e && r && level && status) << "Float32 irradiance and ratio, Int32 level, status";
+  ASSERT_TRUE(e && r && aided && level && status)
+      << "Float32 irradiance and both ratios, Int32 level, status";
   int nonzero = 0;
   for (int k = 0; k < n[2]; ++k)
     for (int j = 0; j < n[1]; ++j)
@@ -120,8 +131,10 @@ TEST(VtkFiles, VtiReadsBackWithVtkAsTheFieldsValuesExactly) {
         const float want = latticeValue(field, i, j, k);
         nonzero += want != 0.0f;
         ASSERT_EQ(e->GetValue(p), want) << "irradiance at (" << i << ", " << j << ", " << k << ")";
-        ASSERT_EQ(r->GetValue(p), static_cast<float>(static_cast<double>(want) / kMpe))
+        ASSERT_EQ(r->GetValue(p), scaled(want, kRatios[0]))
             << "hazard ratio at (" << i << ", " << j << ", " << k << ")";
+        ASSERT_EQ(aided->GetValue(p), scaled(want, kRatios[1]))
+            << "aided hazard ratio at (" << i << ", " << j << ", " << k << ")";
         ASSERT_EQ(status->GetValue(p), field.status(i, j, k) == VoxelStatus::Evaluated ? 1 : 2)
             << "status at (" << i << ", " << j << ", " << k << ")";
         ASSERT_EQ(level->GetValue(p), 1);
@@ -133,7 +146,7 @@ TEST(VtkFiles, VtiReadsBackWithVtkAsTheFieldsValuesExactly) {
 TEST(VtkFiles, AmrHasOneLevelPerBlockResolutionEachHoldingTheLatticeValues) {
   const ObserverField field = sampleField();
   const fs::path dir = freshFolder("glint-vtk-amr");
-  writeAmr(dir / "irradiance.vthb", field, kMpe).commit();
+  writeAmr(dir / "irradiance.vthb", field, kRatios).commit();
   ASSERT_TRUE(fs::is_regular_file(dir / "irradiance.vthb"));
   ASSERT_TRUE(fs::is_directory(dir / "irradiance"));
 
@@ -157,7 +170,9 @@ TEST(VtkFiles, AmrHasOneLevelPerBlockResolutionEachHoldingTheLatticeValues) {
       EXPECT_DOUBLE_EQ(grid->GetSpacing()[0], 0.25 * step) << "level " << l;
       auto* e = vtkFloatArray::SafeDownCast(grid->GetPointData()->GetArray("irradiance_w_m2"));
       auto* r = vtkFloatArray::SafeDownCast(grid->GetPointData()->GetArray("hazard_ratio"));
-      ASSERT_TRUE(e && r) << "level " << l;
+      auto* aided =
+          vtkFloatArray::SafeDownCast(grid->GetPointData()->GetArray("aided_hazard_ratio"));
+      ASSERT_TRUE(e && r && aided) << "level " << l;
       for (vtkIdType p = 0; p < grid->GetNumberOfPoints(); ++p) {
         double x[3];
         grid->GetPoint(p, x);
@@ -167,7 +182,8 @@ TEST(VtkFiles, AmrHasOneLevelPerBlockResolutionEachHoldingTheLatticeValues) {
         const float want = latticeValue(field, i, j, k);
         ASSERT_EQ(e->GetValue(p), want)
             << "level " << l << " at (" << i << ", " << j << ", " << k << ")";
-        ASSERT_EQ(r->GetValue(p), static_cast<float>(static_cast<double>(want) / kMpe));
+        ASSERT_EQ(r->GetValue(p), scaled(want, kRatios[0]));
+        ASSERT_EQ(aided->GetValue(p), scaled(want, kRatios[1]));
         ++compared;
       }
     }
@@ -180,12 +196,12 @@ TEST(VtkFiles, AmrHasOneLevelPerBlockResolutionEachHoldingTheLatticeValues) {
 TEST(VtkFiles, AmrLeavesNothingUntilCommittedAndReplacesThePreviousWhole) {
   const ObserverField field = sampleField();
   const fs::path dir = freshFolder("glint-vtk-staged");
-  { const StagedAmr dropped = writeAmr(dir / "irradiance.vthb", field, kMpe); }
+  { const StagedAmr dropped = writeAmr(dir / "irradiance.vthb", field, kRatios); }
   EXPECT_TRUE(fs::is_empty(dir)) << "an AMR dropped uncommitted leaves no file or folder";
 
   fs::create_directories(dir / "irradiance");
   { std::ofstream(dir / "irradiance" / "stale.vti") << "old"; }
-  writeAmr(dir / "irradiance.vthb", field, kMpe).commit();
+  writeAmr(dir / "irradiance.vthb", field, kRatios).commit();
   EXPECT_FALSE(fs::exists(dir / "irradiance" / "stale.vti")) << "the previous folder is replaced";
   int entries = 0;
   for (const auto& entry : fs::directory_iterator(dir)) {
@@ -200,7 +216,7 @@ TEST(VtkFiles, AmrLeavesNothingUntilCommittedAndReplacesThePreviousWhole) {
 TEST(VtkFiles, AmrIntoAMissingFolderThrowsOutputError) {
   const ObserverField field = sampleField();
   const fs::path dir = freshFolder("glint-vtk-missing") / "not-there";
-  EXPECT_THROW((void)writeAmr(dir / "irradiance.vthb", field, kMpe), OutputError);
+  EXPECT_THROW((void)writeAmr(dir / "irradiance.vthb", field, kRatios), OutputError);
   fs::remove_all(dir.parent_path());
 }
 

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <tuple>
 
 #include "export/exr_map.h"
 #include "export/lattice_vdb.h"
@@ -196,6 +197,8 @@ TEST(BatchFarField, EachScenarioMatchesGlintRunAndTheSummaryNamesTheFarthest) {
                  "material": "mirror", "segments": 8}],
     "observers": {"min": [-1, 0.5, -0.25], "max": [0, 1.5, 0.25], "voxel_m": 0.25,
                   "block_m": 1.0, "tolerance": 0.05},
+    "planes": [{"name": "far", "origin": [-2, 100, -2], "u_axis": [1, 0, 0], "v_axis": [0, 0, 1],
+                "size_m": [4, 4], "pixel_m": 0.25}],
     "far_field": {"tolerance": 0.05, "face_pixels": 64}})";
   std::ofstream(dir / "study.json") << R"({"scene": "scene.json", "sweep": {"yaw_deg": [0, 20]}})";
   const Outcome batch =
@@ -257,6 +260,8 @@ TEST(BatchHazard, PulsesFogAndBinocularsReachEveryScenarioAndTheSummary) {
                  "material": "mirror", "segments": 8}],
     "observers": {"min": [-1, 0.5, -0.25], "max": [0, 1.5, 0.25], "voxel_m": 0.25,
                   "block_m": 1.0, "tolerance": 0.05},
+    "planes": [{"name": "far", "origin": [-2, 100, -2], "u_axis": [1, 0, 0], "v_axis": [0, 0, 1],
+                "size_m": [4, 4], "pixel_m": 0.25}],
     "far_field": {"tolerance": 0.05, "face_pixels": 64}})";
   std::ofstream(dir / "study.json") << R"({"scene": "scene.json", "sweep": {"yaw_deg": [0, 20]}})";
   const Outcome batch =
@@ -288,6 +293,47 @@ TEST(BatchHazard, PulsesFogAndBinocularsReachEveryScenarioAndTheSummary) {
             std::string::npos)
       << header;
   EXPECT_NE(header.find(",far_aided_max_nohd_m,"), std::string::npos) << header;
+
+  // The coverage maps through the aid, box and plane: at every point at least the naked eye's
+  // coverage, and the fraction of the two scenarios whose stored irradiance × 34.3 reaches the
+  // MPE; the plane 100 m down the glint is hazardous through the aid only (unaided peak 0.53).
+  const Scene base = loadScene(dir / "scene.json");
+  auto read = [&](const fs::path& file, const std::string& channel, const FieldSpec& spec) {
+    if (file.extension() == ".vdb") return readLatticeVdb(file.string(), channel, spec);
+    int w = 0, h = 0;
+    return readExrChannel(file.string(), channel, w, h);
+  };
+  int aided_only = 0;
+  for (const auto& [spec, study_file, scenario_file] :
+       {std::tuple{fieldSpec(base), "box.vdb", "irradiance.vdb"},
+        std::tuple{planeFieldSpec(base, base.planes[0]), "far.exr", "far.exr"}}) {
+    const fs::path map = dir / "out" / study_file;
+    const auto cover = read(map, "coverage_probability", spec);
+    const auto aided_cover = read(map, "aided_coverage_probability", spec);
+    const auto aided_max = read(map, "aided_max_hazard_ratio", spec);
+    std::vector<std::vector<float>> scenario_e;
+    for (int s = 0; s < 2; ++s) {
+      scenario_e.push_back(
+          read(dir / "out" / "scenarios" / ("s00000" + std::to_string(s)) / scenario_file,
+               "irradiance_w_m2", spec));
+    }
+    ASSERT_EQ(aided_cover.size(), cover.size()) << study_file;
+    for (std::size_t i = 0; i < cover.size(); ++i) {
+      int reached = 0;
+      for (const auto& e : scenario_e) reached += base.hazard.aidedRatio(e[i]) >= 1.0 ? 1 : 0;
+      ASSERT_EQ(aided_cover[i], 0.5f * static_cast<float>(reached)) << study_file << " " << i;
+      ASSERT_GE(aided_cover[i], cover[i]) << study_file << " " << i;
+      aided_only += aided_cover[i] > cover[i] ? 1 : 0;
+      const float e_max = std::max(scenario_e[0][i], scenario_e[1][i]);
+      ASSERT_EQ(aided_max[i], static_cast<float>(base.hazard.aidedRatio(e_max)))
+          << study_file << " " << i;
+    }
+  }
+  EXPECT_GT(aided_only, 0) << "premise: the aid makes some points hazardous the eye alone is not";
+  const auto& plane = summary.at("regions").at(1);
+  EXPECT_GT(plane.at("aided_hazardous_in_any_scenario_m2").get<double>(),
+            plane.at("hazardous_in_any_scenario_m2").get<double>())
+      << plane.dump();
   fs::remove_all(dir);
 }
 

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -116,6 +117,7 @@ TEST(Examples, FinnedMissileOcclusionOnlyEverRemovesLight) {
 struct CoarseRun {
   test::Outcome run;
   nlohmann::json summary;
+  std::set<std::string> files;  ///< the output folder's entries
 };
 CoarseRun runCoarseExample(const std::string& name,
                            const std::function<void(nlohmann::json&)>& edit = {},
@@ -130,8 +132,11 @@ CoarseRun runCoarseExample(const std::string& name,
   std::ofstream(dir / "cylinder.json") << scene.dump();
   CoarseRun r;
   r.run = test::glint({"run", (dir / "cylinder.json").string(), "-o", (dir / "out").string()});
-  if (r.run.status == 0)
+  if (r.run.status == 0) {
     r.summary = nlohmann::json::parse(std::ifstream(dir / "out" / "summary.json"));
+    for (const auto& entry : std::filesystem::directory_iterator(dir / "out"))
+      r.files.insert(entry.path().filename().string());
+  }
   std::filesystem::remove_all(dir);
   return r;
 }
@@ -339,6 +344,8 @@ TEST(Examples, BinocularsScaleTheAidedRatioAndWidenTheZone) {
   EXPECT_GE(aided.at("volume_m3").get<double>(), unaided.at("volume_m3").get<double>());
   EXPECT_TRUE(aided.at("reaches_box_edge").get<bool>()) << "34.3× reaches beyond the 8 m box";
   EXPECT_TRUE(summary.at("far_field").contains("aided_max_nohd_m")) << summary.dump();
+  EXPECT_EQ(run.files.count("far_field_aided.vtp"), 1u) << "the aided eye's hazard boundary";
+  EXPECT_EQ(summary.at("far_field").at("files").size(), 3u) << summary.at("far_field").dump();
   std::filesystem::remove_all(points.dir);
 }
 

@@ -1,0 +1,359 @@
+#include "pipeline/batch_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <ostream>
+
+#include "export/atomic_file.h"
+#include "export/exr_map.h"
+#include "export/lattice_vdb.h"
+#include "glint/version.h"
+#include "pipeline/progress.h"
+
+namespace glint {
+namespace {
+
+// Linear interpolation between order statistics (Hyndman and Fan's type 7, as numpy's default).
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const double h = q * static_cast<double>(v.size() - 1);
+  const auto lo = static_cast<std::size_t>(std::floor(h));
+  const std::size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (h - static_cast<double>(lo)) * (v[hi] - v[lo]);
+}
+
+nlohmann::json quantilesJson(const std::vector<double>& v) {
+  double sum = 0.0;
+  for (double x : v) sum += x;
+  return {
+      {"min", quantile(v, 0.0)},  {"p05", quantile(v, 0.05)},
+      {"p25", quantile(v, 0.25)}, {"median", quantile(v, 0.5)},
+      {"p75", quantile(v, 0.75)}, {"p95", quantile(v, 0.95)},
+      {"max", quantile(v, 1.0)},  {"mean", v.empty() ? 0.0 : sum / static_cast<double>(v.size())}};
+}
+
+// %.10g: enough for every parameter a study file can hold, and the same text on every rank.
+std::string csvNumber(double x) { return formatNumber("%.10g", x); }
+
+}  // namespace
+
+std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
+                         const std::map<std::size_t, nlohmann::json>& records, bool far_field,
+                         bool aided) {
+  std::string csv =
+      "scenario,time_s,offset_x_m,offset_y_m,offset_z_m,pose_yaw_deg,pose_pitch_deg,"
+      "pose_roll_deg,yaw_deg,pitch_deg,roll_deg,sigma,specular_reflectance,jitter_sample,"
+      "jitter_u_rad,jitter_v_rad";
+  for (const StudyLattice& r : lattices) {
+    const std::string extent = r.plane ? "_hazardous_area_m2" : "_hazard_volume_m3";
+    csv += "," + r.name + "_peak_hazard_ratio," + r.name + extent;
+    if (aided) csv += "," + r.name + "_aided_peak_hazard_ratio," + r.name + "_aided" + extent;
+  }
+  if (far_field) csv += ",far_max_nohd_m,far_peak_intensity_w_sr";
+  if (far_field && aided) csv += ",far_aided_max_nohd_m";
+  csv += ",unconverged_points,evaluations,seconds\n";
+  for (const auto& [index, rec] : records) {
+    const nlohmann::json& p = rec.at("parameters");
+    std::string row = std::to_string(index);
+    auto cell = [&row](const std::string& value) {
+      row += ',';
+      row += value;
+    };
+    auto number = [&](const nlohmann::json& x) { cell(csvNumber(x.get<double>())); };
+    number(p.at("time_s"));
+    for (const nlohmann::json& x : p.at("offset_m")) number(x);
+    for (const char* key :
+         {"pose_yaw_deg", "pose_pitch_deg", "pose_roll_deg", "yaw_deg", "pitch_deg", "roll_deg"})
+      number(p.at(key));
+    // Empty: as in the scene.
+    for (const char* key : {"sigma", "specular_reflectance"})
+      p.contains(key) ? number(p.at(key)) : cell("");
+    const int sample = p.at("jitter_sample").get<int>();
+    cell(sample >= 0 ? std::to_string(sample) : std::string());
+    number(p.at("jitter_u_rad"));
+    number(p.at("jitter_v_rad"));
+    for (const nlohmann::json& r : rec.at("regions")) {
+      const bool plane = r.contains("hazardous_area_m2");
+      number(r.at("peak_hazard_ratio"));
+      number(plane ? r.at("hazardous_area_m2") : r.at("hazard_volume_m3"));
+      if (aided) {
+        number(r.at("aided_peak_hazard_ratio"));
+        number(plane ? r.at("aided_hazardous_area_m2") : r.at("aided_hazard_volume_m3"));
+      }
+    }
+    if (far_field) {
+      number(rec.at("far_field").at("max_nohd_m"));
+      number(rec.at("far_field").at("peak_intensity_w_sr"));
+      if (aided) number(rec.at("far_field").at("aided_max_nohd_m"));
+    }
+    cell(std::to_string(rec.at("unconverged_points").get<std::int64_t>()));
+    cell(std::to_string(rec.at("evaluations").get<std::int64_t>()));
+    cell(formatNumber("%.3f", rec.at("seconds").get<double>()));
+    row += '\n';
+    csv += row;
+  }
+  return csv;
+}
+
+void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, const Study& study,
+                   std::size_t scenarios) {
+  const HazardSpec& h = study.base.hazard;
+  std::vector<float> max_ratio(r.max_w_m2.size());
+  for (std::size_t i = 0; i < max_ratio.size(); ++i)
+    max_ratio[i] = static_cast<float>(h.ratio(static_cast<double>(r.max_w_m2[i])));
+  const std::vector<float> cover = coverage(r.hazardous, scenarios);
+  // With an optical aid, the same through it.
+  std::vector<float> aided_max_ratio, aided_cover;
+  if (h.aid) {
+    aided_max_ratio.resize(r.max_w_m2.size());
+    for (std::size_t i = 0; i < aided_max_ratio.size(); ++i)
+      aided_max_ratio[i] = static_cast<float>(h.aidedRatio(static_cast<double>(r.max_w_m2[i])));
+    aided_cover = coverage(r.aided_hazardous, scenarios);
+  }
+  const std::string program = std::string("glint ") + GLINT_VERSION;
+  AtomicFile file(path);
+  if (r.plane) {
+    const PlaneSpec& p = study.base.planes[r.plane_index];
+    PlaneGrid g;
+    const auto n = r.spec.nodes();
+    g.width = n[0];
+    g.height = n[1];
+    g.origin_m = r.spec.min_m;
+    g.u_axis = p.u_axis;
+    g.v_axis = p.v_axis;
+    g.pixel_m = r.spec.voxel_m;
+    std::vector<ExrChannel> channels = {{"max_irradiance_w_m2", &r.max_w_m2},
+                                        {"max_hazard_ratio", &max_ratio},
+                                        {"coverage_probability", &cover}};
+    if (h.aid) {
+      channels.push_back({"aided_max_hazard_ratio", &aided_max_ratio});
+      channels.push_back({"aided_coverage_probability", &aided_cover});
+    }
+    writeExr(file.stream(), g, channels, {program, study.base.laser.wavelength_nm, h.mpe_w_m2});
+  } else {
+    LatticeMeta meta;
+    meta.strings = {{"program", program},
+                    {"study_file", study.source},
+                    {"study_fnv1a64", study.fnv1a64},
+                    {"length_unit", "m"},
+                    {"mpe_rule", hazardCitation(h)}};
+    meta.numbers = {{"scenarios", static_cast<double>(scenarios)},
+                    {"wavelength_nm", study.base.laser.wavelength_nm},
+                    {"exposure_s", h.exposure_s},
+                    {"mpe_w_m2", h.mpe_w_m2},
+                    {"voxel_m", r.spec.voxel_m}};
+    std::vector<LatticeChannel> channels = {
+        {"max_irradiance_w_m2", "W/m^2", &r.max_w_m2},
+        {"max_hazard_ratio", "1 (irradiance / MPE)", &max_ratio},
+        {"coverage_probability", "1 (fraction of scenarios at or above the MPE)", &cover}};
+    if (h.aid) {
+      meta.numbers["optical_aid_gain"] = h.aid->gain;
+      channels.push_back(
+          {"aided_max_hazard_ratio", "1 (irradiance x optical aid gain / MPE)", &aided_max_ratio});
+      channels.push_back({"aided_coverage_probability",
+                          "1 (fraction of scenarios at or above the MPE through the aid)",
+                          &aided_cover});
+    }
+    writeLatticeVdb(file.stream(), r.spec, channels, meta);
+  }
+  file.commit();
+}
+
+nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLattice>& lattices,
+                                const std::map<std::size_t, nlohmann::json>& records,
+                                std::size_t resumed, int ranks, double wall_s) {
+  const HazardSpec& h = study.base.hazard;
+  const std::size_t n = records.size();
+  nlohmann::json j = {
+      {"program", std::string("glint ") + GLINT_VERSION},
+      {"study_file", study.source},
+      {"study_fnv1a64", study.fnv1a64},
+      {"scene_file", study.scene_path.string()},
+      {"description", study.description},
+      {"scenarios", {{"count", n}, {"computed", n - resumed}, {"resumed", resumed}}},
+      {"ranks", ranks},
+      {"wall_seconds", wall_s},
+      {"hazard", hazardLimitsJson(h)}};
+  std::vector<double> evaluations, seconds;
+  for (const auto& [index, rec] : records) {
+    evaluations.push_back(static_cast<double>(rec.at("evaluations").get<std::int64_t>()));
+    seconds.push_back(rec.at("seconds").get<double>());
+  }
+  j["evaluations"] = quantilesJson(evaluations);
+  j["scenario_seconds"] = quantilesJson(seconds);
+  nlohmann::json rs = nlohmann::json::array();
+  for (std::size_t k = 0; k < lattices.size(); ++k) {
+    const StudyLattice& r = lattices[k];
+    std::vector<double> peak, extent, aided_peak, aided_extent;
+    std::size_t with_hazard = 0, with_aided_hazard = 0;
+    for (const auto& [index, rec] : records) {
+      const nlohmann::json& x = rec.at("regions")[k];
+      peak.push_back(x.at("peak_hazard_ratio").get<double>());
+      const std::int64_t points = x.at("hazardous_points").get<std::int64_t>();
+      extent.push_back(static_cast<double>(points) * r.cell());
+      with_hazard += points > 0 ? 1 : 0;
+      if (h.aid) {
+        aided_peak.push_back(x.at("aided_peak_hazard_ratio").get<double>());
+        const std::int64_t aided = x.at("aided_hazardous_points").get<std::int64_t>();
+        aided_extent.push_back(static_cast<double>(aided) * r.cell());
+        with_aided_hazard += aided > 0 ? 1 : 0;
+      }
+    }
+    std::int64_t ever = 0, half = 0;
+    float max_e = 0.0f;
+    for (std::size_t i = 0; i < r.hazardous.size(); ++i) {
+      ever += r.hazardous[i] > 0 ? 1 : 0;
+      half += r.hazardous[i] > 0 && 2 * static_cast<std::size_t>(r.hazardous[i]) >= n ? 1 : 0;
+      max_e = std::max(max_e, r.max_w_m2[i]);
+    }
+    const char* unit = r.plane ? "_m2" : "_m3";
+    rs.push_back(
+        {{"name", r.name},
+         {"kind", r.plane ? "plane" : "box"},
+         {"file", r.studyFile()},
+         {"peak_hazard_ratio", quantilesJson(peak)},
+         {std::string(r.plane ? "hazardous_area" : "hazard_volume") + unit, quantilesJson(extent)},
+         {"scenarios_with_hazard", with_hazard},
+         {"fraction_of_scenarios_with_hazard",
+          n > 0 ? static_cast<double>(with_hazard) / static_cast<double>(n) : 0.0},
+         {"max_irradiance_w_m2", max_e},
+         {std::string("hazardous_in_any_scenario") + unit, static_cast<double>(ever) * r.cell()},
+         {std::string("hazardous_in_half_or_more") + unit, static_cast<double>(half) * r.cell()}});
+    if (h.aid) {
+      std::int64_t aided_ever = 0;
+      for (std::uint32_t c : r.aided_hazardous) aided_ever += c > 0 ? 1 : 0;
+      nlohmann::json& a = rs.back();
+      a[std::string("aided_hazardous_in_any_scenario") + unit] =
+          static_cast<double>(aided_ever) * r.cell();
+      a["aided_peak_hazard_ratio"] = quantilesJson(aided_peak);
+      a[std::string(r.plane ? "aided_hazardous_area" : "aided_hazard_volume") + unit] =
+          quantilesJson(aided_extent);
+      a["scenarios_with_aided_hazard"] = with_aided_hazard;
+    }
+  }
+  j["regions"] = rs;
+  if (study.base.far_field.enabled) {
+    std::vector<double> nohd;
+    std::size_t beyond = 0;
+    const nlohmann::json* farthest = nullptr;
+    std::size_t farthest_index = 0;
+    for (const auto& [index, rec] : records) {
+      const nlohmann::json& f = rec.at("far_field");
+      const double d = f.at("max_nohd_m").get<double>();
+      nohd.push_back(d);
+      beyond += d > 0.0 ? 1 : 0;
+      if (farthest == nullptr || d > farthest->at("max_nohd_m").get<double>()) {
+        farthest = &f;
+        farthest_index = index;
+      }
+    }
+    nlohmann::json far = {{"max_nohd_m", quantilesJson(nohd)},
+                          {"scenarios_hazardous_beyond_far_radius", beyond}};
+    if (farthest != nullptr) {
+      far["farthest"] = {{"scenario", farthest_index},
+                         {"max_nohd_m", farthest->at("max_nohd_m")},
+                         {"direction", farthest->at("max_nohd_direction")},
+                         {"far_radius_m", farthest->at("far_radius_m")}};
+    }
+    if (h.aid) {
+      std::vector<double> aided;
+      for (const auto& [index, rec] : records) {
+        aided.push_back(rec.at("far_field").at("aided_max_nohd_m").get<double>());
+      }
+      far["aided_max_nohd_m"] = quantilesJson(aided);
+    }
+    j["far_field"] = far;
+  }
+  return j;
+}
+
+nlohmann::json scenarioParametersJson(const Scenario& s) {
+  nlohmann::json p = {{"time_s", s.pose.time_s},
+                      {"offset_m", {s.pose.offset_m.x, s.pose.offset_m.y, s.pose.offset_m.z}},
+                      {"pose_yaw_deg", s.pose.yaw_deg},
+                      {"pose_pitch_deg", s.pose.pitch_deg},
+                      {"pose_roll_deg", s.pose.roll_deg},
+                      {"yaw_deg", s.yaw_deg},
+                      {"pitch_deg", s.pitch_deg},
+                      {"roll_deg", s.roll_deg},
+                      {"jitter_sample", s.jitter_sample},
+                      {"jitter_u_rad", s.jitter_u_rad},
+                      {"jitter_v_rad", s.jitter_v_rad}};
+  if (s.sigma) p["sigma"] = *s.sigma;
+  if (s.specular_reflectance) p["specular_reflectance"] = *s.specular_reflectance;
+  return p;
+}
+
+nlohmann::json scenarioRegionJson(const StudyLattice& r, const FieldStats& st, const HazardSpec& h,
+                                  const HazardousPoints& hazardous) {
+  const char* extent = r.plane ? "hazardous_area_m2" : "hazard_volume_m3";
+  nlohmann::json region = {{"name", r.name},
+                           {"peak_hazard_ratio", h.ratio(st.peak_w_m2)},
+                           {"hazardous_points", hazardous.unaided},
+                           {extent, static_cast<double>(hazardous.unaided) * r.cell()},
+                           {"evaluations", st.evaluations},
+                           {"unconverged_points", st.unconverged_points},
+                           // Below 1, no unconverged point of the scenario can be hazardous
+                           // (aided, where there is an aid).
+                           {"unconverged_max_hazard_ratio_plus_error",
+                            std::max(h.ratio(st.unconverged_max_upper_w_m2),
+                                     h.aidedRatio(st.unconverged_max_upper_w_m2))}};
+  if (h.pulse) {
+    region["peak_radiant_exposure_j_m2_per_pulse"] = h.pulseRadiantExposureJ_m2(st.peak_w_m2);
+  }
+  if (h.aid) {
+    region["aided_peak_hazard_ratio"] = h.aidedRatio(st.peak_w_m2);
+    region["aided_hazardous_points"] = hazardous.aided;
+    region[std::string("aided_") + extent] = static_cast<double>(hazardous.aided) * r.cell();
+  }
+  return region;
+}
+
+nlohmann::json scenarioFarFieldJson(const FarField& far, const HazardSpec& h) {
+  const Vec3& peak = far.peak().direction;
+  nlohmann::json j = {{"far_radius_m", far.spec().far_radius_m},
+                      {"peak_intensity_w_sr", far.peak().intensity_w_sr},
+                      {"peak_direction", {peak.x, peak.y, peak.z}},
+                      {"evaluations", far.stats().evaluations},
+                      {"unconverged_directions", far.stats().unconverged_points}};
+  j.update(farHazardJson(farHazard(far, h)));
+  if (far.stats().unconverged_points > 0) {
+    j["unconverged_max_intensity_plus_error_w_sr"] = far.stats().unconverged_max_upper_w_m2;
+  }
+  return j;
+}
+
+void printBatchSummary(std::ostream& err, const nlohmann::json& summary,
+                       const std::vector<StudyLattice>& lattices,
+                       const std::filesystem::path& out_dir, double wall_s) {
+  const std::size_t n = summary.at("scenarios").at("count").get<std::size_t>();
+  for (const nlohmann::json& r : summary.at("regions")) {
+    const bool plane = r.at("kind") == "plane";
+    const std::string unit = plane ? "_m2" : "_m3";
+    const char* symbol = plane ? "m²" : "m³";
+    const nlohmann::json& q = r.at("peak_hazard_ratio");
+    err << "  " << r.at("name").get<std::string>() << ": peak hazard ratio median "
+        << formatNumber("%.3g", q.at("median").get<double>()) << ", p95 "
+        << formatNumber("%.3g", q.at("p95").get<double>()) << ", max "
+        << formatNumber("%.3g", q.at("max").get<double>()) << "; hazard in "
+        << r.at("scenarios_with_hazard").get<std::size_t>() << " of " << n
+        << " scenarios; hazardous in any scenario "
+        << formatNumber("%.4g", r.at("hazardous_in_any_scenario" + unit).get<double>()) << " "
+        << symbol << "\n";
+    if (r.contains("scenarios_with_aided_hazard")) {
+      err << "    through the optical aid: peak ratio max "
+          << formatNumber("%.3g", r.at("aided_peak_hazard_ratio").at("max").get<double>())
+          << "; hazard in " << r.at("scenarios_with_aided_hazard").get<std::size_t>() << " of " << n
+          << " scenarios; hazardous in any scenario "
+          << formatNumber("%.4g", r.at("aided_hazardous_in_any_scenario" + unit).get<double>())
+          << " " << symbol << "\n";
+    }
+  }
+  err << "  wrote " << out_dir.string() << "/{scenarios.csv, summary.json";
+  for (const StudyLattice& r : lattices) err << ", " << r.studyFile();
+  err << "} in " << formatDuration(wall_s) << "\n";
+}
+
+}  // namespace glint

@@ -1,0 +1,58 @@
+#pragma once
+/// @file
+/// @brief What `glint batch` reports: each scenario's record (result.json), the study's
+/// scenarios.csv, its aggregated maps (`box.vdb`, `<plane>.exr`), summary.json and the lines
+/// on the terminal (README "Batch studies").
+
+#include <cstddef>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json_fwd.hpp>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "observers/far_field.h"
+#include "observers/field.h"
+#include "pipeline/hazard.h"
+#include "pipeline/study.h"
+#include "pipeline/study_maps.h"
+
+namespace glint {
+
+/// @brief A scenario's `parameters` in its result.json (and so its row of scenarios.csv).
+nlohmann::json scenarioParametersJson(const Scenario& s);
+
+/// @brief One region's entry of a scenario's result.json: its peak ratio, hazardous points and
+/// extent, counts, the per-pulse peak and the aided figures where the scene has them.
+nlohmann::json scenarioRegionJson(const StudyLattice& r, const FieldStats& stats,
+                                  const HazardSpec& h, const HazardousPoints& hazardous);
+
+/// @brief The far field's entry of a scenario's result.json (with farHazardJson()).
+nlohmann::json scenarioFarFieldJson(const FarField& far, const HazardSpec& h);
+
+/// @brief scenarios.csv: one row per scenario record, in index order (README's columns).
+std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
+                         const std::map<std::size_t, nlohmann::json>& records, bool far_field,
+                         bool aided);
+
+/// @brief Writes one region's aggregated map to @p path (StudyLattice::studyFile()): maximum
+/// irradiance and hazard ratio, coverage probability, and with an optical aid the aided ratio
+/// and coverage, each whole or not at all.
+/// @throw OutputError when the file cannot be written.
+void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, const Study& study,
+                   std::size_t scenarios);
+
+/// @brief summary.json of a study: the limits, quantiles over the scenarios of each region's
+/// peak ratio and extent, the areas or volumes hazardous in any and in half the scenarios, the
+/// far field's NOHD (aided too, with an aid).
+nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLattice>& lattices,
+                                const std::map<std::size_t, nlohmann::json>& records,
+                                std::size_t resumed, int ranks, double wall_s);
+
+/// @brief The study's closing lines on the terminal, from its @p summary.
+void printBatchSummary(std::ostream& err, const nlohmann::json& summary,
+                       const std::vector<StudyLattice>& lattices,
+                       const std::filesystem::path& out_dir, double wall_s);
+
+}  // namespace glint

@@ -1,0 +1,57 @@
+#pragma once
+/// @file
+/// @brief What `glint run` reports: summary.json's entries for the box, each plane and the far
+/// field, and the lines on the terminal (README "Outputs").
+
+#include <nlohmann/json_fwd.hpp>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "export/field_files.h"
+#include "facets/integrator.h"
+#include "observers/far_field.h"
+#include "observers/field.h"
+#include "pipeline/hazard.h"
+#include "pipeline/scene.h"
+
+namespace glint {
+
+/// @brief The entries every summary.json begins with: program, scene file and hash, schemes.
+nlohmann::json runJson(const RunInfo& info);
+
+/// @brief summary.json's `target`: what the culling made of the coarse facets.
+nlohmann::json targetJson(const CullStats& cull);
+
+/// @brief summary.json's `meshes`: what became of each mesh's triangles (@p stats in the
+/// order of the scene's meshes).
+nlohmann::json meshesJson(const Scene& scene, const std::vector<MeshStats>& stats);
+
+/// @brief summary.json of the observer box (runJson() first): lattice, counts, blocks,
+/// evaluations, peak, volumes above fractions of the peak, memory; the unconverged points
+/// with what @p zone says of them.
+nlohmann::json volumeSummaryJson(const ObserverField& field, const HazardZone& zone,
+                                 const RunInfo& info, const CullStats& cull);
+
+/// @brief The one-screen summary of the box. @p beyond_box: what the far field says of the
+/// hazard beyond the box ("" without one).
+void printVolume(std::ostream& err, const ObserverField& field, const Scene& scene,
+                 const HazardZone& zone, const RunInfo& info, bool uniform,
+                 const std::string& beyond_box);
+
+/// @brief One plane's entry of summary.json's `planes`.
+nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
+                         const HazardZone& zone);
+
+/// @brief One plane's lines on the terminal.
+void printPlane(std::ostream& err, const PlaneSpec& plane, const ObserverField& field,
+                const HazardZone& zone);
+
+/// @brief summary.json's `far_field`: the map, its far radius and rule, counts, the peak and
+/// @p hazard's NOHD.
+nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard);
+
+/// @brief The far field's lines on the terminal.
+void printFarField(std::ostream& err, const FarField& field, const FarHazard& hazard);
+
+}  // namespace glint

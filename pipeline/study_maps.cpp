@@ -1,0 +1,71 @@
+#include "pipeline/study_maps.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "pipeline/target_builder.h"
+
+namespace glint {
+
+std::string StudyLattice::scenarioFile() const { return plane ? name + ".exr" : "irradiance.vdb"; }
+
+std::string StudyLattice::studyFile() const { return plane ? name + ".exr" : "box.vdb"; }
+
+double StudyLattice::cell() const {
+  return plane ? spec.voxel_m * spec.voxel_m : spec.voxel_m * spec.voxel_m * spec.voxel_m;
+}
+
+HazardousPoints StudyLattice::add(const std::vector<float>& e_w_m2, const HazardSpec& h) {
+  if (e_w_m2.size() != max_w_m2.size())
+    throw std::logic_error("batch: a scenario's map does not fit its region's lattice");
+  HazardousPoints n;
+  for (std::size_t i = 0; i < e_w_m2.size(); ++i) {
+    max_w_m2[i] = std::max(max_w_m2[i], e_w_m2[i]);
+    const double e = static_cast<double>(e_w_m2[i]);
+    if (h.ratio(e) >= 1.0) {
+      ++hazardous[i];
+      ++n.unaided;
+    }
+    if (aided && h.aidedRatio(e) >= 1.0) {
+      ++aided_hazardous[i];
+      ++n.aided;
+    }
+  }
+  return n;
+}
+
+std::uint64_t StudyLattice::mapBytes() const {
+  const auto n = spec.nodes();
+  const std::uint64_t points = static_cast<std::uint64_t>(n[0]) * static_cast<std::uint64_t>(n[1]) *
+                               static_cast<std::uint64_t>(n[2]);
+  return points * (sizeof(float) + sizeof(std::uint32_t) * (aided ? 2 : 1));
+}
+
+void StudyLattice::allocate() {
+  const auto n = spec.nodes();
+  const std::size_t points = static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]) *
+                             static_cast<std::size_t>(n[2]);
+  max_w_m2.assign(points, 0.0f);
+  hazardous.assign(points, 0u);
+  if (aided) aided_hazardous.assign(points, 0u);
+}
+
+std::vector<StudyLattice> studyLattices(const Scene& base) {
+  std::vector<StudyLattice> lattices;
+  const bool aided = base.hazard.aid.has_value();
+  if (base.observers) lattices.push_back({"box", false, 0, fieldSpec(base), {}, {}, {}, aided});
+  for (std::size_t p = 0; p < base.planes.size(); ++p) {
+    lattices.push_back(
+        {base.planes[p].name, true, p, planeFieldSpec(base, base.planes[p]), {}, {}, {}, aided});
+  }
+  return lattices;
+}
+
+std::vector<float> coverage(const std::vector<std::uint32_t>& counts, std::size_t scenarios) {
+  std::vector<float> c(counts.size());
+  for (std::size_t i = 0; i < c.size(); ++i)
+    c[i] = static_cast<float>(static_cast<double>(counts[i]) / static_cast<double>(scenarios));
+  return c;
+}
+
+}  // namespace glint

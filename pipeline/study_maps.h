@@ -1,0 +1,63 @@
+#pragma once
+/// @file
+/// @brief A study's hazard over its observer lattices: each region's maximum irradiance and,
+/// per lattice point, how many scenarios reach the MPE there (and the aided MPE, with an
+/// optical aid), from which the coverage maps are made (README "Batch studies").
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "observers/field.h"
+#include "pipeline/hazard.h"
+#include "pipeline/scene.h"
+
+namespace glint {
+
+/// @brief How many points of one scenario's map reach the MPE, and the aided MPE (0 without an
+/// aid).
+struct HazardousPoints {
+  std::int64_t unaided = 0;
+  std::int64_t aided = 0;
+};
+
+/// @brief One observer lattice of a study (the box or a plane): the same in every scenario,
+/// since poses move the target, never the observers.
+struct StudyLattice {
+  std::string name;  ///< "box" or the plane's name
+  bool plane = false;
+  std::size_t plane_index = 0;
+  FieldSpec spec;
+  // Over the scenarios this rank has added (rank 0, after the reduction: all of them).
+  std::vector<float> max_w_m2;
+  std::vector<std::uint32_t> hazardous;        ///< scenarios with E ≥ MPE at the point
+  std::vector<std::uint32_t> aided_hazardous;  ///< with E × gain ≥ MPE; empty without an aid
+  bool aided = false;                          ///< the scene has an optical aid
+
+  /// @brief Bytes of the maps allocate() makes.
+  [[nodiscard]] std::uint64_t mapBytes() const;
+  /// @brief Makes the maps, zeroed (aided counts only with an aid).
+  void allocate();
+
+  /// @brief The map a scenario's folder keeps of this region.
+  [[nodiscard]] std::string scenarioFile() const;
+  /// @brief The aggregated map of the study's folder.
+  [[nodiscard]] std::string studyFile() const;
+  /// @brief m² of a plane's pixel, m³ of a box's voxel.
+  [[nodiscard]] double cell() const;
+
+  /// @brief Adds one scenario's irradiance to the maximum and the counts. Each point is judged
+  /// by the stored float, so that a scenario read back from its file counts as it did when
+  /// fresh.
+  /// @throw std::logic_error when the map does not fit the lattice (a programming error).
+  HazardousPoints add(const std::vector<float>& e_w_m2, const HazardSpec& h);
+};
+
+/// @brief The lattices of @p base (its box, then its planes), their maps not yet allocated.
+std::vector<StudyLattice> studyLattices(const Scene& base);
+
+/// @brief The coverage probability at each point: @p counts / @p scenarios.
+std::vector<float> coverage(const std::vector<std::uint32_t>& counts, std::size_t scenarios);
+
+}  // namespace glint
