@@ -118,11 +118,7 @@ void writeVdb(std::ostream& out, ObserverField field, const RunInfo& info) {
     file.write(level);
   }
   openvdb::FloatGrid::Ptr status = std::move(g.status);
-  status->insertMeta("meaning",
-                     openvdb::StringMetadata(
-                         "0 outside the box, 1 evaluated, 2 interpolated, 3 proven "
-                         "below floor_w_m2 (not computed), 4 inside or on the target, 5 evaluated "
-                         "but unconverged (integrator limit reached)"));
+  status->insertMeta("meaning", openvdb::StringMetadata(voxelStatusMeanings()));
   file.write(status);
   file.finish();
 }

@@ -28,9 +28,9 @@ void writeVti(std::ostream& out, const ObserverField& field, int stride,
               const std::vector<ScaledArray>& scaled);
 
 /// @brief VTK UnstructuredGrid (.vtu) of the octree's final blocks as hexahedra: cell data
-/// `refinement_level` and `status` (1 computed, 2 interpolated, 3 proven below the floor),
-/// point data `irradiance_w_m2` and each of @p scaled at the corners, Float32. A finest block
-/// (every lattice point evaluated) is written as its 8 voxels.
+/// `refinement_level` and `status` (VoxelStatus: 1 evaluated, 2 interpolated, 3 proven below the
+/// floor), point data `irradiance_w_m2` and each of @p scaled at the corners, Float32. A finest
+/// block (every lattice point evaluated) is written as its 8 voxels.
 /// @throw OutputError when VTK's writer fails.
 void writeBlocksVtu(std::ostream& out, const ObserverField& field,
                     const std::vector<ScaledArray>& scaled);

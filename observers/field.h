@@ -66,6 +66,13 @@ enum class VoxelStatus : int {
   Unconverged = 5,
 };
 
+/// @brief What each VoxelStatus value means, in one line for files that carry the codes.
+inline const char* voxelStatusMeanings() {
+  return "0 outside the box, 1 evaluated, 2 interpolated, 3 proven below floor_w_m2 (not "
+         "computed), 4 inside or on the target, 5 evaluated but unconverged (integrator limit "
+         "reached)";
+}
+
 /// @brief Whether the irradiance of a voxel with status @p s was integrated at that point.
 inline bool integratedHere(VoxelStatus s) {
   return s == VoxelStatus::Evaluated || s == VoxelStatus::Unconverged;

@@ -20,6 +20,7 @@
 #include "pipeline/input_error.h"
 #include "pipeline/json_reader.h"
 #include "pipeline/memory_budget.h"
+#include "pipeline/output_names.h"
 #include "pipeline/progress.h"
 #include "pipeline/run_command.h"
 #include "pipeline/study.h"
@@ -47,16 +48,17 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
   const Scene scene = scenarioScene(study, s);
   const std::string scene_json = scenarioSceneJson(study, s);
   const double mpe = scene.hazard.mpe_w_m2;
-  const fs::path dir = out_dir / "scenarios" / scenarioDirName(s.index);
+  const fs::path dir = out_dir / output_names::kScenariosFolder / scenarioDirName(s.index);
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw OutputError(dir.string() + ": cannot create the scenario folder: " + ec.message());
 
-  AtomicFile scene_file(dir / "scene.json");
+  AtomicFile scene_file(dir / output_names::kScenarioScene);
   scene_file.stream() << scene_json;
   scene_file.commit();
 
-  const RunInfo info = runInfo(scene, (dir / "scene.json").string(), scene_json, "adaptive");
+  const RunInfo info =
+      runInfo(scene, (dir / output_names::kScenarioScene).string(), scene_json, "adaptive");
 
   nlohmann::json record = {{"study_fnv1a64", study.fnv1a64},
                            {"scenario", s.index},
@@ -110,7 +112,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
   record["unconverged_points"] = unconverged;
   record["seconds"] = std::chrono::duration<double>(Clock::now() - start).count();
   const std::string text = record.dump(2) + "\n";
-  AtomicFile result(dir / "result.json");
+  AtomicFile result(dir / output_names::kScenarioResult);
   result.stream() << text;
   result.commit();
   return text;
@@ -122,14 +124,15 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
                                              std::vector<StudyLattice>& lattices,
                                              const fs::path& out_dir, bool fresh, std::ostream& err,
                                              bool quiet) {
-  const fs::path dir = out_dir / "scenarios" / scenarioDirName(s.index);
+  const fs::path dir = out_dir / output_names::kScenariosFolder / scenarioDirName(s.index);
   std::error_code ec;
-  if (!fs::is_regular_file(dir / "result.json", ec)) return std::nullopt;
+  if (!fs::is_regular_file(dir / output_names::kScenarioResult, ec)) return std::nullopt;
   nlohmann::json record;
   std::string fnv;
   bool matches = false;
   try {
-    record = nlohmann::json::parse(readUserFile(dir / "result.json", "scenario result"));
+    record =
+        nlohmann::json::parse(readUserFile(dir / output_names::kScenarioResult, "scenario result"));
     fnv = record.at("study_fnv1a64").get<std::string>();
     matches =
         record.at("scenario").get<std::size_t>() == s.index &&
@@ -138,19 +141,22 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
         // A result from before the scene had an optical aid lacks the aided figures.
         (!study.base.hazard.aid || record.at("regions").at(0).contains("aided_peak_hazard_ratio"));
   } catch (const std::exception&) {
-    if (!quiet) err << "glint batch: " << (dir / "result.json").string() << " unreadable: redone\n";
+    if (!quiet)
+      err << "glint batch: " << (dir / output_names::kScenarioResult).string()
+          << " unreadable: redone\n";
     return std::nullopt;
   }
   if (fnv != study.fnv1a64) {
     if (fresh) return std::nullopt;
     throw InputError(out_dir.string() + ": holds results of another study (or of this study " +
-                     "before it changed): " + (dir / "result.json").string() + " has study " + fnv +
-                     ", this study is " + study.fnv1a64 +
+                     "before it changed): " + (dir / output_names::kScenarioResult).string() +
+                     " has study " + fnv + ", this study is " + study.fnv1a64 +
                      ". Use --fresh to discard them, or another --out folder");
   }
   if (!matches) {
     if (!quiet)
-      err << "glint batch: " << (dir / "result.json").string() << " does not match: redone\n";
+      err << "glint batch: " << (dir / output_names::kScenarioResult).string()
+          << " does not match: redone\n";
     return std::nullopt;
   }
   // Maps read in full before any is added, so a damaged file leaves the aggregates untouched.
@@ -211,8 +217,8 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   std::size_t resumed = 0;
   if (root) {
     std::error_code ec;
-    if (args.fresh) fs::remove_all(out_dir / "scenarios", ec);
-    fs::create_directories(out_dir / "scenarios", ec);
+    if (args.fresh) fs::remove_all(out_dir / output_names::kScenariosFolder, ec);
+    fs::create_directories(out_dir / output_names::kScenariosFolder, ec);
     if (ec)
       throw OutputError(out_dir.string() + ": cannot create the output folder: " + ec.message());
     for (const Scenario& s : study.scenarios) {
@@ -227,7 +233,8 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
       err << "glint batch: " << study.scenarios.size() << " scenarios of " << study.source;
       if (resumed > 0) err << " (" << resumed << " done before, " << todo.size() << " to run)";
       err << " on " << cluster.size() << (cluster.size() == 1 ? " process" : " MPI ranks")
-          << "; scenario folders in " << (out_dir / "scenarios").string() << "\n";
+          << "; scenario folders in " << (out_dir / output_names::kScenariosFolder).string()
+          << "\n";
     }
   }
 
@@ -273,7 +280,7 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   if (!root) return;
 
   const std::size_t n = study.scenarios.size();
-  AtomicFile csv(out_dir / "scenarios.csv");
+  AtomicFile csv(out_dir / output_names::kScenariosCsv);
   csv.stream() << scenariosCsv(lattices, records, study.base.far_field.enabled,
                                study.base.hazard.aid.has_value());
   csv.commit();
@@ -281,7 +288,7 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   const double wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
   const nlohmann::json summary =
       batchSummaryJson(study, lattices, records, resumed, cluster.size(), wall_s);
-  AtomicFile summary_file(out_dir / "summary.json");
+  AtomicFile summary_file(out_dir / output_names::kSummary);
   summary_file.stream() << summary.dump(2) << "\n";
   summary_file.commit();
   if (talk) printBatchSummary(err, summary, lattices, out_dir, wall_s);

@@ -9,6 +9,7 @@
 #include "export/exr_map.h"
 #include "export/lattice_vdb.h"
 #include "glint/version.h"
+#include "pipeline/output_names.h"
 #include "pipeline/progress.h"
 
 namespace glint {
@@ -351,7 +352,8 @@ void printBatchSummary(std::ostream& err, const nlohmann::json& summary,
           << " " << symbol << "\n";
     }
   }
-  err << "  wrote " << out_dir.string() << "/{scenarios.csv, summary.json";
+  err << "  wrote " << out_dir.string() << "/{" << output_names::kScenariosCsv << ", "
+      << output_names::kSummary;
   for (const StudyLattice& r : lattices) err << ", " << r.studyFile();
   err << "} in " << formatDuration(wall_s) << "\n";
 }

@@ -22,29 +22,36 @@
 namespace glint {
 namespace {
 
+// How an exception that ends a command is reported: its exit status and the message's kind.
+struct Failure {
+  ExitStatus status;
+  const char* kind;
+};
+Failure failureOf(const std::exception& e) {
+  if (dynamic_cast<const InputError*>(&e) != nullptr ||
+      dynamic_cast<const OutputError*>(&e) != nullptr) {
+    return {kExitBadInput, "error: "};
+  }
+  return {kExitInternalError, "internal error: "};
+}
+
 // `glint batch` or `glint run` (@p work) on one process or as one rank of an MPI job. Alone,
 // errors go to the caller's handler; as a rank, an error on one rank ends them all
 // (MPI_Abort): the others would wait for it for ever.
 int runOnCluster(Cluster& cluster, std::ostream& err, const std::function<void()>& work) {
   if (cluster.size() == 1) {
     work();
-    return 0;
+    return kExitSuccess;
   }
   const std::string who = " (rank " + std::to_string(cluster.rank()) + ")";
-  auto fail = [&](const char* kind, const char* what, int status) {
-    err << "glint" << who << ": " << kind << what << "\n" << std::flush;
-    cluster.abort(status);
-    return status;
-  };
   try {
     work();
-    return 0;
-  } catch (const InputError& e) {
-    return fail("error: ", e.what(), 2);
-  } catch (const OutputError& e) {
-    return fail("error: ", e.what(), 2);
+    return kExitSuccess;
   } catch (const std::exception& e) {
-    return fail("internal error: ", e.what(), 1);
+    const Failure f = failureOf(e);
+    err << "glint" << who << ": " << f.kind << e.what() << "\n" << std::flush;
+    cluster.abort(f.status);
+    return f.status;
   }
 }
 
@@ -179,8 +186,8 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    // --help and --version are successes; everything else is a usage error (status 2).
-    return app.exit(e, out, err) == 0 ? 0 : 2;
+    // --help and --version are successes; everything else is a usage error.
+    return app.exit(e, out, err) == 0 ? kExitSuccess : kExitBadInput;
   }
 
   try {
@@ -211,16 +218,11 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
       Cluster cluster;
       return runOnCluster(cluster, err, [&] { runBatch(batch, cluster, err); });
     }
-    return 0;
-  } catch (const InputError& e) {
-    err << "glint: error: " << e.what() << "\n";
-    return 2;
-  } catch (const OutputError& e) {
-    err << "glint: error: " << e.what() << "\n";
-    return 2;
+    return kExitSuccess;
   } catch (const std::exception& e) {
-    err << "glint: internal error: " << e.what() << "\n";
-    return 1;
+    const Failure f = failureOf(e);
+    err << "glint: " << f.kind << e.what() << "\n";
+    return f.status;
   }
 }
 

@@ -6,10 +6,17 @@
 
 namespace glint {
 
+/// @brief glint's exit statuses (README "Using it").
+enum ExitStatus : int {
+  kExitSuccess = 0,
+  kExitInternalError = 1,  ///< a bug or a resource failure: never a clean "no hazard"
+  kExitBadInput = 2,       ///< scene, points, study or command line; or an unwritable output
+  // Interrupted by a signal: 128 + its number (export/atomic_file.h).
+};
+
 /// @brief Runs glint with the given arguments, printing results to @p out and messages to
 /// @p err.
-/// @return the exit status: 0 success, 2 bad input (scene, points, command line) or an output
-/// that cannot be written, 1 an internal error.
+/// @return the ExitStatus.
 int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream& err);
 
 }  // namespace glint

@@ -122,6 +122,11 @@ struct HazardSpec {
   /// @brief The lowest irradiance that is hazardous to any viewer the scene describes (aided
   /// where the aid gathers more than the eye): what defaults of floors are scaled from.
   [[nodiscard]] double lowestHazardousW_m2() const { return mpe_w_m2 / std::max(1.0, aidGain()); }
+  /// @brief The irradiance below which the fields need not resolve anything: their default
+  /// floors. A thousandth of lowestHazardousW_m2(): hazard ratios down to 1e-3 are resolved,
+  /// below what even an undeclared 50 mm binocular (about 50× the collected power of a 7 mm
+  /// pupil) could lift to 1.
+  [[nodiscard]] double negligibleW_m2() const { return 1e-3 * lowestHazardousW_m2(); }
   /// @brief One pulse's radiant exposure (J/m²) at mean irradiance @p irradiance_w_m2.
   [[nodiscard]] double pulseRadiantExposureJ_m2(double irradiance_w_m2) const {
     return irradiance_w_m2 * pulse_exposure_s;

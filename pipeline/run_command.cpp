@@ -18,6 +18,7 @@
 #include "pipeline/input_error.h"
 #include "pipeline/json_reader.h"
 #include "pipeline/memory_budget.h"
+#include "pipeline/output_names.h"
 #include "pipeline/progress.h"
 #include "pipeline/run_report.h"
 #include "pipeline/scene.h"
@@ -208,24 +209,25 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     files.push_back(std::make_unique<AtomicFile>(dir / name));
     return files.back().get();
   };
-  AtomicFile* summary = open("summary.json");
+  AtomicFile* summary = open(output_names::kSummary);
   AtomicFile *vdb = nullptr, *vti = nullptr, *vtu = nullptr, *vtp = nullptr;
   if (scene.observers) {
-    vdb = open("irradiance.vdb");
-    vti = open("irradiance.vti");
-    vtu = open("blocks.vtu");
-    vtp = open("target.vtp");
+    vdb = open(output_names::kIrradianceVdb);
+    vti = open(output_names::kIrradianceVti);
+    vtu = open(output_names::kBlocksVtu);
+    vtp = open(output_names::kTargetVtp);
   }
   std::optional<StagedAmr> amr;  // irradiance.vthb and its folder, committed with the files
-  if (scene.observers) written.push_back("irradiance.vthb");
+  if (scene.observers) written.push_back(output_names::kIrradianceAmr);
   AtomicFile *far_exr = nullptr, *far_vtp = nullptr, *far_aided_vtp = nullptr;
   if (scene.far_field.enabled) {
-    far_exr = open("far_field.exr");
-    far_vtp = open("far_field.vtp");
-    if (scene.hazard.aid) far_aided_vtp = open("far_field_aided.vtp");
+    far_exr = open(output_names::kFarFieldExr);
+    far_vtp = open(output_names::kFarFieldVtp);
+    if (scene.hazard.aid) far_aided_vtp = open(output_names::kFarFieldAidedVtp);
   }
   std::vector<AtomicFile*> exrs;
-  for (const PlaneSpec& plane : scene.planes) exrs.push_back(open(plane.name + ".exr"));
+  for (const PlaneSpec& plane : scene.planes)
+    exrs.push_back(open(output_names::planeExr(plane.name)));
 
   std::unique_ptr<tbb::global_control> thread_limit;
   if (args.threads > 0) {
@@ -273,7 +275,7 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
       writeVti(vti->stream(), field, vtiStride(spec), info.scaled);
       writeBlocksVtu(vtu->stream(), field, info.scaled);
       writeTargetVtp(vtp->stream(), integrator, 2);
-      amr.emplace(writeAmr(dir / "irradiance.vthb", field, info.scaled));
+      amr.emplace(writeAmr(dir / output_names::kIrradianceAmr, field, info.scaled));
     }
     const HazardZone zone = hazardZone(field, scene.hazard, targetCentre(integrator.target()));
     j = volumeSummaryJson(field, zone, info, integrator.cullStats());

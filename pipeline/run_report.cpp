@@ -4,6 +4,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "pipeline/output_names.h"
 #include "pipeline/progress.h"
 
 namespace glint {
@@ -201,7 +202,7 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
   const FieldSpec& spec = field.spec();
   const ObserverField::Exceedance& r = zone.above_mpe;
   nlohmann::json j = {{"name", plane.name},
-                      {"file", plane.name + ".exr"},
+                      {"file", output_names::planeExr(plane.name)},
                       {"pixels", {s.nodes[0], s.nodes[1]}},
                       {"pixel_m", spec.voxel_m},
                       {"tolerance", spec.tolerance},
@@ -239,8 +240,9 @@ nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard) {
   const double elevation_deg = std::asin(std::clamp(d.z, -1.0, 1.0)) * 180.0 / kPi;
   nlohmann::json j = {
       {"files", hazard.aided
-                    ? nlohmann::json{"far_field.exr", "far_field.vtp", "far_field_aided.vtp"}
-                    : nlohmann::json{"far_field.exr", "far_field.vtp"}},
+                    ? nlohmann::json{output_names::kFarFieldExr, output_names::kFarFieldVtp,
+                                     output_names::kFarFieldAidedVtp}
+                    : nlohmann::json{output_names::kFarFieldExr, output_names::kFarFieldVtp}},
       {"centre_m", {c.x, c.y, c.z}},
       {"lit_radius_m", field.ball().radius_m},
       {"far_radius_m", spec.far_radius_m},

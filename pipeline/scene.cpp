@@ -309,7 +309,7 @@ ObjectSpec readObject(ObjectReader r, const std::vector<MaterialSpec>& materials
   }
   o.material = static_cast<std::uint32_t>(it - materials.begin());
   if (o.shape != ShapeKind::Mesh) {
-    const std::int64_t segments = r.integer("segments", 16);
+    const std::int64_t segments = r.integer("segments", o.segments);
     if (segments < 3 || segments > 4096) r.fail("segments", "must be an integer in [3, 4096]");
     o.segments = static_cast<int>(segments);
   }
@@ -352,7 +352,7 @@ AccuracySpec readAccuracy(ObjectReader r) {
 // A coarsest block of `block_key`: `lattice_m` times a power of two (default 16).
 double blockSize(ObjectReader& r, const char* block_key, const char* lattice_key,
                  double lattice_m) {
-  const double block_m = r.number(block_key, 16.0 * lattice_m);
+  const double block_m = r.number(block_key, FieldSpec{}.block_voxels * lattice_m);
   const double ratio = block_m / lattice_m;
   const double power = std::round(std::log2(ratio));
   if (!(ratio >= 1.0) || std::abs(ratio - std::exp2(power)) > 1e-9 * ratio || power > 12) {

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "facets/beam.h"
-#include "facets/integrator.h"  // IntegrationScheme
+#include "facets/integrator.h"  // IntegrationScheme, IntegratorOptions (the defaults)
 #include "facets/patch.h"
 #include "facets/tessellate.h"
 #include "facets/vec3.h"
@@ -83,10 +83,11 @@ struct ObjectSpec {
 
 /// @brief Accuracy settings (key `accuracy`, all optional).
 struct AccuracySpec {
-  double tolerance = 1e-3;                   ///< relative accuracy of each observer's total
-  std::optional<double> floor_w_m2;          ///< default: 1e-9 × the beam's peak irradiance
-  int max_depth = 16;                        ///< deepest 1→4 subdivision level
-  std::int64_t max_evaluations = 4'000'000;  ///< per observer
+  // The defaults are the integrator's own (facets/integrator.h).
+  double tolerance = IntegratorOptions{}.tolerance;  ///< relative accuracy of each total
+  std::optional<double> floor_w_m2;               ///< default: 1e-9 × the beam's peak irradiance
+  int max_depth = IntegratorOptions{}.max_depth;  ///< deepest 1→4 subdivision level
+  std::int64_t max_evaluations = IntegratorOptions{}.max_evaluations;  ///< per observer
   NormalModel normals = NormalModel::Surface;
   bool occlusion = true;  ///< occlusion rays where the target can shadow itself
   /// `lobe` (the default), `cubature` or `paper` (integrator.h); `paper` where `normals` is
@@ -100,8 +101,8 @@ struct ObserversSpec {
   Vec3 max_m{0.0};
   double voxel_m = 0.0;
   double block_m = 0.0;  ///< coarsest block edge: voxel_m × a power of two (default 16 voxels)
-  double tolerance = 1e-2;
-  std::optional<double> floor_w_m2;  ///< default: 1e-3 × HazardSpec::lowestHazardousW_m2()
+  double tolerance = FieldSpec{}.tolerance;
+  std::optional<double> floor_w_m2;  ///< default: HazardSpec::negligibleW_m2()
 };
 
 /// @brief A plane of observers (key `planes/<i>`): a ground plane, a slice at eye height, a
@@ -115,18 +116,18 @@ struct PlaneSpec {
   double height_m = 0.0;       ///< extent along v_axis
   double pixel_m = 0.0;
   double block_m = 0.0;  ///< coarsest square block: pixel_m × a power of two (default 16 px)
-  double tolerance = 1e-2;
-  std::optional<double> floor_w_m2;  ///< default: 1e-3 × HazardSpec::lowestHazardousW_m2()
+  double tolerance = FieldSpec{}.tolerance;
+  std::optional<double> floor_w_m2;  ///< default: HazardSpec::negligibleW_m2()
 };
 
 /// @brief The far field by direction (key `far_field`, all optional; observers/far_field.h).
 struct FarFieldSettings {
   bool enabled = true;
-  double tolerance = 1e-2;
+  double tolerance = FarFieldSpec{}.tolerance;
   /// Lattice intervals per cube-face edge, a power of two in 16 .. 8192; default: the first
   /// that samples directions at most σ apart (σ the narrowest lobe), within 64 .. 4096.
   std::optional<int> face_pixels;
-  std::optional<double> floor_w_sr;  ///< default: 1e-3 × MPE × far radius²
+  std::optional<double> floor_w_sr;  ///< default: HazardSpec::negligibleW_m2() × far radius²
 };
 
 /// @brief A validated scene: every number finite and in range, every reference resolved.

@@ -3,13 +3,18 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "pipeline/output_names.h"
 #include "pipeline/target_builder.h"
 
 namespace glint {
 
-std::string StudyLattice::scenarioFile() const { return plane ? name + ".exr" : "irradiance.vdb"; }
+std::string StudyLattice::scenarioFile() const {
+  return plane ? output_names::planeExr(name) : output_names::kIrradianceVdb;
+}
 
-std::string StudyLattice::studyFile() const { return plane ? name + ".exr" : "box.vdb"; }
+std::string StudyLattice::studyFile() const {
+  return plane ? output_names::planeExr(name) : output_names::kStudyBoxVdb;
+}
 
 double StudyLattice::cell() const {
   return plane ? spec.voxel_m * spec.voxel_m : spec.voxel_m * spec.voxel_m * spec.voxel_m;

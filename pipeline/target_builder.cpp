@@ -77,10 +77,7 @@ FieldSpec fieldSpec(const Scene& scene) {
   f.voxel_m = o.voxel_m;
   f.block_voxels = static_cast<int>(std::lround(o.block_m / o.voxel_m));
   f.tolerance = o.tolerance;
-  // A thousandth of the lowest hazardous irradiance (the aided one where the scene has an
-  // optical aid): hazard ratios down to 1e-3 are resolved, below what even an undeclared 50 mm
-  // binocular (about 50× the collected power of a 7 mm pupil) could lift to 1.
-  f.floor_w_m2 = o.floor_w_m2 ? *o.floor_w_m2 : 1e-3 * scene.hazard.lowestHazardousW_m2();
+  f.floor_w_m2 = o.floor_w_m2.value_or(scene.hazard.negligibleW_m2());
   return f;
 }
 
@@ -93,7 +90,7 @@ FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane) {
   f.voxel_m = plane.pixel_m;
   f.block_voxels = static_cast<int>(std::lround(plane.block_m / plane.pixel_m));
   f.tolerance = plane.tolerance;
-  f.floor_w_m2 = plane.floor_w_m2 ? *plane.floor_w_m2 : 1e-3 * scene.hazard.lowestHazardousW_m2();
+  f.floor_w_m2 = plane.floor_w_m2.value_or(scene.hazard.negligibleW_m2());
   return f;
 }
 
@@ -119,9 +116,8 @@ FarFieldSpec farFieldSpec(const Scene& scene, const FacetIntegrator& integrator)
     while (f.face_pixels < 4096 && 2.0 / f.face_pixels > sigma) f.face_pixels *= 2;
   }
   f.block_pixels = std::max(1, f.face_pixels / 16);
-  f.floor_w_sr = settings.floor_w_sr
-                     ? *settings.floor_w_sr
-                     : 1e-3 * scene.hazard.lowestHazardousW_m2() * f.far_radius_m * f.far_radius_m;
+  f.floor_w_sr =
+      settings.floor_w_sr.value_or(scene.hazard.negligibleW_m2() * f.far_radius_m * f.far_radius_m);
   return f;
 }
 

@@ -22,19 +22,20 @@ Target buildTarget(const Scene& scene, std::vector<MeshStats>* mesh_stats = null
 /// irradiance, far below any exposure limit yet scaled to the scene.
 IntegratorOptions integratorOptions(const Scene& scene);
 
-/// @brief The observer box of the scene's `observers` section; the floor defaults to 1e-3 ×
-/// the MPE.
+/// @brief The observer box of the scene's `observers` section; the floor defaults to
+/// HazardSpec::negligibleW_m2().
 /// @throw InputError when the scene has no `observers` section.
 FieldSpec fieldSpec(const Scene& scene);
 
 /// @brief The lattice of one of the scene's observer planes (axes u, v, u × v; one layer);
-/// the floor defaults to 1e-3 × the MPE.
+/// the floor defaults to HazardSpec::negligibleW_m2().
 FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane);
 
 /// @brief The far field of the scene's `far_field` key for the target @p integrator lights:
 /// the far radius from its lit ball, the narrowest lobe of the scene's materials and the
 /// tolerance (farRadius()); the face lattice samples directions at most that lobe's σ apart
-/// unless the scene says otherwise; the floor defaults to 1e-3 × the MPE at the far radius.
+/// unless the scene says otherwise; the floor defaults to the intensity that gives
+/// HazardSpec::negligibleW_m2() at the far radius.
 FarFieldSpec farFieldSpec(const Scene& scene, const FacetIntegrator& integrator);
 
 /// @brief Integrator settings for the points of an observer field: the scene's accuracy

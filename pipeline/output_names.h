@@ -1,0 +1,31 @@
+#pragma once
+/// @file
+/// @brief The names of the files glint writes, each spelled once here (README "glint run",
+/// "Far field", "Batch studies" describe their contents).
+
+#include <string>
+
+namespace glint::output_names {
+
+// glint run
+inline constexpr const char* kSummary = "summary.json";
+inline constexpr const char* kIrradianceVdb = "irradiance.vdb";
+inline constexpr const char* kIrradianceVti = "irradiance.vti";
+inline constexpr const char* kIrradianceAmr = "irradiance.vthb";  ///< and its folder irradiance/
+inline constexpr const char* kBlocksVtu = "blocks.vtu";
+inline constexpr const char* kTargetVtp = "target.vtp";
+inline constexpr const char* kFarFieldExr = "far_field.exr";
+inline constexpr const char* kFarFieldVtp = "far_field.vtp";
+inline constexpr const char* kFarFieldAidedVtp = "far_field_aided.vtp";  ///< with an optical aid
+/// @brief A plane's map (glint run), and its aggregate over a study's scenarios (glint batch).
+inline std::string planeExr(const std::string& plane_name) { return plane_name + ".exr"; }
+
+// glint batch: the study's folder (summary.json too) and each scenario's
+inline constexpr const char* kScenariosCsv = "scenarios.csv";
+inline constexpr const char* kStudyBoxVdb = "box.vdb";
+inline constexpr const char* kScenariosFolder = "scenarios";
+inline constexpr const char* kScenarioScene = "scene.json";
+inline constexpr const char* kScenarioResult =
+    "result.json";  ///< written last: the scenario is done
+
+}  // namespace glint::output_names
