@@ -118,11 +118,9 @@ std::string hazardCitation(const HazardSpec& h) {
 }
 
 std::string hazardLine(const HazardSpec& h) {
-  std::string s =
-      "MPE " + formatNumber("%.4g", h.mpe_w_m2) + " W/m² for " + formatNumber("%g", h.exposure_s) +
-      " s (" +
-      (h.exposure_default && !(h.pulse && !h.pulse->repetition_rate_hz) ? "default, " : "") +
-      toString(h.mpe.limit) + ")";
+  std::string s = "MPE " + formatNumber("%.4g", h.mpe_w_m2) + " W/m² for " +
+                  formatNumber("%g", h.exposure_s) + " s (" +
+                  (h.exposure_default ? "default, " : "") + toString(h.mpe.limit) + ")";
   if (h.train) {
     s += ", " + formatNumber("%.4g", h.mpe_w_m2 * h.pulse_exposure_s) + " J/m² a pulse (rule " +
          std::to_string(h.train->rule) + ", " + formatNumber("%.4g", h.train->pulses) +

@@ -96,7 +96,9 @@ struct HazardSpec {
   /// `laser.exposure_s`, by default 0.25 s (the aversion response) for 400–700 nm and 10 s
   /// beyond 700 nm, where nothing makes the eye turn away; a single pulse's duration.
   double exposure_s = 0.25;
-  bool exposure_default = true;  ///< exposure_s was not in the file
+  /// The exposure is the default for the wavelength (defaultExposureS()): exposure_s was not
+  /// in the file and the laser is not a single pulse (whose exposure is its duration).
+  bool exposure_default = true;
   /// The table's MPE for the exposure (a continuous laser) or for one pulse (a pulsed laser).
   Mpe mpe;
   std::optional<PulseSpec> pulse;

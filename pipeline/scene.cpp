@@ -68,7 +68,8 @@ HazardSpec readExposure(ObjectReader& r, const LaserSpec& laser,
            "Z136.1 / IEC 60825-1) that glint's hazard uses");
   }
   h.pulse = pulse;
-  h.exposure_default = !laser.exposure_s.has_value();
+  // A single pulse's exposure is its duration, which the file gives: never the default.
+  h.exposure_default = !laser.exposure_s.has_value() && !(pulse && !pulse->repetition_rate_hz);
   if (pulse && !pulse->repetition_rate_hz) {
     if (laser.exposure_s) {
       r.fail("exposure_s",

@@ -164,6 +164,8 @@ TEST(SceneHazard, SinglePulseExposureIsItsDuration) {
   j["laser"]["pulse"] = {{"peak_power_w", 1.0}, {"duration_s", 1e-6}};
   const Scene s = parseScene(j.dump(), "scene.json");
   EXPECT_EQ(s.hazard.exposure_s, 1e-6);
+  EXPECT_FALSE(s.hazard.exposure_default) << "the file gives the pulse's duration";
+  EXPECT_EQ(hazardLine(s.hazard).find("default"), std::string::npos) << hazardLine(s.hazard);
   EXPECT_NEAR(s.hazard.pulse->energy_j, 1e-6, 1e-21);
   // 1064 nm below 13 µs: 2.0e-2 C_C J/m², as mean irradiance over 1 µs.
   EXPECT_NEAR(s.hazard.mpe_w_m2, 2.0e-2 / 1e-6, 1e-6);
