@@ -4,6 +4,7 @@
 /// paper writes it (Eq. 8).
 
 #include <cmath>
+#include <limits>
 
 #include "facets/vec3.h"
 
@@ -39,7 +40,7 @@ struct Beckmann {
   /// @brief ln Ξ(s_lo) − ln Ξ(s_hi) for 0 ≤ s_lo ≤ s_hi (s = tan²θN): how much the lobe can change
   /// between two angles, in e-folds; +∞ once Ξ(s_hi) underflows.
   [[nodiscard]] double logRatio(double tan2_lo, double tan2_hi) const {
-    if (!std::isfinite(tan2_hi)) return INFINITY;
+    if (!std::isfinite(tan2_hi)) return std::numeric_limits<double>::infinity();
     return (tan2_hi - tan2_lo) / (2.0 * sigma * sigma) +
            2.0 * (std::log1p(tan2_lo) - std::log1p(tan2_hi));
   }

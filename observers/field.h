@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -88,8 +89,8 @@ struct FieldStats {
   std::int64_t excluded_points = 0;
   std::int64_t unconverged_points = 0;  ///< integrator did not reach its tolerance (status 5)
   /// The box around the unconverged points (meaningful when there are any).
-  Vec3 unconverged_min_m{INFINITY};
-  Vec3 unconverged_max_m{-INFINITY};
+  Vec3 unconverged_min_m{std::numeric_limits<double>::infinity()};
+  Vec3 unconverged_max_m{-std::numeric_limits<double>::infinity()};
   /// The largest irradiance + error estimate of an unconverged point (W/m²): below the MPE,
   /// none of them can be hazardous however the integration would have ended.
   double unconverged_max_upper_w_m2 = 0.0;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "facets/material.h"
 #include "support/quadrature.h"
@@ -28,7 +29,7 @@ TEST(Beckmann, ZeroNotNanAtGrazing) {
       EXPECT_EQ(xi, 0.0) << "sigma " << sigma << " at " << deg << " deg";
     }
     EXPECT_EQ(b.xi(n, Vec3(0.0)), 0.0) << "zero half vector, sigma " << sigma;
-    EXPECT_EQ(b.xiFromTan2(INFINITY), 0.0) << "sigma " << sigma;
+    EXPECT_EQ(b.xiFromTan2(std::numeric_limits<double>::infinity()), 0.0) << "sigma " << sigma;
   }
 }
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <random>
 #include <span>
@@ -218,7 +219,7 @@ TEST(Integrator, ErrorFallsAsTheToleranceFalls) {
   IntegratorWorkspace ws;
   const double reference =
       paperCylinder(0.003, paperAccuracy(1e-7)).adaptive(obs, ws).irradiance_w_m2;
-  double previous_error = INFINITY;
+  double previous_error = std::numeric_limits<double>::infinity();
   std::int64_t previous_cost = 0;
   for (double tol : {1e-2, 1e-3, 1e-4, 1e-5}) {
     const ObserverResult r = paperCylinder(0.003, paperAccuracy(tol)).adaptive(obs, ws);
@@ -255,7 +256,7 @@ TEST(Integrator, UniformTwinConvergesToTheSameAnswer) {
   IntegratorWorkspace ws;
   const Vec3 obs(-5.0, 5.0, 0.0);
   const double reference = fi.adaptive(obs, ws).irradiance_w_m2;
-  double previous = INFINITY;
+  double previous = std::numeric_limits<double>::infinity();
   for (int level = 3; level <= 6; ++level) {
     const ObserverResult u = fi.uniform(obs, level, ws);
     const double error = std::abs(u.irradiance_w_m2 - reference);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 
@@ -139,7 +140,8 @@ TEST(FarField, FarRadiusGrowsAsTheLobeNarrowsAndTheToleranceTightens) {
   EXPECT_DOUBLE_EQ(farRadius(1.0, 0.01, 0.01), 1.0 + 103.0 / 0.01);
   EXPECT_DOUBLE_EQ(farRadius(2.0, 0.01, 0.01), 2.0 * farRadius(1.0, 0.01, 0.01));
   EXPECT_GT(farRadius(1.0, 0.001, 0.01), 9.0 * farRadius(1.0, 0.01, 0.01));
-  EXPECT_DOUBLE_EQ(farRadius(1.0, INFINITY, 0.1), 31.0) << "diffuse only: 3 per radian";
+  EXPECT_DOUBLE_EQ(farRadius(1.0, std::numeric_limits<double>::infinity(), 0.1), 31.0)
+      << "diffuse only: 3 per radian";
   EXPECT_DOUBLE_EQ(farRadius(1.0, 0.01, 0.01, kPi / 2), farRadius(1.0, 0.01, 0.01))
       << "beyond 51° of the beam's direction the half vector turns no faster than allowed for";
   EXPECT_NEAR(farRadius(1.0, 0.01, 0.01, 0.1), 1.0 + (3.0 + 0.43 / std::sin(0.05) / 0.01) / 0.01,

@@ -37,7 +37,8 @@ TEST(StressLobe, BeckmannIsNormalisedAndFiniteFromSigma1e5To1) {
     const double peak = b.maxXiBeyond(0.0);
     EXPECT_TRUE(std::isfinite(peak)) << "sigma " << sigma;
     EXPECT_GE(peak, b.xiFromTan2(0.0)) << "sigma " << sigma;
-    for (double tan2 : {0.0, 1e-30, 1e-10, 1.0, 1e10, 1e300, static_cast<double>(INFINITY)}) {
+    for (double tan2 :
+         {0.0, 1e-30, 1e-10, 1.0, 1e10, 1e300, std::numeric_limits<double>::infinity()}) {
       const double xi = b.xiFromTan2(tan2);
       EXPECT_TRUE(std::isfinite(xi) && xi >= 0.0) << "sigma " << sigma << " tan² " << tan2;
       EXPECT_LE(xi, peak) << "sigma " << sigma << " tan² " << tan2;
