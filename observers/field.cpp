@@ -74,7 +74,7 @@ ObserverField::ObserverField(ObserverField&&) noexcept = default;
 ObserverField& ObserverField::operator=(ObserverField&&) noexcept = default;
 
 double ObserverField::irradiance(int i, int j, int k) const {
-  return grids_->irradiance->tree().getValue(openvdb::Coord(i, j, k));
+  return static_cast<double>(grids_->irradiance->tree().getValue(openvdb::Coord(i, j, k)));
 }
 std::vector<float> ObserverField::irradianceLattice() const {
   std::size_t outside = 0;
