@@ -37,7 +37,7 @@ class GridByGridWriter : private openvdb::io::Archive {
     out.write(reinterpret_cast<const char*>(&grids), sizeof grids);
   }
 
-  void write(const openvdb::GridBase::ConstPtr& grid) {
+  void append(const openvdb::GridBase::ConstPtr& grid) {
     if (left_-- <= 0) throw std::logic_error("GridByGridWriter: more grids than announced");
     openvdb::io::GridDescriptor descriptor(grid->getName(), grid->type(), grid->saveFloatAsHalf());
     writeGrid(descriptor, grid, out_, /*seekable=*/false);
@@ -97,7 +97,7 @@ void writeVdb(std::ostream& out, ObserverField field, const RunInfo& info) {
   {
     auto irradiance = g.irradiance->copyGrid();
     irradiance->insertMeta("units", openvdb::StringMetadata("W/m^2"));
-    file.write(irradiance);
+    file.append(irradiance);
   }
   double scale = 1.0;  // what the grid's values are, per W/m² of irradiance
   for (const ScaledArray& a : info.scaled) {
@@ -109,17 +109,17 @@ void writeVdb(std::ostream& out, ObserverField field, const RunInfo& info) {
     auto grid = g.irradiance->copyGrid();
     grid->setName(a.name);
     grid->insertMeta("units", openvdb::StringMetadata(a.units));
-    file.write(grid);
+    file.append(grid);
   }
   g.irradiance.reset();
   {
     openvdb::FloatGrid::Ptr level = std::move(g.level);
     level->insertMeta("meaning", openvdb::StringMetadata("refinement level, 0 = coarsest block"));
-    file.write(level);
+    file.append(level);
   }
   openvdb::FloatGrid::Ptr status = std::move(g.status);
   status->insertMeta("meaning", openvdb::StringMetadata(voxelStatusMeanings()));
-  file.write(status);
+  file.append(status);
   file.finish();
 }
 

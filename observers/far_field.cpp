@@ -2,13 +2,15 @@
 #include "observers/far_field.h"
 
 #include <algorithm>
-#include <cfloat>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
 namespace glint {
 namespace {
+
+// The largest float: maps store distances and intensities as float, capped here.
+constexpr double kFloatMax = static_cast<double>(std::numeric_limits<float>::max());
 
 // Outward normal, u and v of each cube face (u × v = normal: the plane's lattice axes).
 struct FaceFrame {
@@ -279,15 +281,14 @@ LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2, double
   const double source_m = field.ball().radius_m;
   auto reach = [&](double intensity, double threshold_w_m2, const Vec3& d) {
     const double nohd = hazardDistance(intensity, threshold_w_m2, extinction_per_m, source_m);
-    return nohd >= farRadiusToward(field.spec(), d)
-               ? static_cast<float>(std::min<double>(nohd, FLT_MAX))
-               : 0.0f;
+    return nohd >= farRadiusToward(field.spec(), d) ? static_cast<float>(std::min(nohd, kFloatMax))
+                                                    : 0.0f;
   };
   m.nohd_m.resize(cell.size());
   if (aided_mpe_w_m2 > 0.0) m.aided_nohd_m.resize(cell.size());
   for (std::size_t p = 0; p < cell.size(); ++p) {
     const Vec3 d = latLongDirection(p, m.width, height);
-    m.intensity_w_sr[p] = static_cast<float>(std::min<double>(cell[p], FLT_MAX));
+    m.intensity_w_sr[p] = static_cast<float>(std::min(cell[p], kFloatMax));
     m.nohd_m[p] = reach(cell[p], mpe_w_m2, d);
     if (aided_mpe_w_m2 > 0.0) m.aided_nohd_m[p] = reach(cell[p], aided_mpe_w_m2, d);
   }
@@ -326,8 +327,8 @@ HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mp
         const double shown_m =
             beyond ? nohd : std::min(far_m, kForwardDisplayLimit * field.spec().far_radius_m);
         s.points_m.push_back(centre + shown_m * dir);
-        s.nohd_m.push_back(beyond ? static_cast<float>(std::min<double>(nohd, FLT_MAX)) : 0.0f);
-        s.intensity_w_sr.push_back(static_cast<float>(std::min<double>(intensity, FLT_MAX)));
+        s.nohd_m.push_back(beyond ? static_cast<float>(std::min(nohd, kFloatMax)) : 0.0f);
+        s.intensity_w_sr.push_back(static_cast<float>(std::min(intensity, kFloatMax)));
         s.beyond_far_radius.push_back(beyond ? 1 : 0);
       }
     const auto at = [&](int a, int b) {

@@ -94,9 +94,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
       writeVdb(map.stream(), std::move(field), info);
     }
     map.commit();
-    const HazardousPoints hazardous = r.add(e, scene.hazard);
-    nlohmann::json region = scenarioRegionJson(r, st, scene.hazard, hazardous);
-    results.push_back(std::move(region));
+    results.push_back(scenarioRegionJson(r, st, scene.hazard, r.add(e, scene.hazard)));
     evaluations += st.evaluations;
     unconverged += st.unconverged_points;
   }

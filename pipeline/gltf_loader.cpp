@@ -282,7 +282,7 @@ class Reader {
       for (int c = 0; c < 3; ++c) {
         if (!std::isfinite(xyz[c]))
           fail(what + ": element " + std::to_string(i) + " is not finite");
-        out[i][c] = xyz[c];
+        out[i][c] = static_cast<double>(xyz[c]);
       }
     }
     return out;

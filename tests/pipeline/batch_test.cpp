@@ -320,12 +320,14 @@ TEST(BatchHazard, PulsesFogAndBinocularsReachEveryScenarioAndTheSummary) {
     ASSERT_EQ(aided_cover.size(), cover.size()) << study_file;
     for (std::size_t i = 0; i < cover.size(); ++i) {
       int reached = 0;
-      for (const auto& e : scenario_e) reached += base.hazard.aidedRatio(e[i]) >= 1.0 ? 1 : 0;
+      for (const auto& e : scenario_e)
+        reached += base.hazard.aidedRatio(static_cast<double>(e[i])) >= 1.0 ? 1 : 0;
       ASSERT_EQ(aided_cover[i], 0.5f * static_cast<float>(reached)) << study_file << " " << i;
       ASSERT_GE(aided_cover[i], cover[i]) << study_file << " " << i;
       aided_only += aided_cover[i] > cover[i] ? 1 : 0;
       const float e_max = std::max(scenario_e[0][i], scenario_e[1][i]);
-      ASSERT_EQ(aided_max[i], static_cast<float>(base.hazard.aidedRatio(e_max)))
+      ASSERT_EQ(aided_max[i],
+                static_cast<float>(base.hazard.aidedRatio(static_cast<double>(e_max))))
           << study_file << " " << i;
     }
   }

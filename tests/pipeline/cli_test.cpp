@@ -233,7 +233,7 @@ TEST_F(CliTest, RunWritesEachPlaneAsAnExrMapAndSummarisesIt) {
                Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(status.data()), sizeof(float), row));
   file.setFrameBuffer(frame);
   file.readPixels(w.min.y, w.max.y);
-  const double peak = *std::max_element(e.begin(), e.end());
+  const double peak = static_cast<double>(*std::max_element(e.begin(), e.end()));
   EXPECT_NEAR(peak, plane.at("peak_irradiance_w_m2").get<double>(), 1e-6 * peak)
       << "the map holds the summary's peak";
   EXPECT_NEAR(*std::max_element(ratio.begin(), ratio.end()), peak / mpe, 1e-6 * peak / mpe);
