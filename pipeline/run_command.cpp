@@ -220,10 +220,15 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   std::optional<StagedAmr> amr;  // irradiance.vthb and its folder, committed with the files
   if (scene.observers) written.push_back(output_names::kIrradianceAmr);
   AtomicFile *far_exr = nullptr, *far_vtp = nullptr, *far_aided_vtp = nullptr;
+  std::vector<std::string> far_files;  // as summary.json lists them
+  auto openFar = [&](const char* name) {
+    far_files.emplace_back(name);
+    return open(name);
+  };
   if (scene.far_field.enabled) {
-    far_exr = open(output_names::kFarFieldExr);
-    far_vtp = open(output_names::kFarFieldVtp);
-    if (scene.hazard.aid) far_aided_vtp = open(output_names::kFarFieldAidedVtp);
+    far_exr = openFar(output_names::kFarFieldExr);
+    far_vtp = openFar(output_names::kFarFieldVtp);
+    if (scene.hazard.aid) far_aided_vtp = openFar(output_names::kFarFieldAidedVtp);
   }
   std::vector<AtomicFile*> exrs;
   for (const PlaneSpec& plane : scene.planes)
@@ -340,7 +345,7 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
       writeHazardSurfaceVtp(far_aided_vtp->stream(),
                             hazardSurface(*far, surface_pixels, scene.hazard.aidedMpeW_m2(), mu));
     }
-    j["far_field"] = farFieldJson(*far, far_hazard);
+    j["far_field"] = farFieldJson(*far, far_hazard, far_files);
     if (!args.quiet) printFarField(err, *far, far_hazard);
   }
   if (!writer) return;

@@ -231,7 +231,8 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
   return j;
 }
 
-nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard) {
+nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard,
+                            const std::vector<std::string>& files) {
   const FarFieldSpec& spec = field.spec();
   const FieldStats& s = field.stats();
   const Vec3& c = field.ball().centre_m;
@@ -239,10 +240,7 @@ nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard) {
   const double azimuth_deg = std::atan2(d.y, d.x) * 180.0 / kPi;
   const double elevation_deg = std::asin(std::clamp(d.z, -1.0, 1.0)) * 180.0 / kPi;
   nlohmann::json j = {
-      {"files", hazard.aided
-                    ? nlohmann::json{output_names::kFarFieldExr, output_names::kFarFieldVtp,
-                                     output_names::kFarFieldAidedVtp}
-                    : nlohmann::json{output_names::kFarFieldExr, output_names::kFarFieldVtp}},
+      {"files", files},
       {"centre_m", {c.x, c.y, c.z}},
       {"lit_radius_m", field.ball().radius_m},
       {"far_radius_m", spec.far_radius_m},

@@ -47,9 +47,10 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
 void printPlane(std::ostream& err, const PlaneSpec& plane, const ObserverField& field,
                 const HazardZone& zone);
 
-/// @brief summary.json's `far_field`: the map, its far radius and rule, counts, the peak and
-/// @p hazard's NOHD.
-nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard);
+/// @brief summary.json's `far_field`: the @p files written of it, the map, its far radius and
+/// rule, counts, the peak and @p hazard's NOHD.
+nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard,
+                            const std::vector<std::string>& files);
 
 /// @brief The far field's lines on the terminal.
 void printFarField(std::ostream& err, const FarField& field, const FarHazard& hazard);

@@ -61,6 +61,14 @@ std::string withoutUuid(const std::string& vdb) {
   return vdb.substr(0, kUuidAt) + vdb.substr(kUuidAt + kUuidChars);
 }
 
+// The grids writeVdb() writes of sampleField() with @p info, read back by OpenVDB.
+openvdb::GridPtrVecPtr writtenGrids(const RunInfo& info) {
+  std::ostringstream out;
+  writeVdb(out, sampleField(), info);
+  std::istringstream in(out.str());
+  return openvdb::io::Stream(in).getGrids();
+}
+
 TEST(VdbFile, GridByGridIsByteForByteWhatOpenVdbWritesOfTheSameGrids) {
   std::ostringstream ours;
   writeVdb(ours, sampleField(), sampleInfo());
@@ -81,11 +89,7 @@ TEST(VdbFile, GridByGridIsByteForByteWhatOpenVdbWritesOfTheSameGrids) {
 TEST(VdbFile, HazardRatioIsTheIrradianceOverTheMpeAndTheOtherGridsAreKept) {
   const ObserverField reference = sampleField();
   const RunInfo info = sampleInfo();
-  std::ostringstream out;
-  writeVdb(out, sampleField(), info);
-  std::istringstream in(out.str());
-  openvdb::io::Stream reader(in);
-  const openvdb::GridPtrVecPtr grids = reader.getGrids();
+  const openvdb::GridPtrVecPtr grids = writtenGrids(info);
   ASSERT_EQ(grids->size(), 4u);
   auto grid = [&](const std::string& name) {
     const openvdb::GridBase::Ptr g = openvdb::findGridByName(*grids, name);
@@ -119,11 +123,7 @@ TEST(VdbFile, WithoutScaledArraysOnlyTheFieldsGridsAreWritten) {
   RunInfo info = sampleInfo();
   info.mpe_w_m2 = 0.0;
   info.scaled.clear();
-  std::ostringstream out;
-  writeVdb(out, sampleField(), info);
-  std::istringstream in(out.str());
-  openvdb::io::Stream reader(in);
-  const openvdb::GridPtrVecPtr grids = reader.getGrids();
+  const openvdb::GridPtrVecPtr grids = writtenGrids(info);
   EXPECT_EQ(grids->size(), 3u);
   EXPECT_FALSE(openvdb::findGridByName(*grids, "hazard_ratio")) << "written without an MPE";
 }
@@ -134,11 +134,7 @@ TEST(VdbFile, EachScaledGridIsTheIrradianceTimesItsFactorWithinTwoFloatRoundings
   RunInfo info = sampleInfo();
   info.scaled.push_back({"aided_hazard_ratio", "1 (aided)", 34.3 / 50.0});
   const ObserverField reference = sampleField();
-  std::ostringstream out;
-  writeVdb(out, sampleField(), info);
-  std::istringstream in(out.str());
-  openvdb::io::Stream reader(in);
-  const openvdb::GridPtrVecPtr grids = reader.getGrids();
+  const openvdb::GridPtrVecPtr grids = writtenGrids(info);
   ASSERT_EQ(grids->size(), 5u) << "irradiance, two scaled grids, level and status";
   const auto aided = openvdb::gridPtrCast<openvdb::FloatGrid>(
       openvdb::findGridByName(*grids, "aided_hazard_ratio"));

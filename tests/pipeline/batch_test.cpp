@@ -180,30 +180,40 @@ TEST_F(Batch, RefusesAFolderOfAnotherStudyUnlessFresh) {
   fs::remove_all(dir);
 }
 
+// A study of a 5 cm mirror disk at the origin, lit along +x from 100 m and glinting along +y,
+// yawed 0° and 20°, with a 1 m observer box beside it and the far field: @p laser_keys gives
+// the scene's `laser` (and its atmosphere and optical aid), @p plane_keys any `planes` entry
+// (with its trailing comma). Runs glint batch into dir/out.
+void runMirrorStudy(const fs::path& dir, const std::string& laser_keys,
+                    const std::string& plane_keys) {
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "scene.json") << "{" << laser_keys << ","
+                                    << R"(
+    "materials": {"mirror": {"specular_reflectance": 0.9, "sigma": 0.01}},
+    "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [-1, 1, 0], "radius": 0.05,
+                 "material": "mirror", "segments": 8}],
+    "observers": {"min": [-1, 0.5, -0.25], "max": [0, 1.5, 0.25], "voxel_m": 0.25,
+                  "block_m": 1.0, "tolerance": 0.05},)"
+                                    << plane_keys << R"(
+    "far_field": {"tolerance": 0.05, "face_pixels": 64}})";
+  std::ofstream(dir / "study.json") << R"({"scene": "scene.json", "sweep": {"yaw_deg": [0, 20]}})";
+  const Outcome batch =
+      glint({"batch", (dir / "study.json").string(), "-o", (dir / "out").string(), "-q"});
+  ASSERT_EQ(batch.status, 0) << batch.err;
+}
+
 // A study's far field: each scenario's hazard distance by direction is the one `glint run`
 // finds for that scenario's scene, and the summary names the farthest. A 5 cm mirror at
 // σ = 0.01 in a 1 MW beam reflects about 3.6e6 W/sr: a NOHD of some 270 m, beyond its far
 // radius of 135 m, so the far field has a hazard to report.
 TEST(BatchFarField, EachScenarioMatchesGlintRunAndTheSummaryNamesTheFarthest) {
   const fs::path dir = fs::temp_directory_path() / "glint_batch_far_field";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  std::ofstream(dir / "scene.json") << R"({
+  ASSERT_NO_FATAL_FAILURE(runMirrorStudy(dir, R"(
     "laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "power_w": 1.0e6,
               "wavelength_nm": 1064, "exposure_s": 10,
-              "beam": {"profile": "flat_top", "radius_m": 0.5}},
-    "materials": {"mirror": {"specular_reflectance": 0.9, "sigma": 0.01}},
-    "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [-1, 1, 0], "radius": 0.05,
-                 "material": "mirror", "segments": 8}],
-    "observers": {"min": [-1, 0.5, -0.25], "max": [0, 1.5, 0.25], "voxel_m": 0.25,
-                  "block_m": 1.0, "tolerance": 0.05},
-    "planes": [{"name": "far", "origin": [-2, 100, -2], "u_axis": [1, 0, 0], "v_axis": [0, 0, 1],
-                "size_m": [4, 4], "pixel_m": 0.25}],
-    "far_field": {"tolerance": 0.05, "face_pixels": 64}})";
-  std::ofstream(dir / "study.json") << R"({"scene": "scene.json", "sweep": {"yaw_deg": [0, 20]}})";
-  const Outcome batch =
-      glint({"batch", (dir / "study.json").string(), "-o", (dir / "out").string(), "-q"});
-  ASSERT_EQ(batch.status, 0) << batch.err;
+              "beam": {"profile": "flat_top", "radius_m": 0.5}})",
+                                         ""));
 
   std::vector<double> nohd;
   for (int s = 0; s < 2; ++s) {
@@ -247,26 +257,15 @@ TEST(BatchFarField, EachScenarioMatchesGlintRunAndTheSummaryNamesTheFarthest) {
 // NOHD; scenarios.csv and summary.json carry them.
 TEST(BatchHazard, PulsesFogAndBinocularsReachEveryScenarioAndTheSummary) {
   const fs::path dir = fs::temp_directory_path() / "glint_batch_hazard";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  std::ofstream(dir / "scene.json") << R"({
+  ASSERT_NO_FATAL_FAILURE(runMirrorStudy(dir, R"(
     "laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "wavelength_nm": 1064,
               "pulse": {"energy_j": 10.0, "duration_s": 1e-8, "repetition_rate_hz": 10},
               "beam": {"profile": "flat_top", "radius_m": 0.5}},
     "atmosphere": {"visibility_m": 5000},
-    "optical_aid": {"aperture_m": 0.05, "magnification": 7, "transmission": 0.7},
-    "materials": {"mirror": {"specular_reflectance": 0.9, "sigma": 0.01}},
-    "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [-1, 1, 0], "radius": 0.05,
-                 "material": "mirror", "segments": 8}],
-    "observers": {"min": [-1, 0.5, -0.25], "max": [0, 1.5, 0.25], "voxel_m": 0.25,
-                  "block_m": 1.0, "tolerance": 0.05},
+    "optical_aid": {"aperture_m": 0.05, "magnification": 7, "transmission": 0.7})",
+                                         R"(
     "planes": [{"name": "far", "origin": [-2, 100, -2], "u_axis": [1, 0, 0], "v_axis": [0, 0, 1],
-                "size_m": [4, 4], "pixel_m": 0.25}],
-    "far_field": {"tolerance": 0.05, "face_pixels": 64}})";
-  std::ofstream(dir / "study.json") << R"({"scene": "scene.json", "sweep": {"yaw_deg": [0, 20]}})";
-  const Outcome batch =
-      glint({"batch", (dir / "study.json").string(), "-o", (dir / "out").string(), "-q"});
-  ASSERT_EQ(batch.status, 0) << batch.err;
+                "size_m": [4, 4], "pixel_m": 0.25}],)"));
   for (int s = 0; s < 2; ++s) {
     const auto rec = nlohmann::json::parse(
         bytes(dir / "out" / "scenarios" / ("s00000" + std::to_string(s)) / "result.json"));
@@ -299,9 +298,8 @@ TEST(BatchHazard, PulsesFogAndBinocularsReachEveryScenarioAndTheSummary) {
   // MPE; the plane 100 m down the glint is hazardous through the aid only (unaided peak 0.53).
   const Scene base = loadScene(dir / "scene.json");
   auto read = [&](const fs::path& file, const std::string& channel, const FieldSpec& spec) {
-    if (file.extension() == ".vdb") return readLatticeVdb(file.string(), channel, spec);
-    int w = 0, h = 0;
-    return readExrChannel(file.string(), channel, w, h);
+    return file.extension() == ".vdb" ? readLatticeVdb(file.string(), channel, spec)
+                                      : exrChannel(file, channel);
   };
   int aided_only = 0;
   for (const auto& [spec, study_file, scenario_file] :

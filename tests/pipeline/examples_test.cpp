@@ -232,6 +232,22 @@ EditedRun runEdited(const std::string& name, const std::string& scene_file,
   return r;
 }
 
+// `glint points` on an example scene (edited by @p edit), the observers of @p points_file; its
+// table in <temp>/<name>.csv.
+struct PointsRun {
+  EditedRun run;
+  std::filesystem::path csv;
+};
+PointsRun runExamplePoints(const std::string& name, const std::string& scene_file,
+                           const std::string& points_file,
+                           const std::function<void(nlohmann::json&)>& edit = {}) {
+  PointsRun r;
+  r.csv = std::filesystem::temp_directory_path() / (name + ".csv");
+  r.run = runEdited(name, scene_file, edit,
+                    {"points", "--points", points_file, "--out", r.csv.string(), "-q"});
+  return r;
+}
+
 std::vector<std::vector<double>> readCsvNumbers(const std::filesystem::path& path,
                                                 std::string& header) {
   std::ifstream in(path);
@@ -252,20 +268,14 @@ std::vector<std::vector<double>> readCsvNumbers(const std::filesystem::path& pat
 // integrations' tolerance (1e-3 each).
 TEST(Examples, FogAttenuatesTheMirrorsGlintOnBothLegsByBeerLambert) {
   const std::string points = example("mirror_fog_points.csv");
-  const EditedRun fog =
-      runEdited("glint_fog", "mirror_fog.json", {},
-                {"points", "--points", points, "--out",
-                 (std::filesystem::temp_directory_path() / "glint_fog.csv").string(), "-q"});
-  ASSERT_EQ(fog.outcome.status, 0) << fog.outcome.err;
-  const EditedRun vacuum =
-      runEdited("glint_vacuum", "mirror_fog.json", [](nlohmann::json& j) { j.erase("atmosphere"); },
-                {"points", "--points", points, "--out",
-                 (std::filesystem::temp_directory_path() / "glint_vacuum.csv").string(), "-q"});
-  ASSERT_EQ(vacuum.outcome.status, 0) << vacuum.outcome.err;
+  const PointsRun fog = runExamplePoints("glint_fog", "mirror_fog.json", points);
+  ASSERT_EQ(fog.run.outcome.status, 0) << fog.run.outcome.err;
+  const PointsRun vacuum = runExamplePoints("glint_vacuum", "mirror_fog.json", points,
+                                            [](nlohmann::json& j) { j.erase("atmosphere"); });
+  ASSERT_EQ(vacuum.run.outcome.status, 0) << vacuum.run.outcome.err;
   std::string header;
-  const auto f = readCsvNumbers(std::filesystem::temp_directory_path() / "glint_fog.csv", header);
-  const auto v =
-      readCsvNumbers(std::filesystem::temp_directory_path() / "glint_vacuum.csv", header);
+  const auto f = readCsvNumbers(fog.csv, header);
+  const auto v = readCsvNumbers(vacuum.csv, header);
   const double mu = 3.912 / 500.0;
   ASSERT_EQ(f.size(), 5u);
   for (std::size_t i = 0; i < f.size(); ++i) {
@@ -276,7 +286,7 @@ TEST(Examples, FogAttenuatesTheMirrorsGlintOnBothLegsByBeerLambert) {
   EXPECT_GT(f[2][7], 1.0) << "hazardous at 60 m in fog";
   EXPECT_LT(f[3][7], 1.0) << "not at 100 m in fog";
   EXPECT_GT(v[3][7], 1.0) << "hazardous at 100 m in vacuum";
-  for (const auto& p : {fog.dir, vacuum.dir}) std::filesystem::remove_all(p);
+  for (const auto& p : {fog.run.dir, vacuum.run.dir}) std::filesystem::remove_all(p);
 }
 
 // examples/pulsed_nd_yag.json: 0.6 J, 10 ns at 10 Hz for 10 s, the MPE set by rule 3 (2.0e-2
@@ -284,13 +294,11 @@ TEST(Examples, FogAttenuatesTheMirrorsGlintOnBothLegsByBeerLambert) {
 // E / 10 Hz, and its ratio E / (MPE per pulse × 10 Hz).
 TEST(Examples, PulsedNdYagIsJudgedPerPulseInPointsAndRun) {
   const double mpe_pulse_j_m2 = 2.0e-2 / std::sqrt(10.0);
-  const auto csv = std::filesystem::temp_directory_path() / "glint_pulsed.csv";
-  const EditedRun points =
-      runEdited("glint_pulsed_points", "pulsed_nd_yag.json", {},
-                {"points", "--points", example("cylinder_186.csv"), "--out", csv.string(), "-q"});
-  ASSERT_EQ(points.outcome.status, 0) << points.outcome.err;
+  const PointsRun points =
+      runExamplePoints("glint_pulsed", "pulsed_nd_yag.json", example("cylinder_186.csv"));
+  ASSERT_EQ(points.run.outcome.status, 0) << points.run.outcome.err;
   std::string header;
-  const auto rows = readCsvNumbers(csv, header);
+  const auto rows = readCsvNumbers(points.csv, header);
   EXPECT_EQ(header,
             "x,y,z,irradiance_w_m2,error_estimate_w_m2,evaluations,converged,hazard_ratio,"
             "radiant_exposure_j_m2_per_pulse");
@@ -312,19 +320,17 @@ TEST(Examples, PulsedNdYagIsJudgedPerPulseInPointsAndRun) {
   EXPECT_NEAR(hazard.at("peak_radiant_exposure_j_m2_per_pulse").get<double>(),
               hazard.at("peak_hazard_ratio").get<double>() * mpe_pulse_j_m2, 1e-12);
   EXPECT_GT(hazard.at("nominal_hazard_zone").at("volume_m3").get<double>(), 0.0);
-  std::filesystem::remove_all(points.dir);
+  std::filesystem::remove_all(points.run.dir);
 }
 
 // examples/cylinder_binoculars.json: 7×50 binoculars, τ = 0.7: gain 0.7 × 49 = 34.3. The aided
 // ratio is the unaided one × 34.3 everywhere, and the aided zone holds the unaided one.
 TEST(Examples, BinocularsScaleTheAidedRatioAndWidenTheZone) {
-  const auto csv = std::filesystem::temp_directory_path() / "glint_aided.csv";
-  const EditedRun points =
-      runEdited("glint_aided_points", "cylinder_binoculars.json", {},
-                {"points", "--points", example("cylinder_186.csv"), "--out", csv.string(), "-q"});
-  ASSERT_EQ(points.outcome.status, 0) << points.outcome.err;
+  const PointsRun points =
+      runExamplePoints("glint_aided", "cylinder_binoculars.json", example("cylinder_186.csv"));
+  ASSERT_EQ(points.run.outcome.status, 0) << points.run.outcome.err;
   std::string header;
-  for (const auto& row : readCsvNumbers(csv, header)) {
+  for (const auto& row : readCsvNumbers(points.csv, header)) {
     EXPECT_NEAR(row[8], 34.3 * row[7], 1e-12 * row[8]) << "aided = 34.3 × unaided";
   }
   EXPECT_EQ(header.substr(header.size() - 31), "hazard_ratio,aided_hazard_ratio") << header;
@@ -346,7 +352,7 @@ TEST(Examples, BinocularsScaleTheAidedRatioAndWidenTheZone) {
   EXPECT_TRUE(summary.at("far_field").contains("aided_max_nohd_m")) << summary.dump();
   EXPECT_EQ(run.files.count("far_field_aided.vtp"), 1u) << "the aided eye's hazard boundary";
   EXPECT_EQ(summary.at("far_field").at("files").size(), 3u) << summary.at("far_field").dump();
-  std::filesystem::remove_all(points.dir);
+  std::filesystem::remove_all(points.run.dir);
 }
 
 }  // namespace
