@@ -29,11 +29,12 @@ Vec3 edgeControl(const Vec3& p_i, const Vec3& p_j, const Vec3& n_i) {
 
 }  // namespace
 
-PNTriangle::PNTriangle(const std::array<Vec3, 3>& p, const std::array<Vec3, 3>& n)
-    : PNTriangle(p, n, {{{n[0], n[1]}, {n[1], n[2]}, {n[2], n[0]}}}) {}
+PNTriangle::PNTriangle(const std::array<Vec3, 3>& p, const std::array<Vec3, 3>& n,
+                       PNNormalField field)
+    : PNTriangle(p, n, {{{n[0], n[1]}, {n[1], n[2]}, {n[2], n[0]}}}, field) {}
 
 PNTriangle::PNTriangle(const std::array<Vec3, 3>& p, const std::array<Vec3, 3>& n,
-                       const std::array<std::array<Vec3, 2>, 3>& across) {
+                       const std::array<std::array<Vec3, 2>, 3>& across, PNNormalField field) {
   // Near vertex i on edge e, toward j; `other` is the neighbour's normal at vertex i. The sum
   // is symmetric, so the neighbour computes the very same double.
   auto shared = [&](int i, int j, const Vec3& other) {
@@ -63,8 +64,70 @@ PNTriangle::PNTriangle(const std::array<Vec3, 3>& p, const std::array<Vec3, 3>& 
     if (auto m = tryNormalize(n[i] + n[j] - vij * d)) return *m;
     return n[i];
   };
-  n_ = {n[0], n[1], n[2], midNormal(0, 1), midNormal(1, 2), midNormal(0, 2)};
+  const double weight = field == PNNormalField::Bernstein ? 1.0 : 0.5;
+  n_ = {n[0],
+        n[1],
+        n[2],
+        weight * midNormal(0, 1),
+        weight * midNormal(1, 2),
+        weight * midNormal(0, 2)};
+  computeSagBound();
+}
 
+PNTriangle PNTriangle::nagata(const std::array<Vec3, 3>& p, const std::array<Vec3, 3>& n,
+                              const std::array<std::array<Vec3, 2>, 3>& across) {
+  // The edge curve x(t) = pᵢ + (d − c) t + c t², d = pⱼ − pᵢ, leaves pᵢ along d − c and reaches
+  // pⱼ along d + c; with c = α nᵢ + β nⱼ, tangency to both normals is the 2×2 system
+  // [1 γ; γ 1] (α, β) = (nᵢ·d, −nⱼ·d), γ = nᵢ·nⱼ.
+  auto curvature = [&](int i, int j, const Vec3& ni, const Vec3& nj) {
+    const Vec3 d = p[j] - p[i];
+    const double gamma = glm::dot(ni, nj);
+    const double det = 1.0 - gamma * gamma;
+    // Parallel normals (to a microradian) leave the edge straight: its sag is then below the
+    // rounding of the positions, while α and β would divide two vanishing numbers.
+    if (!(det > 1e-12)) return Vec3(0.0);
+    const double a = glm::dot(ni, d), b = -glm::dot(nj, d);
+    return ((a - gamma * b) * ni + (b - gamma * a) * nj) / det;
+  };
+  auto shared = [&](int e) {
+    const int i = e, j = (e + 1) % 3;
+    return 0.5 * (curvature(i, j, n[i], n[j]) + curvature(i, j, across[e][0], across[e][1]));
+  };
+  // The quadratic's Bernstein mid controls, mᵢⱼ = (pᵢ + pⱼ − cᵢⱼ) / 2, raised to the cubic net.
+  const std::array<Vec3, 3> c = {shared(0), shared(1), shared(2)};  // edges 01, 12, 20
+  const Vec3 m01 = 0.5 * (p[0] + p[1] - c[0]);
+  const Vec3 m12 = 0.5 * (p[1] + p[2] - c[1]);
+  const Vec3 m20 = 0.5 * (p[2] + p[0] - c[2]);
+  PNTriangle t;
+  t.b_ = {p[0],
+          p[1],
+          p[2],
+          (p[0] + 2.0 * m01) / 3.0,
+          (p[1] + 2.0 * m01) / 3.0,
+          (p[1] + 2.0 * m12) / 3.0,
+          (p[2] + 2.0 * m12) / 3.0,
+          (p[2] + 2.0 * m20) / 3.0,
+          (p[0] + 2.0 * m20) / 3.0,
+          (m01 + m12 + m20) / 3.0};
+  // The geometric normal is a quadratic: its Bernstein controls from its values at the corners
+  // and edge midpoints, nᵢⱼ = 2 N(midpoint) − (Nᵢ + Nⱼ) / 2.
+  auto geometric = [&](const Vec3& bary) {
+    return glm::cross(t.derivative(bary, Vec3(-1.0, 1.0, 0.0)),
+                      t.derivative(bary, Vec3(-1.0, 0.0, 1.0)));
+  };
+  const std::array<Vec3, 3> at = {geometric(Vec3(1.0, 0.0, 0.0)), geometric(Vec3(0.0, 1.0, 0.0)),
+                                  geometric(Vec3(0.0, 0.0, 1.0))};
+  auto mid = [&](int i, int j) {
+    Vec3 bary(0.0);
+    bary[i] = bary[j] = 0.5;
+    return 2.0 * geometric(bary) - 0.5 * (at[i] + at[j]);
+  };
+  t.n_ = {at[0], at[1], at[2], mid(0, 1), mid(1, 2), mid(0, 2)};
+  t.computeSagBound();
+  return t;
+}
+
+void PNTriangle::computeSagBound() {
   // Largest second difference of the net in the two parameter directions and their mix.
   double m = 0.0;
   const int basis[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
@@ -105,8 +168,8 @@ Vec3 PNTriangle::derivative(const Vec3& t, const Vec3& d) const {
 
 Vec3 PNTriangle::normalField(const Vec3& t) const {
   const double w = t[0], u = t[1], v = t[2];
-  return n_[0] * (w * w) + n_[1] * (u * u) + n_[2] * (v * v) + n_[3] * (w * u) + n_[4] * (u * v) +
-         n_[5] * (w * v);
+  return n_[0] * (w * w) + n_[1] * (u * u) + n_[2] * (v * v) +
+         2.0 * (n_[3] * (w * u) + n_[4] * (u * v) + n_[5] * (w * v));
 }
 
 double PNTriangle::normalConeHalfAngle(const std::array<Vec3, 3>& c, const Vec3& axis) const {

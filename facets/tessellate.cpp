@@ -134,7 +134,6 @@ std::uint32_t addDisk(Target& target, const DiskShape& s, std::uint32_t material
 std::size_t fillNormals(TriangleMesh& mesh, double crease_angle_rad) {
   const std::vector<std::uint32_t> weld = weldByPosition(mesh.positions_m);
   const std::size_t welded = weld.empty() ? 0 : *std::max_element(weld.begin(), weld.end()) + 1;
-  std::vector<Vec3> area_normal(mesh.triangles.size());  // |cross| = twice the area
   std::vector<Vec3> unit_normal(mesh.triangles.size());
   std::vector<bool> has_normal(mesh.triangles.size(), false);
   // The faces around each welded position, as one array with offsets (compressed rows): a
@@ -143,20 +142,35 @@ std::size_t fillNormals(TriangleMesh& mesh, double crease_angle_rad) {
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
     const auto& tri = mesh.triangles[t];
     const Vec3& a = mesh.positions_m[tri[0]];
-    area_normal[t] = glm::cross(mesh.positions_m[tri[1]] - a, mesh.positions_m[tri[2]] - a);
-    const auto unit = tryNormalize(area_normal[t]);
+    const auto unit =
+        tryNormalize(glm::cross(mesh.positions_m[tri[1]] - a, mesh.positions_m[tri[2]] - a));
     if (!unit) continue;  // no direction to lend its neighbours
     unit_normal[t] = *unit;
     has_normal[t] = true;
     for (std::uint32_t v : tri) ++first[weld[v] + 1];
   }
   for (std::size_t w = 0; w < welded; ++w) first[w + 1] += first[w];
+  // Beside each face around a position, its normal weighted by sin(corner angle) / (|e₁| |e₂|),
+  // e₁ and e₂ its edges from that corner (Max, "Weights for computing vertex normals from facet
+  // normals", JGT 1999): exact at vertices of a sphere, and second order on smooth surfaces,
+  // where area weights are first order on uneven meshes. A glint's irradiance follows the
+  // derivative of the normals, so their error reaches it one order lower.
   std::vector<std::uint32_t> faces(first[welded]);
+  std::vector<Vec3> corner_weighted(first[welded]);
   {
     std::vector<std::uint32_t> next(first.begin(), first.end() - 1);
     for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
       if (!has_normal[t]) continue;
-      for (std::uint32_t v : mesh.triangles[t]) faces[next[weld[v]]++] = t;
+      const auto& tri = mesh.triangles[t];
+      for (std::size_t k = 0; k < 3; ++k) {
+        const Vec3& p = mesh.positions_m[tri[k]];
+        const Vec3 e1 = mesh.positions_m[tri[(k + 1) % 3]] - p;
+        const Vec3 e2 = mesh.positions_m[tri[(k + 2) % 3]] - p;
+        const double scale = glm::dot(e1, e1) * glm::dot(e2, e2);
+        const std::uint32_t slot = next[weld[tri[k]]]++;
+        faces[slot] = t;
+        corner_weighted[slot] = scale > 0.0 ? glm::cross(e1, e2) / scale : Vec3(0.0);
+      }
     }
   }
   // Each corner compares its face with every face around its vertex: corners × valence in all.
@@ -190,7 +204,7 @@ std::size_t fillNormals(TriangleMesh& mesh, double crease_angle_rad) {
       if (first[w + 1] - first[w] <= kMaxValence) {
         sum = Vec3(0.0);
         for (std::uint32_t i = first[w]; i < first[w + 1]; ++i) {
-          if (glm::dot(unit_normal[faces[i]], own) >= cos_crease) sum += area_normal[faces[i]];
+          if (glm::dot(unit_normal[faces[i]], own) >= cos_crease) sum += corner_weighted[i];
         }
       }
       const Vec3 normal = tryNormalize(sum).value_or(own);
@@ -302,8 +316,12 @@ MeshStats addMesh(Target& target, const Vec3& origin_m, std::uint32_t material,
       }
       ++stats.fit_fallbacks;
     }
-    target.addFacet(obj, f.p, SurfaceModel::PN,
-                    target.addPNTriangle(PNTriangle(f.p, f.n, neighbours)));
+    const PNTriangle patch = surface == MeshSurface::Nagata
+                                 ? PNTriangle::nagata(f.p, f.n, neighbours)
+                             : surface == MeshSurface::PNVlachos
+                                 ? PNTriangle(f.p, f.n, neighbours, PNNormalField::Vlachos)
+                                 : PNTriangle(f.p, f.n, neighbours);
+    target.addFacet(obj, f.p, SurfaceModel::PN, target.addPNTriangle(patch));
   }
   // Each interior edge was seen from both sides.
   stats.crease_edges /= 2;

@@ -52,8 +52,15 @@ std::uint32_t addSphere(Target& target, const SphereShape& shape, std::uint32_t 
 std::uint32_t addDisk(Target& target, const DiskShape& shape, std::uint32_t material, int segments,
                       const Vec3& reference);
 
-/// @brief The surface a mesh's facets are given.
-enum class MeshSurface { Flat, PN, QuadricFit };
+/// @brief The surface a mesh's facets are given (README, "Meshes": measured against the shapes
+/// glint knows exactly, bench/RESULTS.md).
+enum class MeshSurface {
+  Flat,        ///< the chord triangles
+  PN,          ///< PN triangles with the Bernstein normal field (PNNormalField): the default
+  QuadricFit,  ///< the quadric through each facet's vertices and normals, PN where it fails
+  Nagata,      ///< Nagata's quadratic patches with their own normals
+  PNVlachos,   ///< PN triangles with the normal field as published: only to measure it
+};
 
 /// @brief An indexed triangle mesh in one object's frame (metres), as a file gives it.
 /// Vertices at one position may repeat with different normals (a crease); the mesh is stitched

@@ -230,10 +230,9 @@ MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder, const Gl
   MeshSpec m;
   const std::string file = r.string("file");
   m.file = folder / file;
-  const std::size_t surface = r.choice("surface", {"pn", "quadric_fit", "flat"}, 0);
-  m.surface = surface == 0   ? MeshSurface::PN
-              : surface == 1 ? MeshSurface::QuadricFit
-                             : MeshSurface::Flat;
+  static constexpr MeshSurface kSurfaces[] = {MeshSurface::PN, MeshSurface::QuadricFit,
+                                              MeshSurface::Flat, MeshSurface::Nagata};
+  m.surface = kSurfaces[r.choice("surface", {"pn", "quadric_fit", "flat", "nagata"}, 0)];
   m.crease_angle_deg = r.number("crease_angle_deg", m.crease_angle_deg);
   if (!(m.crease_angle_deg >= 0.0 && m.crease_angle_deg <= 180.0)) {
     r.fail("crease_angle_deg", "must be in [0, 180]");

@@ -130,5 +130,25 @@ TEST(MeshPN, SmoothEdgesAreThoseOfPlainPN) {
   EXPECT_EQ(t.pn_triangles[0].controlPoints(), plain.controlPoints());
 }
 
+TEST(MeshNormals, ComputedNormalsAreExactAtVerticesOfASphere) {
+  // An uneven fan of six triangles around the pole of a unit sphere, its rim at different
+  // heights: Max's weights give the pole's normal +z to rounding, where area weights tilt it
+  // by the fan's unevenness (a first-order error that the glint's curvature would inherit).
+  TriangleMesh m;
+  m.positions_m.push_back(Vec3(0, 0, 1));
+  const double polar[6] = {0.1, 0.25, 0.15, 0.3, 0.12, 0.2};
+  for (int k = 0; k < 6; ++k) {
+    const double phi = k * kPi / 3.0 + 0.15 * std::sin(3.0 * k);  // uneven, in order
+    m.positions_m.push_back(Vec3(std::sin(polar[k]) * std::cos(phi),
+                                 std::sin(polar[k]) * std::sin(phi), std::cos(polar[k])));
+  }
+  for (std::uint32_t k = 0; k < 6; ++k) m.triangles.push_back({0, 1 + k, 1 + (k + 1) % 6});
+  m.normals.assign(m.positions_m.size(), Vec3(0.0));
+  fillNormals(m, 1.0);
+  const Vec3 pole = m.normals[m.triangles[0][0]];
+  EXPECT_NEAR(angleBetween(pole, Vec3(0, 0, 1)), 0.0, 1e-15)
+      << "pole normal " << pole.x << ", " << pole.y;
+}
+
 }  // namespace
 }  // namespace glint

@@ -103,5 +103,107 @@ TEST(PNTriangle, ConeAndSagBoundEverySubPatch) {
   }
 }
 
+// A triangle of a unit sphere whose corners are about h apart (radians), its normals exact.
+struct SmallSpherePatch {
+  std::array<Vec3, 3> p, n;
+  explicit SmallSpherePatch(double h) {
+    auto at = [](double theta, double phi) {
+      return Vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                  std::cos(theta));
+    };
+    p = {at(0.3, 0.0), at(0.3 + h, 0.0), at(0.3 + 0.5 * h, h)};
+    n = p;
+  }
+};
+
+// How far a patch's normal field is from the normal of the sphere at the patch's own points:
+// the largest angle, and the largest relative error of its derivative (the curvature a glint
+// sees: on a unit sphere dn/ds = dp/ds exactly), over a lattice of barycentric points.
+struct Consistency {
+  double angle_rad = 0.0;
+  double derivative = 0.0;
+};
+Consistency consistencyOnUnitSphere(const PNTriangle& pn) {
+  Consistency c;
+  const double step = 1e-5;  // central differences: error ~1e-10, far below what is measured
+  const std::array<Vec3, 2> dirs = {Vec3(-1, 1, 0), Vec3(-1, 0, 1)};
+  for (int i = 1; i < 8; ++i) {
+    for (int j = 1; i + j < 8; ++j) {
+      const Vec3 b(1.0 - i / 8.0 - j / 8.0, i / 8.0, j / 8.0);
+      c.angle_rad = std::max(c.angle_rad, angleBetween(*pn.normal(b), pn.position(b)));
+      for (const Vec3& d : dirs) {
+        const Vec3 dn = (*pn.normal(b + step * d) - *pn.normal(b - step * d)) / (2 * step);
+        const Vec3 dp = pn.derivative(b, d);
+        const Vec3 dtrue = dp - glm::dot(dp, *pn.normal(b)) * *pn.normal(b);
+        c.derivative = std::max(c.derivative, glm::length(dn - dtrue) / glm::length(dtrue));
+      }
+    }
+  }
+  return c;
+}
+
+TEST(PNTriangle, NormalFieldTurnsWithTheSurfaceToSecondOrder) {
+  // The Bernstein field's direction follows the sphere's normal at the patch's points to third
+  // order in h and its derivative to second: halving h divides them by 8 and 4 (asymptotically;
+  // ≥ 6 and ≥ 3 leave room for the next order at these sizes).
+  const Consistency coarse =
+      consistencyOnUnitSphere(PNTriangle(SmallSpherePatch(0.2).p, SmallSpherePatch(0.2).n));
+  const Consistency fine =
+      consistencyOnUnitSphere(PNTriangle(SmallSpherePatch(0.1).p, SmallSpherePatch(0.1).n));
+  EXPECT_GT(coarse.angle_rad / fine.angle_rad, 6.0)
+      << coarse.angle_rad << " rad at h = 0.2, " << fine.angle_rad << " at 0.1";
+  EXPECT_GT(coarse.derivative / fine.derivative, 3.0)
+      << coarse.derivative << " at h = 0.2, " << fine.derivative << " at 0.1";
+  EXPECT_LT(fine.derivative, 1e-2) << "the curvature a glint sees, at 0.1 rad facets";
+}
+
+TEST(PNTriangle, PublishedNormalFieldMissesTheCurvatureAtAnySize) {
+  // Vlachos' printed weights b_i b_j: the normal leaves a corner at half the surface's rate, so
+  // near the corners its derivative is off by up to a half, and that does not shrink with h. The
+  // Bernstein field, from the same controls, is within 1 %.
+  for (const double h : {0.2, 0.05}) {
+    const SmallSpherePatch s(h);
+    const Consistency vlachos =
+        consistencyOnUnitSphere(PNTriangle(s.p, s.n, PNNormalField::Vlachos));
+    const Consistency bernstein = consistencyOnUnitSphere(PNTriangle(s.p, s.n));
+    EXPECT_GT(vlachos.derivative, 0.2) << "h = " << h;
+    EXPECT_LT(bernstein.derivative, 0.01) << "h = " << h;
+  }
+}
+
+TEST(NagataPatch, InterpolatesVerticesAndNormalsWithItsOwnGeometricNormal) {
+  const SmallSpherePatch s(0.3);
+  const PNTriangle patch =
+      PNTriangle::nagata(s.p, s.n, {{{s.n[0], s.n[1]}, {s.n[1], s.n[2]}, {s.n[2], s.n[0]}}});
+  const std::array<Vec3, 3> corners = {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(glm::length(patch.position(corners[i]) - s.p[i]), 0.0, 1e-15) << "vertex " << i;
+    EXPECT_NEAR(angleBetween(*patch.normal(corners[i]), s.n[i]), 0.0, 1e-14) << "normal " << i;
+  }
+  // The normal field is the patch's own: ∂x/∂u × ∂x/∂v everywhere, not only at the corners.
+  std::mt19937_64 rng(5);
+  for (int k = 0; k < 100; ++k) {
+    const Vec3 b = randomBary(rng);
+    const Vec3 geometric =
+        glm::cross(patch.derivative(b, Vec3(-1, 1, 0)), patch.derivative(b, Vec3(-1, 0, 1)));
+    EXPECT_NEAR(angleBetween(*patch.normal(b), geometric), 0.0, 1e-13)
+        << "at " << b.x << ", " << b.y;
+  }
+}
+
+TEST(NagataPatch, EdgesLeaveEachVertexInItsTangentPlaneAndParallelNormalsStayFlat) {
+  const SmallSpherePatch s(0.3);
+  const std::array<std::array<Vec3, 2>, 3> own = {
+      {{s.n[0], s.n[1]}, {s.n[1], s.n[2]}, {s.n[2], s.n[0]}}};
+  const PNTriangle patch = PNTriangle::nagata(s.p, s.n, own);
+  // Along edge 0 → 1 from vertex 0: the tangent is perpendicular to n0 (to rounding).
+  const Vec3 t = patch.derivative(Vec3(1, 0, 0), Vec3(-1, 1, 0));
+  EXPECT_NEAR(glm::dot(t, s.n[0]) / glm::length(t), 0.0, 1e-14);
+  const Vec3 n(0.0, 0.0, 1.0);
+  const std::array<Vec3, 3> flat = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  const PNTriangle plane = PNTriangle::nagata(flat, {n, n, n}, {{{n, n}, {n, n}, {n, n}}});
+  EXPECT_EQ(plane.position(Vec3(0.2, 0.3, 0.5)).z, 0.0) << "parallel normals: the chord itself";
+}
+
 }  // namespace
 }  // namespace glint

@@ -408,7 +408,8 @@ TEST(StressDegenerate, BrokenTrianglesAreDroppedOrRepairedAndCounted) {
   const Vec3 observer(0.5 + 10.0 * 0.3, 0.5, 10.0);  // near the mirror direction of the square
   IntegratorWorkspace ws;
   double square_alone = 0.0;
-  for (MeshSurface surface : {MeshSurface::Flat, MeshSurface::PN, MeshSurface::QuadricFit}) {
+  for (MeshSurface surface :
+       {MeshSurface::Flat, MeshSurface::PN, MeshSurface::QuadricFit, MeshSurface::Nagata}) {
     for (bool with_broken : {false, true}) {
       Target t;
       const std::uint32_t m = t.addMaterial(mirror(0.9, 0.05));
