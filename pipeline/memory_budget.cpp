@@ -104,14 +104,23 @@ void requireWithinBudget(const std::string& what, std::uint64_t floor_bytes,
 }
 
 MemoryWatch::MemoryWatch(std::uint64_t budget_bytes) : budget_bytes_(budget_bytes) {
+  // Sampled here first, so the flag never waits on the thread's schedule to reflect a budget
+  // passed before the work starts.
+  sample();
   thread_ = std::thread([this] {
-    while (!stopping_.load()) {
-      const std::uint64_t now = residentBytes();
-      if (now > peak_bytes_.load()) peak_bytes_.store(now);
-      if (now > budget_bytes_) exceeded_.store(true);
+    for (;;) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      if (stopping_.load()) return;
+      sample();
     }
   });
+}
+
+void MemoryWatch::sample() {
+  const std::uint64_t now = residentBytes();
+  if (now > peak_bytes_.load()) peak_bytes_.store(now);
+  if (now > budget_bytes_) exceeded_.store(true);
+  samples_.fetch_add(1);
 }
 
 MemoryWatch::~MemoryWatch() {

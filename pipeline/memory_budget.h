@@ -35,10 +35,13 @@ std::uint64_t residentBytes();
 void requireWithinBudget(const std::string& what, std::uint64_t floor_bytes,
                          std::uint64_t budget_bytes, std::string_view advice);
 
-/// @brief Samples the resident memory every 20 ms on a thread of its own; once it passes the
-/// budget, stopFlag() turns true (the field builders poll it and stop).
+/// @brief Samples the resident memory once when constructed and then every 20 ms on a thread
+/// of its own; once it passes the budget, stopFlag() turns true (the field builders poll it
+/// and stop).
 class MemoryWatch {
  public:
+  /// @brief Takes the first sample before returning: a process already past the budget has
+  /// exceeded() true at once.
   explicit MemoryWatch(std::uint64_t budget_bytes);
   ~MemoryWatch();
   MemoryWatch(const MemoryWatch&) = delete;
@@ -48,14 +51,19 @@ class MemoryWatch {
   [[nodiscard]] bool exceeded() const { return exceeded_.load(); }
   [[nodiscard]] std::uint64_t budgetBytes() const { return budget_bytes_; }
   [[nodiscard]] std::uint64_t peakBytes() const { return peak_bytes_.load(); }
+  /// @brief How many samples have been taken (the constructor's first among them).
+  [[nodiscard]] std::uint64_t samples() const { return samples_.load(); }
   /// @throw InputError if the budget was passed, naming @p what was being computed.
   void check(const std::string& what) const;
 
  private:
+  void sample();
+
   std::uint64_t budget_bytes_;
   std::atomic<bool> exceeded_{false};
   std::atomic<bool> stopping_{false};
   std::atomic<std::uint64_t> peak_bytes_{0};
+  std::atomic<std::uint64_t> samples_{0};
   std::thread thread_;
 };
 

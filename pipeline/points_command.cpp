@@ -18,6 +18,7 @@
 #include "pipeline/progress.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
+#include "pipeline/test_pause.h"
 
 namespace glint {
 namespace {
@@ -119,6 +120,7 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   // Open the output first: a missing folder should stop the run before the work, not after.
   std::unique_ptr<AtomicFile> file;
   if (args.out_path != "-") file = std::make_unique<AtomicFile>(args.out_path);
+  if (file) pauseForTestsAfterTemporaries(err);
 
   std::unique_ptr<tbb::global_control> thread_limit;
   if (args.threads > 0) {

@@ -23,6 +23,7 @@
 #include "pipeline/run_report.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
+#include "pipeline/test_pause.h"
 
 namespace glint {
 namespace {
@@ -233,6 +234,7 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   std::vector<AtomicFile*> exrs;
   for (const PlaneSpec& plane : scene.planes)
     exrs.push_back(open(output_names::planeExr(plane.name)));
+  if (writer) pauseForTestsAfterTemporaries(err);
 
   std::unique_ptr<tbb::global_control> thread_limit;
   if (args.threads > 0) {

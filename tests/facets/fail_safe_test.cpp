@@ -89,17 +89,56 @@ TEST(ContributionBoundFailSafe, ANaNNormalBoundsAsTheLobePeakNeverZero) {
 
 TEST(ContributionBoundFailSafe, OverflowingBeamPowerGivesAnInfiniteBoundNeverNaN) {
   // 1.7e308 W over a beam of 1 m: the irradiance is finite, but times the lobe's peak and an
-  // area it overflows, and ∞ · 0 (no diffuse reflectance) would be NaN.
+  // area it overflows, and ∞ · 0 (no diffuse reflectance) would be NaN. The bound is linear in
+  // the power, so the same facet under 1 W says what it must be: 1.7e308 times that, +∞ where
+  // that product passes the largest double. A factor 2 either side of it is left out, where
+  // the bound's own order of products may round to the other side.
+  constexpr double kPower = 1.7e308, kMax = std::numeric_limits<double>::max();
   Beam beam = test::flatTop(Vec3(0), Vec3(1, 0, 0), 1.0, 1.0);
-  beam.power_w = 1.7e308;
+  Beam one_watt = beam;
+  one_watt.power_w = 1.0;
+  beam.power_w = kPower;
   const Target t = sphereTarget(beam);
   const Material& m = t.materials[0];
+  const Vec3 observer(-5, 0.3, 0.1);
+  constexpr double kObserverRadius = 0.2;
+  int infinite = 0, finite = 0;
   for (std::uint32_t i = 0; i < t.facetCount(); ++i) {
     const PatchGeometry g = patchGeometry(t, coarseSubFacet(t, i), NormalModel::Surface);
-    const ContributionBound b = contributionBound(g, Vec3(-5, 0.3, 0.1), beam, m, {}, 0.2);
+    const ContributionBound b = contributionBound(g, observer, beam, m, {}, kObserverRadius);
+    const double per_watt =
+        contributionBound(g, observer, one_watt, m, {}, kObserverRadius).upper_w_m2;
+    ASSERT_TRUE(std::isfinite(per_watt)) << "facet " << i << ": premise, 1 W overflows nothing";
     EXPECT_FALSE(std::isnan(b.upper_w_m2)) << "facet " << i;
     EXPECT_FALSE(std::isnan(b.unresolved_w_m2)) << "facet " << i;
+    if (per_watt > 2.0 * (kMax / kPower)) {
+      EXPECT_EQ(b.upper_w_m2, kInf) << "facet " << i << ": " << per_watt << " W/m² a watt";
+      EXPECT_EQ(b.unresolved_w_m2, kInf) << "facet " << i << ": an overflow is never resolved";
+      ++infinite;
+    } else if (per_watt < 0.5 * (kMax / kPower)) {
+      ASSERT_TRUE(std::isfinite(b.upper_w_m2)) << "facet " << i << ": no overflow, no +∞";
+      // The same dozen products and quotients at another scale: a few roundings of 1.1e-16
+      // each apart, well inside 1e-12.
+      EXPECT_NEAR(b.upper_w_m2, per_watt * kPower, 1e-12 * per_watt * kPower) << "facet " << i;
+      if (per_watt > 0.0) ++finite;
+    }
+    if (!std::isfinite(b.upper_w_m2)) continue;
+    // A finite bound holds for every observer of its ball: the facet's sample at its centre
+    // and at the ends of its three axes stays below it.
+    for (const Vec3& at :
+         {observer, observer + Vec3(kObserverRadius, 0, 0), observer - Vec3(kObserverRadius, 0, 0),
+          observer + Vec3(0, kObserverRadius, 0), observer - Vec3(0, kObserverRadius, 0),
+          observer + Vec3(0, 0, kObserverRadius), observer - Vec3(0, 0, kObserverRadius)}) {
+      const double sample = facetIrradiance(g, at, beam, m);
+      ASSERT_TRUE(std::isfinite(sample)) << "facet " << i;
+      EXPECT_GE(b.upper_w_m2, sample)
+          << "facet " << i << " at " << at.x << "," << at.y << "," << at.z;
+    }
   }
+  // The premise that makes the test one of overflow: the power overflows some bounds, not all
+  // (measured: 24 of the 120 facets +∞, 36 finite and positive, 60 zero).
+  EXPECT_GT(infinite, 0) << "no bound overflowed at " << kPower << " W";
+  EXPECT_GT(finite, 0) << "every bound overflowed at " << kPower << " W";
 }
 
 TEST(RegionBoundFailSafe, ABallReachingTheTargetIsUnboundedNotNaN) {

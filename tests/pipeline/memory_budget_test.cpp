@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <thread>
+#include <vector>
 
 #include "observers/field.h"
 #include "pipeline/input_error.h"
@@ -62,18 +63,39 @@ TEST(MemoryBudget, ARegionBeyondTheBudgetIsRefusedWithItsEstimate) {
 }
 
 TEST(MemoryBudget, TheWatchRaisesItsFlagPastTheBudget) {
-  // This process is resident in more than a kilobyte: the flag must rise at the first sample.
+  // The watch samples once before its constructor returns, and this process is resident in
+  // more than a kilobyte: the flag is up at once, with no wait on the watch's thread.
   const MemoryWatch watch(1024);
-  for (int i = 0; i < 500 && !watch.exceeded(); ++i)
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  ASSERT_TRUE(watch.exceeded()) << "no sample in 5 s";
-  EXPECT_TRUE(watch.stopFlag().load());
-  EXPECT_GT(watch.peakBytes(), 1024u);
+  ASSERT_GE(watch.samples(), 1u) << "the constructor takes the first sample";
+  EXPECT_GT(watch.peakBytes(), 1024u) << "the sample read /proc/self/statm";
+  EXPECT_TRUE(watch.exceeded()) << "resident " << watch.peakBytes() << " bytes, budget 1024";
+  EXPECT_TRUE(watch.stopFlag().load()) << "the flag the field builders poll";
   EXPECT_THROW(watch.check("the observer box"), InputError);
+  // A petabyte is not passed: and the watch has sampled, so this is its verdict, not silence.
   const MemoryWatch roomy(std::uint64_t{1} << 50);
-  std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  EXPECT_FALSE(roomy.exceeded()) << "a petabyte budget was passed";
+  ASSERT_GE(roomy.samples(), 1u) << "the constructor takes the first sample";
+  EXPECT_GT(roomy.peakBytes(), 0u) << "the sample read /proc/self/statm";
+  EXPECT_FALSE(roomy.exceeded()) << "a petabyte budget was passed at " << roomy.peakBytes();
   EXPECT_NO_THROW(roomy.check("the observer box"));
+}
+
+TEST(MemoryBudget, TheWatchSeesMemoryTakenAfterItStarted) {
+  // A budget 64 MiB above what the process holds now, then 128 MiB taken and touched: a sample
+  // of the watch's own thread taken after that must raise the flag. The wait is for samples,
+  // not for time (a watch whose thread never samples is left to ctest's timeout).
+  constexpr std::size_t kMiB = std::size_t{1} << 20;
+  const MemoryWatch watch(residentBytes() + 64 * kMiB);
+  ASSERT_GE(watch.samples(), 1u) << "the constructor takes the first sample";
+  ASSERT_FALSE(watch.exceeded()) << "premise: within the budget at the start";
+  std::vector<char> taken(128 * kMiB);
+  for (std::size_t i = 0; i < taken.size(); i += 4096) taken[i] = 1;  // resident, page by page
+  // A sample that began before the pages were touched may still be in flight: two more.
+  const std::uint64_t after = watch.samples() + 2;
+  while (watch.samples() < after) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  EXPECT_TRUE(watch.exceeded()) << "128 MiB past a budget with 64 MiB to spare; peak "
+                                << watch.peakBytes() << ", budget " << watch.budgetBytes();
+  EXPECT_GE(watch.peakBytes(), watch.budgetBytes()) << "the peak records what passed the budget";
+  EXPECT_EQ(taken[4096], 1) << "the pages stayed in use";
 }
 
 }  // namespace

@@ -93,8 +93,10 @@ TEST(StressLobe, SphereGlintConvergesAndIsRightFromSigma1e5To1) {
     EXPECT_TRUE(r.converged) << "sigma " << sigma << " should be within reach of depth "
                              << fi.options().max_depth << " (evaluations " << r.evaluations << ")";
     const SphereReference ref = sphereReference(fi, sigma, radius, observer);
-    EXPECT_NEAR(r.irradiance_w_m2, ref.value, 3.0 * tol * ref.value + ref.error)
-        << "sigma " << sigma;
+    // Converged means an error estimate within tol × E: the error itself must be too, up to
+    // the reference's own. (Measured: at most 0.12 of tol × E, at σ = 1e-2.)
+    EXPECT_NEAR(r.irradiance_w_m2, ref.value, tol * r.irradiance_w_m2 + ref.error)
+        << "sigma " << sigma << ": error estimate " << r.error_estimate_w_m2;
   }
 }
 
@@ -117,7 +119,8 @@ TEST(StressLobe, SphereGlintOnATightBudgetSaysItDidNotConverge) {
     const SphereReference ref = sphereReference(fi, sigma, radius, observer);
     const double error = std::abs(r.irradiance_w_m2 - ref.value);
     if (r.converged) {
-      EXPECT_LE(error, 3.0 * tol * ref.value + ref.error)
+      // Right as the test above means it: within the tolerance, up to the reference's error.
+      EXPECT_LE(error, tol * r.irradiance_w_m2 + ref.error)
           << "sigma " << sigma << ": converged, so it must be right";
       continue;
     }
@@ -291,8 +294,10 @@ TEST(StressDistance, SphereBackscatterFromAMicrometreToAThousandKilometres) {
         ASSERT_TRUE(std::isfinite(r.irradiance_w_m2) && r.irradiance_w_m2 >= 0.0) << where;
         EXPECT_EQ(r.converged, d >= reach) << where;
         if (r.converged) {
-          // The tolerance, plus the lobe's O(σ²) blur of the pencil.
-          EXPECT_NEAR(r.irradiance_w_m2 / expected, 1.0, 3.0 * tol + 2.0 * sigma * sigma) << where;
+          // The tolerance (a converged estimate is within tol × E), plus the lobe's O(σ²) blur
+          // of the pencil, which the mirror's formula leaves out. (Measured: 0.18 tol for the
+          // paper's scheme, 0.004 tol for the lobe scheme.)
+          EXPECT_NEAR(r.irradiance_w_m2 / expected, 1.0, tol + 2.0 * sigma * sigma) << where;
         } else {
           EXPECT_TRUE(r.depth_limited || r.evaluations >= options.max_evaluations) << where;
           EXPECT_GT(r.error_estimate_w_m2, tol * r.irradiance_w_m2)
