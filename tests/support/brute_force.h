@@ -243,6 +243,23 @@ inline Parametrisation sphere(const SphereShape& s, const Vec3& pole) {
   return p;
 }
 
+/// A torus about the z axis through the origin: ring radius `major_m`, tube radius `minor_m`,
+/// u the angle around the axis, v around the tube (periodic), v = 0 on the outer equator.
+inline Parametrisation torus(double major_m, double minor_m) {
+  Parametrisation p;
+  p.u0 = 0.0;
+  p.u1 = 2.0 * kPi;
+  p.v_range = [](double) { return std::pair{0.0, 2.0 * kPi}; };
+  p.v_periodic = true;
+  p.at = [=](double phi, double theta) {
+    const Vec3 radial(std::cos(phi), std::sin(phi), 0.0);
+    const Vec3 n = std::cos(theta) * radial + Vec3(0.0, 0.0, std::sin(theta));
+    return SurfacePoint{major_m * radial + minor_m * n, n,
+                        minor_m * (major_m + minor_m * std::cos(theta))};
+  };
+  return p;
+}
+
 inline Parametrisation disk(const DiskShape& s) {
   const Vec3 n = glm::normalize(s.normal);
   const Vec3 e1 = anyPerpendicular(n), e2 = glm::cross(n, e1);
