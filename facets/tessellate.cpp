@@ -131,6 +131,22 @@ std::uint32_t addDisk(Target& target, const DiskShape& s, std::uint32_t material
   return obj;
 }
 
+const char* toString(MeshSurface surface) {
+  switch (surface) {
+    case MeshSurface::Flat:
+      return "flat";
+    case MeshSurface::PN:
+      return "pn";
+    case MeshSurface::QuadricFit:
+      return "quadric_fit";
+    case MeshSurface::Nagata:
+      return "nagata";
+    case MeshSurface::PNVlachos:
+      return "pn_published";
+  }
+  return "unknown";
+}
+
 std::size_t fillNormals(TriangleMesh& mesh, double crease_angle_rad) {
   const std::vector<std::uint32_t> weld = weldByPosition(mesh.positions_m);
   const std::size_t welded = weld.empty() ? 0 : *std::max_element(weld.begin(), weld.end()) + 1;

@@ -62,6 +62,10 @@ enum class MeshSurface {
   PNVlachos,   ///< PN triangles with the normal field as published: only to measure it
 };
 
+/// @brief The surface's name in scene files (`pn`, `nagata`, `quadric_fit`, `flat`; the
+/// published PN field, which no scene selects, `pn_published`).
+const char* toString(MeshSurface surface);
+
 /// @brief An indexed triangle mesh in one object's frame (metres), as a file gives it.
 /// Vertices at one position may repeat with different normals (a crease); the mesh is stitched
 /// by exact position, not by index.

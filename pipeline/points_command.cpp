@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include "export/atomic_file.h"
@@ -16,6 +17,7 @@
 #include "pipeline/memory_budget.h"
 #include "pipeline/points_file.h"
 #include "pipeline/progress.h"
+#include "pipeline/run_report.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
 #include "pipeline/test_pause.h"
@@ -23,22 +25,32 @@
 namespace glint {
 namespace {
 
-void printSummary(std::ostream& err, const PointsArgs& args, const HazardSpec& hazard,
+// The brightest observer: the row the summary reports and the meshes' surface is checked at.
+std::size_t brightest(std::span<const ObserverResult> results) {
+  std::size_t peak = 0;
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    if (results[i].irradiance_w_m2 > results[peak].irradiance_w_m2) peak = i;
+  }
+  return peak;
+}
+
+void printSummary(std::ostream& err, const PointsArgs& args, const Scene& scene,
                   const FacetIntegrator& integrator, std::span<const Vec3> points,
-                  std::span<const ObserverResult> results, double seconds, int threads) {
+                  std::span<const ObserverResult> results, double seconds, int threads,
+                  const SurfaceModelCheck* surface_check) {
+  const HazardSpec& hazard = scene.hazard;
   const IntegratorOptions& opt = integrator.options();
   const CullStats& cull = integrator.cullStats();
   std::int64_t total = 0, lo = results.empty() ? 0 : results[0].evaluations, hi = 0;
-  std::size_t unconverged = 0, depth_limited = 0, peak = 0;
-  for (std::size_t i = 0; i < results.size(); ++i) {
-    const ObserverResult& r = results[i];
+  std::size_t unconverged = 0, depth_limited = 0;
+  for (const ObserverResult& r : results) {
     total += r.evaluations;
     lo = std::min(lo, r.evaluations);
     hi = std::max(hi, r.evaluations);
     unconverged += r.converged ? 0 : 1;
     depth_limited += r.depth_limited ? 1 : 0;
-    if (r.irradiance_w_m2 > results[peak].irradiance_w_m2) peak = i;
   }
+  const std::size_t peak = brightest(results);
   const std::string scheme = args.uniform_level
                                  ? "uniform twin, level " + std::to_string(*args.uniform_level)
                                  : "adaptive, tolerance " + formatNumber("%g", opt.tolerance) +
@@ -80,6 +92,7 @@ void printSummary(std::ostream& err, const PointsArgs& args, const HazardSpec& h
           << "accuracy.max_depth, or loosen the tolerance\n";
     }
   }
+  if (surface_check != nullptr) printSurfaceCheck(err, scene, *surface_check);
   if (args.out_path != "-") err << "  wrote " << args.out_path << "\n";
 }
 
@@ -168,8 +181,17 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
     writePointsCsv(out, points, results, hazard);
     out.flush();
   }
-  if (!args.quiet)
-    printSummary(err, args, scene.hazard, integrator, points, results, seconds, threads);
+  if (args.quiet) return;
+  // The meshes' surface model, checked where it matters most: at the brightest observer.
+  std::optional<SurfaceModelCheck> surface_check;
+  const bool has_meshes = scene.hasMeshes();
+  if (has_meshes && !args.uniform_level && !points.empty()) {
+    const std::size_t peak = brightest(results);
+    surface_check =
+        checkSurfaceModel(scene, integrator, {{"row " + std::to_string(peak + 1), points[peak]}});
+  }
+  printSummary(err, args, scene, integrator, points, results, seconds, threads,
+               surface_check ? &*surface_check : nullptr);
 }
 
 }  // namespace glint

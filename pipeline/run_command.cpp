@@ -22,6 +22,7 @@
 #include "pipeline/progress.h"
 #include "pipeline/run_report.h"
 #include "pipeline/scene.h"
+#include "pipeline/surface_check.h"
 #include "pipeline/target_builder.h"
 #include "pipeline/test_pause.h"
 
@@ -264,9 +265,10 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     far_hazard = farHazard(*far, scene.hazard);
   }
   nlohmann::json j;
+  // The brightest observer of each region, where the meshes' surface model is checked.
+  std::vector<std::pair<std::string, Vec3>> probes;
   // The target as the first lattice's problem describes it (all share the same one).
-  const bool has_meshes = std::any_of(scene.objects.begin(), scene.objects.end(),
-                                      [](const ObjectSpec& o) { return o.mesh.has_value(); });
+  const bool has_meshes = scene.hasMeshes();
   auto describeTarget = [&](const FieldProblem& problem) {
     if (!j.contains("target")) j["target"] = targetJson(problem.integrator.cullStats());
     if (has_meshes && !j.contains("meshes")) j["meshes"] = meshesJson(scene, problem.mesh_stats);
@@ -285,6 +287,8 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
       amr.emplace(writeAmr(dir / output_names::kIrradianceAmr, field, info.scaled));
     }
     const HazardZone zone = hazardZone(field, scene.hazard, targetCentre(integrator.target()));
+    if (field.stats().peak_w_m2 > 0.0)
+      probes.emplace_back("the box's peak", field.stats().peak_at_m);
     j = volumeSummaryJson(field, zone, info, integrator.cullStats());
     describeTarget(box.problem);
     j["hazard"] = hazardJson(scene.hazard, &zone);
@@ -323,6 +327,9 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
       const HazardZone zone =
           hazardZone(field, scene.hazard, targetCentre(r.problem.integrator.target()));
       planes.push_back(planeJson(plane, field, zone));
+      if (field.stats().peak_w_m2 > 0.0) {
+        probes.emplace_back("plane " + plane.name + "'s peak", field.stats().peak_at_m);
+      }
       describeTarget(r.problem);
       if (!args.quiet) printPlane(err, plane, field, zone);
     }
@@ -349,6 +356,15 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     }
     j["far_field"] = farFieldJson(*far, far_hazard, far_files);
     if (!args.quiet) printFarField(err, *far, far_hazard);
+  }
+  if (has_meshes && writer) {
+    if (far && far->peak().intensity_w_sr > 0.0) {
+      probes.emplace_back("the far field's peak",
+                          far->ball().centre_m + far->mapDistance() * far->peak().direction);
+    }
+    const SurfaceModelCheck check = checkSurfaceModel(scene, target.integrator, probes);
+    j["surface_check"] = surfaceCheckJson(scene, check);
+    if (!args.quiet) printSurfaceCheck(err, scene, check);
   }
   if (!writer) return;
   summary->stream() << j.dump(2) << "\n";

@@ -64,6 +64,7 @@ nlohmann::json meshesJson(const Scene& scene, const std::vector<MeshStats>& stat
     if (!o.mesh) continue;
     const MeshStats& s = stats[k++];
     meshes.push_back({{"file", o.mesh->file.string()},
+                      {"surface", toString(o.mesh->surface)},
                       {"triangles", s.triangles},
                       {"facets", s.facets},
                       {"degenerate_dropped", s.degenerate_dropped},
@@ -77,6 +78,69 @@ nlohmann::json meshesJson(const Scene& scene, const std::vector<MeshStats>& stat
                       {"mirrored_instances", o.mesh->mirrored_instances}});
   }
   return meshes;
+}
+
+namespace {
+
+// "pn against quadric_fit" for each distinct pair of the scene's meshes.
+std::string comparedSurfaces(const Scene& scene) {
+  std::vector<std::string> pairs;
+  for (const ObjectSpec& o : scene.objects) {
+    if (!o.mesh) continue;
+    const std::string pair = std::string(toString(o.mesh->surface)) + " against " +
+                             toString(alternativeSurface(o.mesh->surface));
+    if (std::find(pairs.begin(), pairs.end(), pair) == pairs.end()) pairs.push_back(pair);
+  }
+  std::string list;
+  for (const std::string& p : pairs) list += (list.empty() ? "" : ", ") + p;
+  return list;
+}
+
+// A relative change for JSON, which has no infinity: null where only the alternative is lit.
+nlohmann::json changeJson(double change) {
+  return std::isfinite(change) ? nlohmann::json(change) : nlohmann::json(nullptr);
+}
+
+}  // namespace
+
+nlohmann::json surfaceCheckJson(const Scene& scene, const SurfaceModelCheck& check) {
+  nlohmann::json j = {{"compared", comparedSurfaces(scene)}};
+  if (!check.skipped.empty()) {
+    j["skipped"] = check.skipped;
+    return j;
+  }
+  nlohmann::json probes = nlohmann::json::array();
+  for (const SurfaceProbe& p : check.probes) {
+    probes.push_back({{"where", p.where},
+                      {"at_m", {p.at_m.x, p.at_m.y, p.at_m.z}},
+                      {"irradiance_w_m2", p.irradiance_w_m2},
+                      {"alternative_w_m2", p.alternative_w_m2},
+                      {"relative_change", changeJson(p.relativeChange())}});
+  }
+  j["probes"] = probes;
+  j["max_relative_change"] = changeJson(check.max_relative_change);
+  return j;
+}
+
+void printSurfaceCheck(std::ostream& err, const Scene& scene, const SurfaceModelCheck& check) {
+  if (check.skipped == "no mesh") return;
+  err << "  mesh surface (" << comparedSurfaces(scene) << "): ";
+  if (!check.skipped.empty()) {
+    err << "not checked: " << check.skipped << "\n";
+    return;
+  }
+  // Below a few percent the mesh resolves the glint; beyond, its curvature is a guess.
+  const auto worst = std::max_element(check.probes.begin(), check.probes.end(),
+                                      [](const SurfaceProbe& a, const SurfaceProbe& b) {
+                                        return a.relativeChange() < b.relativeChange();
+                                      });
+  const double change = worst->relativeChange();
+  err << "the other surface changes " << worst->where << " by "
+      << (std::isfinite(change) ? formatNumber("%.2g", 100.0 * change) + " %" : "all it sees")
+      << (check.probes.size() > 1 ? " (the most of " + std::to_string(check.probes.size()) + ")"
+                                  : std::string())
+      << ", an estimate of the tessellation's own error"
+      << (change > 0.05 ? ": ask for a finer mesh, or normals from the true surface" : "") << "\n";
 }
 
 nlohmann::json volumeSummaryJson(const ObserverField& field, const HazardZone& zone,

@@ -14,6 +14,7 @@
 #include "observers/field.h"
 #include "pipeline/hazard.h"
 #include "pipeline/scene.h"
+#include "pipeline/surface_check.h"
 
 namespace glint {
 
@@ -26,6 +27,13 @@ nlohmann::json targetJson(const CullStats& cull);
 /// @brief summary.json's `meshes`: what became of each mesh's triangles (@p stats in the
 /// order of the scene's meshes).
 nlohmann::json meshesJson(const Scene& scene, const std::vector<MeshStats>& stats);
+
+/// @brief summary.json's `surface_check`: how far the meshes' surface model moves the run's
+/// brightest observers (checkSurfaceModel()).
+nlohmann::json surfaceCheckJson(const Scene& scene, const SurfaceModelCheck& check);
+
+/// @brief The surface check's line on the terminal (nothing for a scene without meshes).
+void printSurfaceCheck(std::ostream& err, const Scene& scene, const SurfaceModelCheck& check);
 
 /// @brief summary.json of the observer box (runJson() first): lattice, counts, blocks,
 /// evaluations, peak, volumes above fractions of the peak, memory; the unconverged points

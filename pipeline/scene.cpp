@@ -232,7 +232,9 @@ MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder, const Gl
   m.file = folder / file;
   static constexpr MeshSurface kSurfaces[] = {MeshSurface::PN, MeshSurface::QuadricFit,
                                               MeshSurface::Flat, MeshSurface::Nagata};
-  m.surface = kSurfaces[r.choice("surface", {"pn", "quadric_fit", "flat", "nagata"}, 0)];
+  std::vector<std::string> names;
+  for (const MeshSurface s : kSurfaces) names.emplace_back(toString(s));
+  m.surface = kSurfaces[r.choice("surface", names, 0)];
   m.crease_angle_deg = r.number("crease_angle_deg", m.crease_angle_deg);
   if (!(m.crease_angle_deg >= 0.0 && m.crease_angle_deg <= 180.0)) {
     r.fail("crease_angle_deg", "must be in [0, 180]");

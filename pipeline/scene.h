@@ -142,6 +142,14 @@ struct Scene {
   std::optional<ObserversSpec> observers;  ///< `glint run` needs this or planes
   std::vector<PlaneSpec> planes;
   FarFieldSettings far_field;
+
+  /// @brief Whether any object is a mesh (whose surface is a model, not the shape itself).
+  [[nodiscard]] bool hasMeshes() const {
+    for (const ObjectSpec& o : objects) {
+      if (o.mesh) return true;
+    }
+    return false;
+  }
 };
 
 /// @brief Reads and validates a scene file, and the mesh files it names.

@@ -201,6 +201,20 @@ TEST(Examples, FinnedMissileRunsThroughGlintRun) {
   EXPECT_GT(mesh["crease_edges"].get<int>(), 0) << "the tail disc, the nose joint and the fins";
   EXPECT_GT(summary["planes"][0]["peak_hazard_ratio"].get<double>(), 1.0);
   EXPECT_TRUE(std::filesystem::exists(out / "eye_level.exr"));
+  // The mesh's surface checked at the plane's brightest point: the same integration as the
+  // plane's there, and the quadric fit a few percent off (the mesh has 2 064 triangles).
+  const auto& check = summary["surface_check"];
+  EXPECT_EQ(check["compared"], "pn against quadric_fit") << check.dump();
+  ASSERT_EQ(check["probes"].size(), 1u) << check.dump();
+  const auto& probe = check["probes"][0];
+  EXPECT_EQ(probe["where"], "plane eye_level's peak");
+  EXPECT_NEAR(probe["irradiance_w_m2"].get<double>() /
+                  summary["planes"][0]["peak_irradiance_w_m2"].get<double>(),
+              1.0, 1e-6)
+      << "the probe is the plane's peak, integrated at the plane's accuracy";
+  const double change = check["max_relative_change"].get<double>();
+  EXPECT_GT(change, 1e-4) << "two surfaces of 2 064 triangles never agree to the bit";
+  EXPECT_LT(change, 0.1) << "nor by more than the mesh's own coarseness allows";
   std::filesystem::remove_all(out);
 }
 
