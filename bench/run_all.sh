@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The whole benchmark suite: kernel throughput, the facet side (the paper's Figure 4, with the
-# lobe scheme beside the paper's and the uniform twin) and the
-# observer side (adaptive field against its dense twin over tolerances and voxel sizes). Writes
+# lobe scheme beside the paper's and the uniform twin), mesh surfaces against the exact shapes,
+# and the observer side (adaptive field against its dense twin over tolerances and voxel sizes). Writes
 # CSV files and PNG plots into OUT (default build/bench-results) and bench/RESULTS.md.
 #
 #   bash bench/run_all.sh [--quick | --field-one]
@@ -24,7 +24,7 @@ quick=0 field_one=0
 command="bash bench/run_all.sh $*"
 mkdir -p "$out"
 cmake --build "$build" --target glint_kernel_bench glint_sweep glint_field_bench glint_hard_bench \
-  >/dev/null
+  glint_surface_bench >/dev/null
 
 echo "== kernel throughput" >&2
 "$build/glint_kernel_bench" --benchmark_out="$out/kernel.csv" --benchmark_out_format=csv
@@ -60,6 +60,14 @@ echo "== hard observers: each scheme against a brute-force reference" >&2
 # (bench/scenes/hard/, observers in the CSV beside each scene), at each scene's tolerance.
 "$build/glint_hard_bench" bench/scenes/hard/*.json --schemes lobe,paper --out "$out/hard.csv" \
   2>&1 | tee "$out/hard.log" >&2
+
+echo "== mesh surfaces against the shapes glint knows exactly" >&2
+# Every surface model at each tessellation, beside the exact shape (about 15 minutes; --quick:
+# coarser meshes and two sphere scenes).
+surface_args=()
+[[ $quick == 1 ]] && surface_args=(--quick)
+"$build/glint_surface_bench" "${surface_args[@]}" --out "$out/surfaces.csv" 2>&1 |
+  tee "$out/surfaces.log" >&2
 
 echo "== observer side: adaptive field against its dense twin" >&2
 field="$out/field.csv"

@@ -333,6 +333,40 @@ void validateAccuracy(const IntegratorOptions& o) {
 
 }  // namespace
 
+// A hierarchy of bounds over the lit facets, in their order: an observer that sees every lit
+// facet (glint points) receives light from few of a mesh's thousands, and a node whose bound is
+// 0 for it rules out all its facets at once, where each would have cost a bound of its own.
+// Nodes never mix objects (each has its frame, beam and material). Level 0 groups kLeaf
+// consecutive facets; each level above pairs the one below. A node's geometry holds its
+// facets' own (the candidates' and their surface maps': ball, normal cone, area bound), so its
+// bound is at least any of theirs, and 0 only where each of theirs is.
+struct LitClusters {
+  static constexpr std::uint32_t kLeaf = 8;
+  struct Node {
+    PatchGeometry geometry;  // centre, normal, radius, cone and area bound only
+    std::uint32_t object = 0;
+    bool mixed = false;  // spans two objects: never bounded, always opened
+  };
+  std::vector<std::vector<Node>> levels;  // levels[0]: runs of kLeaf facets of lit_
+};
+
+namespace {
+
+// The smallest ball and cone (about the mean axis) holding both geometries' own.
+PatchGeometry enclosing(const PatchGeometry& a, const PatchGeometry& b) {
+  PatchGeometry g;
+  g.centre_m = 0.5 * (a.centre_m + b.centre_m);
+  g.radius_m = std::max(glm::length(a.centre_m - g.centre_m) + a.radius_m,
+                        glm::length(b.centre_m - g.centre_m) + b.radius_m);
+  g.normal = tryNormalize(a.normal + b.normal).value_or(a.normal);
+  g.cone_rad = std::min(kPi, std::max(angleBetween(g.normal, a.normal) + a.cone_rad,
+                                      angleBetween(g.normal, b.normal) + b.cone_rad));
+  g.area_bound_m2 = a.area_bound_m2 + b.area_bound_m2;
+  return g;
+}
+
+}  // namespace
+
 FacetIntegrator FacetIntegrator::withAccuracy(double tolerance, double floor_w_m2) const {
   FacetIntegrator copy = *this;  // the target shared; culling, maps and occluder as they are
   copy.options_.tolerance = tolerance;
@@ -396,6 +430,40 @@ FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const Integrat
     maps_.reserve(target_->facetCount());
     for (std::uint32_t i = 0; i < target_->facetCount(); ++i) maps_.emplace_back(*target_, i);
   }
+  if (options_.scheme == IntegrationScheme::Lobe) buildClusters();
+}
+
+void FacetIntegrator::buildClusters() {
+  auto clusters = std::make_shared<LitClusters>();
+  constexpr std::uint32_t leaf = LitClusters::kLeaf;
+  std::vector<LitClusters::Node>& base = clusters->levels.emplace_back();
+  for (std::size_t first = 0; first < lit_.size(); first += leaf) {
+    const std::size_t end = std::min(lit_.size(), first + leaf);
+    LitClusters::Node node{lit_[first].geometry, lit_[first].object, false};
+    for (std::size_t k = first; k < end; ++k) {
+      const Candidate& c = lit_[k];
+      node.mixed = node.mixed || c.object != node.object;
+      // The lobe scheme bounds a coarse facet by its surface map's geometry.
+      const PatchGeometry own = maps_[c.facet.coarse].geometry(*target_, c.facet);
+      node.geometry = enclosing(enclosing(node.geometry, c.geometry), own);
+    }
+    base.push_back(node);
+  }
+  while (clusters->levels.back().size() > 1) {
+    const std::vector<LitClusters::Node>& below = clusters->levels.back();
+    std::vector<LitClusters::Node> above;
+    for (std::size_t k = 0; k < below.size(); k += 2) {
+      if (k + 1 == below.size()) {
+        above.push_back(below[k]);
+        continue;
+      }
+      const LitClusters::Node &a = below[k], &b = below[k + 1];
+      above.push_back({enclosing(a.geometry, b.geometry), a.object,
+                       a.mixed || b.mixed || a.object != b.object});
+    }
+    clusters->levels.push_back(std::move(above));
+  }
+  clusters_ = std::move(clusters);
 }
 
 void FacetIntegrator::prepareObserver(const Vec3& observer_m, IntegratorWorkspace::Impl& ws) const {
@@ -667,18 +735,53 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
     return p;
   };
 
-  for (const Candidate& lit : candidates) {
+  auto consider = [&](const Candidate& lit) {
     const Vec3& x = ws.observer_local_m[lit.object];
-    if (!mayFaceObserver(lit.geometry, x) || !visible(lit, observer_m)) continue;
+    if (!mayFaceObserver(lit.geometry, x)) return;
     const Beam& beam = object_beams_[lit.object];
     const Material& material = target_->materials[target_->objects[lit.object].material];
     // A candidate split by boundBall() has its corners from 1→4 subdivision; the pieces
-    // here are those of the surface map, over the same barycentric triangle.
-    const SubFacet f = ws.surfaces.subFacet(maps_[lit.facet.coarse], lit.facet.bary,
-                                            lit.facet.depth, lit.facet.rim_edges);
+    // here are those of the surface map, over the same barycentric triangle. A coarse facet's
+    // corners are the map's own (it interpolates them), so it needs no lookup.
+    const SubFacet f = lit.facet.depth == 0
+                           ? lit.facet
+                           : ws.surfaces.subFacet(maps_[lit.facet.coarse], lit.facet.bary,
+                                                  lit.facet.depth, lit.facet.rim_edges);
     const LobePiece p = bounded(f, x, beam, material);
-    if (p.upper == 0.0) continue;
+    // The occlusion ray last: of a mesh's thousands of lit facets an observer's bound keeps a
+    // few, and the ray costs more than the bound.
+    if (p.upper == 0.0 || !visible(lit, observer_m)) return;
     store(p);
+  };
+  if (clusters_ && candidates.data() == lit_.data()) {
+    // Every lit facet: through the hierarchy, depth first, so the facets are considered in
+    // their order whatever is pruned (the totals then add up in the same order).
+    const auto& levels = clusters_->levels;
+    auto descend = [&](auto&& self, std::size_t level, std::size_t index) -> void {
+      const LitClusters::Node& node = levels[level][index];
+      if (!node.mixed) {
+        const std::uint32_t obj = node.object;
+        const Material& material = target_->materials[target_->objects[obj].material];
+        const ContributionBound b =
+            contributionBound(node.geometry, ws.observer_local_m[obj], object_beams_[obj], material,
+                              lobeLimits(material.lobe.sigma));
+        if (b.upper_w_m2 == 0.0) return;
+      }
+      if (level == 0) {
+        const std::size_t first = index * LitClusters::kLeaf;
+        const std::size_t end = std::min(lit_.size(), first + LitClusters::kLeaf);
+        for (std::size_t k = first; k < end; ++k) consider(lit_[k]);
+        return;
+      }
+      // A level may end with a node carried up alone: its one child.
+      const std::size_t children = levels[level - 1].size();
+      for (std::size_t c = 2 * index; c < std::min(children, 2 * index + 2); ++c) {
+        self(self, level - 1, c);
+      }
+    };
+    if (!levels.empty() && !levels.back().empty()) descend(descend, levels.size() - 1, 0);
+  } else {
+    for (const Candidate& lit : candidates) consider(lit);
   }
 
   while (true) {

@@ -147,6 +147,7 @@ class IntegratorWorkspace {
 };
 
 class Occluder;
+struct LitClusters;
 
 /// @brief The lit coarse facets of a target under a beam, ready to be integrated at any
 /// number of observers (from any number of threads, each with its own workspace).
@@ -199,6 +200,7 @@ class FacetIntegrator {
 
  private:
   void prepareObserver(const Vec3& observer_m, IntegratorWorkspace::Impl& ws) const;
+  void buildClusters();
   ObserverResult adaptiveLobe(const Vec3& observer_m, std::span<const Candidate> candidates,
                               IntegratorWorkspace::Impl& ws) const;
   // Where the occlusion rays of a facet (geometry g, world frame) start: its centre, lifted
@@ -213,6 +215,8 @@ class FacetIntegrator {
   IntegratorOptions options_;
   std::vector<Beam> object_beams_;  // the beam in each object's frame
   std::vector<Candidate> lit_;
+  // Bounds over runs of lit_, for the observers that see every lit facet (lobe scheme).
+  std::shared_ptr<const LitClusters> clusters_;
   std::vector<SurfaceMap> maps_;  // per coarse facet, for the cubature and lobe schemes
   CullStats cull_;
   std::shared_ptr<const Occluder> occluder_;  // null where the target cannot shadow itself

@@ -16,6 +16,7 @@
 #include "support/quadrature.h"
 #include "support/references.h"
 #include "support/scenes.h"
+#include "support/test_meshes.h"
 
 namespace glint {
 namespace {
@@ -493,6 +494,32 @@ TEST(Integrator, DepthLimitIsReportedNotHidden) {
   EXPECT_FALSE(r.converged);
   EXPECT_TRUE(r.depth_limited);
   EXPECT_TRUE(std::isfinite(r.irradiance_w_m2));
+}
+
+TEST(Integrator, ClusteredCullingGivesTheBitsOfFacetByFacet) {
+  // An observer of glint points sees every lit facet, through bounds over runs of them
+  // (LitClusters); the same candidates handed over as a list of their own are bounded one by
+  // one. The hierarchy only skips facets whose own bound is 0, in their order, so the two must
+  // agree to the bit: value, error estimate and evaluations. Two objects, to cross a boundary.
+  Target t;
+  const std::uint32_t m = t.addMaterial(mirror(0.9, 0.01));
+  addMesh(t, Vec3(0.0), m, test::unitIcosphere(4), MeshSurface::PN);
+  addMesh(t, Vec3(0.0, 2.5, 0.0), m, test::unitIcosphere(3), MeshSurface::PN);
+  const Beam beam = test::flatTop(Vec3(0.0, 1.2, 0.0), Vec3(1.0, 0.2, -0.1), 100.0, 3.0);
+  const FacetIntegrator fi(std::move(t), beam, accuracy(1e-4));
+  const std::vector<Candidate> copy(fi.candidates().begin(), fi.candidates().end());
+  ASSERT_GT(copy.size(), 2000u) << "thousands of lit facets";
+  IntegratorWorkspace ws;
+  int lit = 0;
+  for (const Vec3& o : test::glintObservers(test::unitIcosphere(4), beam, 0.01, 2.0, 40.0, 20)) {
+    const ObserverResult a = fi.adaptive(o, ws);
+    const ObserverResult b = fi.adaptive(o, copy, ws);
+    EXPECT_EQ(a.irradiance_w_m2, b.irradiance_w_m2) << "at " << o.x << ", " << o.y << ", " << o.z;
+    EXPECT_EQ(a.error_estimate_w_m2, b.error_estimate_w_m2);
+    EXPECT_EQ(a.evaluations, b.evaluations);
+    lit += a.irradiance_w_m2 > 0.0 ? 1 : 0;
+  }
+  EXPECT_GT(lit, 15) << "the observers see the glint";
 }
 
 }  // namespace
