@@ -1,6 +1,7 @@
 #pragma once
 /// @file
-/// @brief The result table of `glint points` (PHYSICS.md, "Points file and output").
+/// @brief The result table of `glint points` (docs/physics.md, "The points file and the output
+/// table").
 
 #include <ostream>
 #include <span>

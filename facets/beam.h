@@ -16,7 +16,7 @@ enum class BeamProfile {
   Gaussian,  ///< 2P / (π w²) · exp(−2ρ² / w²), w the 1/e² radius
 };
 
-/// @brief A beam along the ray from @c origin_m in @c direction, as in PHYSICS.md.
+/// @brief A beam along the ray from @c origin_m in @c direction (docs/physics.md, "The beam").
 ///
 /// The radius grows with the distance z along the axis as r(z) = √(r₀² + (z φ/2)²) with φ the
 /// full divergence angle: the beam-diameter law ANSI Z136.1 uses for the nominal hazard zone

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// @brief A reflecting material: Beckmann specular lobe plus a Lambertian part (PHYSICS.md).
+/// @brief A reflecting material: Beckmann specular lobe plus a Lambertian part (docs/physics.md).
 
 #include "facets/beckmann.h"
 #include "facets/vec3.h"

@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// @brief The observer points file of `glint points`: a header `x,y,z`, then one observer per
-/// row (PHYSICS.md, "Points file and output").
+/// row (docs/physics.md, "The points file and the output table").
 
 #include <cstdint>
 #include <filesystem>

@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// @brief The scene file: laser, materials, objects and accuracy settings, loaded and
-/// validated at the boundary (PHYSICS.md "Scene file", README "Scene file reference").
+/// validated at the boundary (docs/physics.md, "The minimal scene file"; README, "Scene file").
 
 #include <cstdint>
 #include <filesystem>

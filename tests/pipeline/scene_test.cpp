@@ -14,7 +14,7 @@ namespace {
 
 using nlohmann::json;
 
-// The minimal scene of PHYSICS.md.
+// The minimal scene of docs/physics.md.
 json minimal() {
   return json::parse(R"({
     "laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "power_w": 1000.0,

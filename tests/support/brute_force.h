@@ -1,6 +1,6 @@
 #pragma once
 // An independent reference for the irradiance one analytic shape sends to an observer: the
-// integrand of PHYSICS.md written out again here (nothing in facets/ is evaluated, only its
+// integrand of docs/physics.md written out again here (nothing in facets/ is evaluated, only its
 // plain data structs are read) and integrated by nested adaptive Gauss–Kronrod over the shape's
 // own exact parametrisation, not over facets.
 //
@@ -41,7 +41,7 @@ struct Parametrisation {
   bool v_periodic = false;
 };
 
-/// The lit, visible, in-beam part of the integrand, as PHYSICS.md states it. `tan2` receives
+/// The lit, visible, in-beam part of the integrand, as docs/physics.md states it. `tan2` receives
 /// tan²θN where the point contributes, +∞ elsewhere (the spike finder's merit).
 inline double integrand(const Beam& beam, const Material& m, const SurfacePoint& p,
                         const Vec3& observer_m, double* tan2 = nullptr) {
