@@ -253,7 +253,12 @@ int main(int argc, char** argv) {
       for (const std::string& normals : normal_kinds) {
         const bool every_model =
             shape.name == "sphere" && scene.name == "far" && normals == "exact";
+        // Nagata's curvature coefficient divides by 1 − (n₁·n₂)²: normals nearly parallel but
+        // apart out of plane (perturbed ones along a cylinder's straight edges) bend its patches
+        // wildly, at up to 2 s an observer. Shown on the sphere, skipped on the others.
+        const bool skip_nagata = normals == "perturbed" && shape.name != "sphere";
         for (const std::string& surface : every_model ? all_surfaces : main_surfaces) {
+          if (skip_nagata && surface == "nagata") continue;
           for (const int n : shape.tessellations) {
             TriangleMesh mesh = shape.mesh(n);
             const double edge_m = test::meanEdgeLength(mesh);
