@@ -128,6 +128,13 @@ std::optional<Decision> decideByBound(const BallBound& bound, const BlockSize& s
   return std::nullopt;
 }
 
+bool unresolvedAtFinest(const BallBound& bound, double largest_sample_w_m2, double tolerance,
+                        double floor_w_m2, double threshold_w_m2) {
+  const double vouched = kCheckShare * (tolerance * largest_sample_w_m2 + floor_w_m2);
+  return !(bound.narrow_w_m2 <= vouched) && !(bound.upper_w_m2 <= largest_sample_w_m2 + vouched) &&
+         !(bound.upper_w_m2 < threshold_w_m2);
+}
+
 Decision decideBySamples(const BlockSamples& samples, const BlockSize& size, const BallBound& bound,
                          double tolerance, double floor_w_m2) {
   const std::uint8_t all = splittableAxes(size);

@@ -93,6 +93,15 @@ std::uint8_t splittableAxes(const BlockSize& size);
 std::optional<Decision> decideByBound(const BallBound& bound, const BlockSize& size,
                                       double floor_w_m2);
 
+/// @brief Whether a block that decideByBound() made Finest may hide a glint its samples miss:
+/// the bound of its coarse facets narrower than the lattice (BallBound::narrow_w_m2) exceeds
+/// what its samples vouch for (tolerance × @p largest_sample_w_m2 + floor), as does the whole
+/// bound over the largest sample, and the bound reaches @p threshold_w_m2. Every lattice
+/// point of such a block is a sample, so nothing finer can be asked of the lattice: only the
+/// bound can say how bright the glint may be. A NaN anywhere answers yes.
+bool unresolvedAtFinest(const BallBound& bound, double largest_sample_w_m2, double tolerance,
+                        double floor_w_m2, double threshold_w_m2);
+
 /// @brief What one block's samples show.
 struct BlockSamples {
   std::size_t count = 0;  ///< 27, or 35 with the octant centres (an axis of 4 voxels or more)
