@@ -148,8 +148,8 @@ struct FieldBlock {
   int level = 0;              ///< 0 = coarsest
   VoxelStatus status =
       VoxelStatus::Evaluated;  ///< Evaluated, Interpolated, BelowFloor or Unresolved
-  /// Unresolved blocks only: no observer in the ball around the block receives more (W/m²;
-  /// +∞ where the ball reaches a lit facet).
+  /// Unresolved blocks only: what a point of the block may receive at most
+  /// (field::narrowGlintBound(), W/m²; +∞ where its ball reaches a lit facet).
   double bound_w_m2 = 0.0;
 };
 

@@ -192,9 +192,9 @@ class FieldBuilder {
     if (stopRequested()) throw WorkStopped();
   }
 
-  // A finest block that may hide a glint narrower than its lattice (unresolvedAtFinest()).
+  // A finest block that may hide a glint narrower than its lattice (narrowGlintBound()).
   struct Unresolved {
-    double bound_w_m2 = 0.0;           // BallBound::upper_w_m2 (+∞ where it reaches the target)
+    double bound_w_m2 = 0.0;  // narrowGlintBound() (+∞ where the ball reaches the target)
     double resolving_spacing_m = 0.0;  // BallBound::resolving_spacing_m
   };
   struct FinalBlock {
@@ -211,11 +211,10 @@ class FieldBuilder {
       const PointValue& v = values_.at(keyAt(b, di, dj, dk));
       if (!v.excluded) largest = std::max(largest, v.irradiance_w_m2);
     });
-    if (!field::unresolvedAtFinest(bound, largest, spec_.tolerance, spec_.floor_w_m2,
-                                   spec_.hazard_threshold_w_m2)) {
-      return std::nullopt;
-    }
-    return Unresolved{bound.upper_w_m2, bound.resolving_spacing_m};
+    const std::optional<double> most = field::narrowGlintBound(
+        bound, largest, spec_.tolerance, spec_.floor_w_m2, spec_.hazard_threshold_w_m2);
+    if (!most) return std::nullopt;
+    return Unresolved{*most, bound.resolving_spacing_m};
   }
 
   // Marks status Unresolved the evaluated points of the unresolved blocks that lie below the

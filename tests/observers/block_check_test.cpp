@@ -164,20 +164,25 @@ TEST(BlockCheck, RefinesWhereASampleIsNotFiniteInsideTheTargetOrAGlintMayPassBet
       << "a NaN narrow bound refines";
 }
 
-TEST(BlockCheck, AFinestBlockIsUnresolvedOnlyWhereItsNarrowBoundOutgrowsItsSamplesAndTheThreshold) {
-  // Samples up to 5, tolerance 0.01, floor 0.05: they vouch for 0.01 × 5 + 0.05 = 0.1.
-  const auto unresolved = [](double upper, double narrow, double threshold) {
-    return unresolvedAtFinest(boundOf(upper, narrow), 5.0, 0.01, 0.05, threshold);
+TEST(BlockCheck, AFinestBlockReportsANarrowGlintOnlyWhereItsBoundOutgrowsItsSamples) {
+  // Samples up to 5, tolerance 0.01, floor 0.05: they vouch for 5 + 0.01 × 5 + 0.05 = 5.1.
+  const auto most = [](double upper, double narrow, double threshold) {
+    return narrowGlintBound(boundOf(upper, narrow), 5.0, 0.01, 0.05, threshold);
   };
-  EXPECT_TRUE(unresolved(20.0, 15.0, 10.0)) << "a pencil the samples miss, bounded above 10";
-  EXPECT_FALSE(unresolved(20.0, 0.09, 10.0)) << "narrow light within what the samples vouch for";
-  EXPECT_FALSE(unresolved(5.09, 5.09, 0.0)) << "the whole bound within 5 + 0.1 of the samples";
-  EXPECT_FALSE(unresolved(9.9, 9.9, 10.0)) << "a bound below the threshold cannot reach it";
-  EXPECT_TRUE(unresolved(9.9, 9.9, 0.0)) << "without a threshold every such block counts";
+  EXPECT_EQ(most(20.0, 15.0, 10.0), std::optional<double>(20.0))
+      << "a pencil the samples miss, bounded above 10 as a whole";
+  ASSERT_TRUE(most(30.0, 15.0, 10.0).has_value());
+  EXPECT_NEAR(*most(30.0, 15.0, 10.0), 5.1 + 15.0, 1e-12)
+      << "what the samples vouch for plus the narrow light, below the whole bound";
+  EXPECT_EQ(most(20.0, 0.09, 10.0), std::nullopt) << "narrow light the samples vouch for";
+  EXPECT_EQ(most(5.09, 5.09, 0.0), std::nullopt) << "the whole bound within 5.1";
+  EXPECT_EQ(most(9.9, 9.9, 10.0), std::nullopt) << "a bound below the threshold cannot reach it";
+  EXPECT_EQ(most(9.9, 9.9, 0.0), std::optional<double>(9.9)) << "without a threshold it counts";
   const double inf = std::numeric_limits<double>::infinity();
-  EXPECT_TRUE(unresolved(inf, inf, 10.0)) << "no finite bound";
-  EXPECT_TRUE(unresolved(std::nan(""), std::nan(""), 10.0)) << "NaN answers yes";
-  EXPECT_TRUE(unresolvedAtFinest(boundOf(20.0, 15.0), std::nan(""), 0.01, 0.05, 10.0))
+  EXPECT_EQ(most(inf, inf, 10.0), std::optional<double>(inf)) << "no finite bound";
+  EXPECT_EQ(most(std::nan(""), 1.0, 10.0), std::optional<double>(inf)) << "NaN: unbounded";
+  EXPECT_EQ(narrowGlintBound(boundOf(20.0, 15.0), std::nan(""), 0.01, 0.05, 10.0),
+            std::optional<double>(inf))
       << "a NaN sample vouches for nothing";
 }
 
