@@ -105,80 +105,10 @@ double latticeAngle(double x, double y, int face_pixels) {
   return (2.0 / face_pixels) / (1.0 + u * u + v * v);
 }
 
-// The largest FarField::upperIntensity() along the great-circle arc from unit @p a to unit
-// @p b (a map cell's edge: short), exactly for that estimate: on a face the arc is a straight
-// segment, and between the lattice lines it crosses it runs in one lattice cell, where the
-// estimate is bilinear plus a constant: quadratic along it, largest at an end or, where it
-// bends down, at its vertex. @p depth guards the split at face edges.
-double edgeUpper(const FarField& f, const Vec3& a, const Vec3& b, int depth = 0) {
-  const int n = f.spec().face_pixels;
-  const FaceHit ha = faceHit(a, n), hb = faceHit(b, n);
-  if (ha.face != hb.face && depth < 4) {
-    // Split where the arc leaves a's face; the two sides meet within 2^-40 of the arc.
-    double lo = 0.0, hi = 1.0;
-    for (int k = 0; k < 40; ++k) {
-      const double mid = 0.5 * (lo + hi);
-      (faceHit(glm::normalize(a + mid * (b - a)), n).face == ha.face ? lo : hi) = mid;
-    }
-    return std::max(edgeUpper(f, a, glm::normalize(a + lo * (b - a)), depth + 1),
-                    edgeUpper(f, glm::normalize(a + hi * (b - a)), b, depth + 1));
-  }
-  if (ha.face != hb.face) return std::max(f.upperIntensity(a), f.upperIntensity(b));
-  const int face = ha.face;
-  const int last = n - 1;
-  if (f.dark(face, std::clamp(static_cast<int>(std::min(ha.x, hb.x)), 0, last),
-             std::clamp(static_cast<int>(std::min(ha.y, hb.y)), 0, last),
-             std::clamp(static_cast<int>(std::max(ha.x, hb.x)), 0, last),
-             std::clamp(static_cast<int>(std::max(ha.y, hb.y)), 0, last))) {
-    return 0.0;
-  }
-  const double dx = hb.x - ha.x, dy = hb.y - ha.y;
-  // The parameters where the segment crosses a lattice line, ends included.
-  thread_local std::vector<double> cuts;
-  cuts.assign(1, 0.0);
-  const auto crossings = [&](double from, double step) {
-    if (step == 0.0) return;
-    const double to = from + step;
-    for (double k = std::floor(std::min(from, to)) + 1.0; k < std::max(from, to); k += 1.0) {
-      cuts.push_back((k - from) / step);
-    }
-  };
-  crossings(ha.x, dx);
-  crossings(ha.y, dy);
-  cuts.push_back(1.0);
-  std::sort(cuts.begin(), cuts.end());
-  const auto count = cuts.size();
-  // Points on a lattice line are put exactly on it, so that the cell test sees both sides.
-  const auto at = [&](double t) {
-    double x = ha.x + t * dx, y = ha.y + t * dy;
-    if (std::abs(x - std::round(x)) < 1e-9) x = std::round(x);
-    if (std::abs(y - std::round(y)) < 1e-9) y = std::round(y);
-    return PlanePoint{x, y};
-  };
-  double best = 0.0;
-  for (std::size_t c = 0; c < count; ++c) {
-    const PlanePoint p = at(cuts[c]);
-    best = std::max(best, f.upperIntensityAt(face, p.x, p.y));
-    if (c + 1 == count || !(cuts[c + 1] > cuts[c])) continue;
-    // The bilinear value along the piece to the next cut is e0 + e1 s + e2 s², s ∈ 0 .. 1.
-    const PlanePoint q = at(cuts[c + 1]);
-    const PlanePoint m{0.5 * (p.x + q.x), 0.5 * (p.y + q.y)};
-    const int i = std::clamp(static_cast<int>(std::floor(m.x)), 0, n - 1);
-    const int j = std::clamp(static_cast<int>(std::floor(m.y)), 0, n - 1);
-    const double f00 = f.latticeIntensity(face, i, j), f10 = f.latticeIntensity(face, i + 1, j);
-    const double f01 = f.latticeIntensity(face, i, j + 1);
-    const double f11 = f.latticeIntensity(face, i + 1, j + 1);
-    const double twist = f11 - f10 - f01 + f00;
-    const double u0 = p.x - i, v0 = p.y - j, du = q.x - p.x, dv = q.y - p.y;
-    const double e2 = twist * du * dv;
-    if (!(e2 < 0.0)) continue;  // no interior top
-    const double e1 = (f10 - f00) * du + (f01 - f00) * dv + twist * (u0 * dv + v0 * du);
-    const double s = -e1 / (2.0 * e2);
-    if (s > 0.0 && s < 1.0) {
-      best = std::max(best, f.upperIntensityAt(face, p.x + s * du, p.y + s * dv));
-    }
-  }
-  return best;
+// The key of the finest block (2 × 2 lattice cells) at lattice origin (2 a, 2 b) of a face.
+std::uint64_t narrowKey(int a, int b, int face_pixels) {
+  return static_cast<std::uint64_t>(a) * static_cast<std::uint64_t>(face_pixels) +
+         static_cast<std::uint64_t>(b);
 }
 
 }  // namespace
@@ -353,7 +283,7 @@ FarField::FarField(LitBall ball, FarFieldSpec spec, double map_distance_m, std::
       narrow_glints_.push_back({hazardSafe(b.bound_w_m2) * reach_m * reach_m,
                                 glm::normalize(centre - ball_.centre_m), Basis::NarrowGlintBound});
       auto& index = narrow_index_[static_cast<std::size_t>(f)];
-      index.emplace_back(narrowKey(b.origin[0] / 2, b.origin[1] / 2),
+      index.emplace_back(narrowKey(b.origin[0] / 2, b.origin[1] / 2, spec_.face_pixels),
                          narrow_glints_.back().intensity_w_sr);
     }
     auto& index = narrow_index_[static_cast<std::size_t>(f)];
@@ -461,7 +391,7 @@ double FarField::narrowGlintBoundAt(int face, double x, double y) const {
   for (const int a : bx)
     for (const int b : by) {
       if (a < 0 || b < 0) continue;
-      const std::uint64_t key = narrowKey(a, b);
+      const std::uint64_t key = narrowKey(a, b, spec_.face_pixels);
       const auto it =
           std::lower_bound(index.begin(), index.end(), std::make_pair(key, 0.0),
                            [](const auto& l, const auto& r) { return l.first < r.first; });
@@ -513,6 +443,84 @@ double FarField::latticeUpperIntensity(int face, int i, int j) const {
   const double upper =
       std::max(latticeIntensity(face, i, j) + allowance, narrowGlintBoundAt(face, i, j));
   return std::min(hazardSafe(upper), peak_.intensity_w_sr);
+}
+
+double FarField::upperIntensityAlong(const Vec3& a, const Vec3& b) const {
+  return upperIntensityAlong(a, b, 0);
+}
+
+// Exact for the estimate: on a face the arc is a straight segment, and between the lattice
+// lines it crosses it runs in one lattice cell, where the estimate is bilinear plus a
+// constant: quadratic along it, largest at an end or, where it bends down, at its vertex.
+double FarField::upperIntensityAlong(const Vec3& a, const Vec3& b, int depth) const {
+  const int n = spec_.face_pixels;
+  const FaceHit ha = faceHit(a, n), hb = faceHit(b, n);
+  if (ha.face != hb.face && depth < 4) {
+    // Split where the arc leaves a's face; the two sides meet within 2^-40 of the arc.
+    double lo = 0.0, hi = 1.0;
+    for (int k = 0; k < 40; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      (faceHit(glm::normalize(a + mid * (b - a)), n).face == ha.face ? lo : hi) = mid;
+    }
+    return std::max(upperIntensityAlong(a, glm::normalize(a + lo * (b - a)), depth + 1),
+                    upperIntensityAlong(glm::normalize(a + hi * (b - a)), b, depth + 1));
+  }
+  if (ha.face != hb.face) return std::max(upperIntensity(a), upperIntensity(b));
+  const int face = ha.face;
+  const int last = n - 1;
+  if (dark(face, std::clamp(static_cast<int>(std::min(ha.x, hb.x)), 0, last),
+           std::clamp(static_cast<int>(std::min(ha.y, hb.y)), 0, last),
+           std::clamp(static_cast<int>(std::max(ha.x, hb.x)), 0, last),
+           std::clamp(static_cast<int>(std::max(ha.y, hb.y)), 0, last))) {
+    return 0.0;
+  }
+  const double dx = hb.x - ha.x, dy = hb.y - ha.y;
+  // The parameters where the segment crosses a lattice line, ends included.
+  thread_local std::vector<double> cuts;
+  cuts.assign(1, 0.0);
+  const auto crossings = [&](double from, double step) {
+    if (step == 0.0) return;
+    const double to = from + step;
+    for (double k = std::floor(std::min(from, to)) + 1.0; k < std::max(from, to); k += 1.0) {
+      cuts.push_back((k - from) / step);
+    }
+  };
+  crossings(ha.x, dx);
+  crossings(ha.y, dy);
+  cuts.push_back(1.0);
+  std::sort(cuts.begin(), cuts.end());
+  const auto count = cuts.size();
+  // Points on a lattice line are put exactly on it, so that the cell test sees both sides.
+  const auto at = [&](double t) {
+    double x = ha.x + t * dx, y = ha.y + t * dy;
+    if (std::abs(x - std::round(x)) < 1e-9) x = std::round(x);
+    if (std::abs(y - std::round(y)) < 1e-9) y = std::round(y);
+    return PlanePoint{x, y};
+  };
+  double best = 0.0;
+  for (std::size_t c = 0; c < count; ++c) {
+    const PlanePoint p = at(cuts[c]);
+    best = std::max(best, upperIntensityAt(face, p.x, p.y));
+    if (c + 1 == count || !(cuts[c + 1] > cuts[c])) continue;
+    // The bilinear value along the piece to the next cut is e0 + e1 s + e2 s², s ∈ 0 .. 1.
+    const PlanePoint q = at(cuts[c + 1]);
+    const PlanePoint m{0.5 * (p.x + q.x), 0.5 * (p.y + q.y)};
+    const int i = std::clamp(static_cast<int>(std::floor(m.x)), 0, n - 1);
+    const int j = std::clamp(static_cast<int>(std::floor(m.y)), 0, n - 1);
+    const double f00 = latticeIntensity(face, i, j), f10 = latticeIntensity(face, i + 1, j);
+    const double f01 = latticeIntensity(face, i, j + 1);
+    const double f11 = latticeIntensity(face, i + 1, j + 1);
+    const double twist = f11 - f10 - f01 + f00;
+    const double u0 = p.x - i, v0 = p.y - j, du = q.x - p.x, dv = q.y - p.y;
+    const double e2 = twist * du * dv;
+    if (!(e2 < 0.0)) continue;  // no interior top
+    const double e1 = (f10 - f00) * du + (f01 - f00) * dv + twist * (u0 * dv + v0 * du);
+    const double s = -e1 / (2.0 * e2);
+    if (s > 0.0 && s < 1.0) {
+      best = std::max(best, upperIntensityAt(face, p.x + s * du, p.y + s * dv));
+    }
+  }
+  return best;
 }
 
 double FarField::upperIntensity(const Vec3& direction) const {
@@ -718,8 +726,9 @@ LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2, double
   std::vector<double> along_parallel((h + 1) * w), along_meridian(h * w);
   tbb::parallel_for(std::size_t{0}, h + 1, [&](std::size_t j) {
     for (std::size_t i = 0; i < w; ++i) {
-      along_parallel[j * w + i] = edgeUpper(field, corner(i, j), corner(i + 1, j));
-      if (j < h) along_meridian[j * w + i] = edgeUpper(field, corner(i, j), corner(i, j + 1));
+      along_parallel[j * w + i] = field.upperIntensityAlong(corner(i, j), corner(i + 1, j));
+      if (j < h)
+        along_meridian[j * w + i] = field.upperIntensityAlong(corner(i, j), corner(i, j + 1));
     }
   });
   std::vector<double> cell(w * h, 0.0);
@@ -806,8 +815,8 @@ HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mp
         const Vec3 c00 = planeDirection(f, x0, y0, n), c10 = planeDirection(f, x1, y0, n);
         const Vec3 c01 = planeDirection(f, x0, y1, n), c11 = planeDirection(f, x1, y1, n);
         v[static_cast<std::size_t>(b) * row + static_cast<std::size_t>(a)] =
-            std::max({edgeUpper(field, c00, c10), edgeUpper(field, c10, c11),
-                      edgeUpper(field, c11, c01), edgeUpper(field, c01, c00)});
+            std::max({field.upperIntensityAlong(c00, c10), field.upperIntensityAlong(c10, c11),
+                      field.upperIntensityAlong(c11, c01), field.upperIntensityAlong(c01, c00)});
       }
     const auto lend = [&](const Vec3& d, double intensity_w_sr) {
       if (!(glm::dot(d, kFaceFrames[static_cast<std::size_t>(f)].normal) > 0.0)) return;

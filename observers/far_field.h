@@ -195,27 +195,26 @@ class FarField {
   /// @brief upperIntensity() at lattice point (i, j): its own intensity plus the largest
   /// interpolation allowance of the lattice cells around it, capped as upperIntensity() is.
   [[nodiscard]] double latticeUpperIntensity(int face, int i, int j) const;
-  /// @brief upperIntensity() at face coordinates (@p x, @p y) of face @p face, in lattice
-  /// units (0 .. face_pixels).
-  [[nodiscard]] double upperIntensityAt(int face, double x, double y) const;
-  /// @brief Whether upperIntensity() is 0 throughout lattice cells (@p i0 .. @p i1, @p j0 ..
-  /// @p j1) of face @p face (cell (i, j) spans lattice points i .. i + 1, j .. j + 1): every
-  /// intensity their estimate reads is 0 and the face has no narrow glint. False may be
-  /// answered for a dark region; never true for a lit one.
-  [[nodiscard]] bool dark(int face, int i0, int j0, int i1, int j1) const;
+  /// @brief The largest upperIntensity() along the great-circle arc from unit @p a to unit
+  /// @p b (a map cell's edge: short).
+  [[nodiscard]] double upperIntensityAlong(const Vec3& a, const Vec3& b) const;
 
  private:
   friend FarField computeFarField(const FacetIntegrator&, const FarFieldSpec&, WorkCounter*,
                                   PointExchange*);
+  // upperIntensity() at face coordinates (x, y) of a face, in lattice units (0 .. face_pixels).
+  [[nodiscard]] double upperIntensityAt(int face, double x, double y) const;
+  // upperIntensityAlong() of an arc that @p depth splits at face edges have made.
+  [[nodiscard]] double upperIntensityAlong(const Vec3& a, const Vec3& b, int depth) const;
+  // Whether upperIntensity() is 0 throughout lattice cells (i0 .. i1, j0 .. j1) of a face (cell
+  // (i, j) spans lattice points i .. i + 1, j .. j + 1): every intensity their estimate reads
+  // is 0 and the face has no narrow glint. False may be answered for a dark region, never
+  // true for a lit one.
+  [[nodiscard]] bool dark(int face, int i0, int j0, int i1, int j1) const;
   // The interpolation allowance of lattice cell (i, j) .. (i + 1, j + 1) of a face.
   [[nodiscard]] double cellAllowance(int face, int i, int j) const;
   // The largest bound of a narrow glint's block whose closed square holds (x, y); 0 if none.
   [[nodiscard]] double narrowGlintBoundAt(int face, double x, double y) const;
-  // The key of the finest block (2 × 2 lattice cells) at lattice origin (2 a, 2 b).
-  [[nodiscard]] std::uint64_t narrowKey(int a, int b) const {
-    return static_cast<std::uint64_t>(a) * static_cast<std::uint64_t>(spec_.face_pixels) +
-           static_cast<std::uint64_t>(b);
-  }
 
   LitBall ball_;
   FarFieldSpec spec_;
@@ -226,7 +225,8 @@ class FarField {
   Peak lattice_peak_;
   std::vector<Peak> located_;
   std::vector<Peak> narrow_glints_;
-  // Per face: the narrow glints' blocks by narrowKey(), sorted, with their intensity bound.
+  // Per face: the narrow glints' blocks (2 × 2 lattice cells at even origins) by their
+  // origin's key, sorted, with their intensity bound.
   std::array<std::vector<std::pair<std::uint64_t, double>>, kFaces> narrow_index_;
   // Per face: the largest lattice intensity of each tile of kTile × kTile cells and of the two
   // lattice points around it (what the cells' estimates read), row-major by tile.
