@@ -340,13 +340,19 @@ Vec3 FarField::latticeDirection(int face, int i, int j) const {
 
 double FarField::intensity(const Vec3& direction) const {
   const FaceHit h = faceHit(direction, spec_.face_pixels);
-  const int i = std::min(static_cast<int>(h.x), spec_.face_pixels - 1);
-  const int j = std::min(static_cast<int>(h.y), spec_.face_pixels - 1);
-  const double fx = h.x - i, fy = h.y - j;
-  return (1.0 - fy) * ((1.0 - fx) * latticeIntensity(h.face, i, j) +
-                       fx * latticeIntensity(h.face, i + 1, j)) +
-         fy * ((1.0 - fx) * latticeIntensity(h.face, i, j + 1) +
-               fx * latticeIntensity(h.face, i + 1, j + 1));
+  return bilinear(h.face, cellOf(h.x), cellOf(h.y), h.x, h.y);
+}
+
+int FarField::cellOf(double x) const {
+  return std::clamp(static_cast<int>(std::floor(x)), 0, spec_.face_pixels - 1);
+}
+
+double FarField::bilinear(int face, int i, int j, double x, double y) const {
+  const double fx = x - i, fy = y - j;
+  return (1.0 - fy) *
+             ((1.0 - fx) * latticeIntensity(face, i, j) + fx * latticeIntensity(face, i + 1, j)) +
+         fy * ((1.0 - fx) * latticeIntensity(face, i, j + 1) +
+               fx * latticeIntensity(face, i + 1, j + 1));
 }
 
 // Bilinear interpolation of a concave stretch errs by at most h²/8 × |f''| per axis, and f''
@@ -415,17 +421,10 @@ bool FarField::dark(int face, int i0, int j0, int i1, int j1) const {
 }
 
 double FarField::upperIntensityAt(int face, double x, double y) const {
-  const int n = spec_.face_pixels;
-  const int i = std::clamp(static_cast<int>(std::floor(x)), 0, n - 1);
-  const int j = std::clamp(static_cast<int>(std::floor(y)), 0, n - 1);
+  const int i = cellOf(x), j = cellOf(y);
   if (dark(face, i, j, i, j)) return 0.0;
-  const double fx = x - i, fy = y - j;
-  const double bilinear = (1.0 - fy) * ((1.0 - fx) * latticeIntensity(face, i, j) +
-                                        fx * latticeIntensity(face, i + 1, j)) +
-                          fy * ((1.0 - fx) * latticeIntensity(face, i, j + 1) +
-                                fx * latticeIntensity(face, i + 1, j + 1));
-  const double upper =
-      std::max(bilinear + cellAllowance(face, i, j), narrowGlintBoundAt(face, x, y));
+  const double upper = std::max(bilinear(face, i, j, x, y) + cellAllowance(face, i, j),
+                                narrowGlintBoundAt(face, x, y));
   return std::min(hazardSafe(upper), peak_.intensity_w_sr);
 }
 
@@ -504,9 +503,7 @@ double FarField::upperIntensityAlong(const Vec3& a, const Vec3& b, int depth) co
     if (c + 1 == count || !(cuts[c + 1] > cuts[c])) continue;
     // The bilinear value along the piece to the next cut is e0 + e1 s + e2 s², s ∈ 0 .. 1.
     const PlanePoint q = at(cuts[c + 1]);
-    const PlanePoint m{0.5 * (p.x + q.x), 0.5 * (p.y + q.y)};
-    const int i = std::clamp(static_cast<int>(std::floor(m.x)), 0, n - 1);
-    const int j = std::clamp(static_cast<int>(std::floor(m.y)), 0, n - 1);
+    const int i = cellOf(0.5 * (p.x + q.x)), j = cellOf(0.5 * (p.y + q.y));
     const double f00 = latticeIntensity(face, i, j), f10 = latticeIntensity(face, i + 1, j);
     const double f01 = latticeIntensity(face, i, j + 1);
     const double f11 = latticeIntensity(face, i + 1, j + 1);

@@ -202,6 +202,10 @@ class FarField {
  private:
   friend FarField computeFarField(const FacetIntegrator&, const FarFieldSpec&, WorkCounter*,
                                   PointExchange*);
+  // The lattice cell (along one axis) that holds face coordinate x (lattice units).
+  [[nodiscard]] int cellOf(double x) const;
+  // The bilinear intensity at (x, y) of a face, in lattice cell (i, j).
+  [[nodiscard]] double bilinear(int face, int i, int j, double x, double y) const;
   // upperIntensity() at face coordinates (x, y) of a face, in lattice units (0 .. face_pixels).
   [[nodiscard]] double upperIntensityAt(int face, double x, double y) const;
   // upperIntensityAlong() of an arc that @p depth splits at face edges have made.
