@@ -146,8 +146,8 @@ struct FieldBlock {
   std::array<int, 3> origin{};
   std::array<int, 3> size{};  ///< edges in voxels
   int level = 0;              ///< 0 = coarsest
-  VoxelStatus status =
-      VoxelStatus::Evaluated;  ///< Evaluated, Interpolated, BelowFloor or Unresolved
+  /// Evaluated, Interpolated, BelowFloor or Unresolved.
+  VoxelStatus status = VoxelStatus::Evaluated;
   /// Unresolved blocks only: what a point of the block may receive at most
   /// (field::narrowGlintBound(), W/m²; +∞ where its ball reaches a lit facet).
   double bound_w_m2 = 0.0;
