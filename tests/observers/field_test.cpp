@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -433,13 +434,19 @@ TEST(ObserverField, AGlintBetweenTheLatticePointsIsMarkedWithItsBoundAtEveryVoxe
     pencil_max = std::max(pencil_max, e);
   }
   ASSERT_GT(pencil_max, 5.0 * mpe) << "the premise: the pencil is hazardous about 9 times over";
-  for (const double voxel : {0.0625, 0.125, 0.25, 0.5, 1.0}) {
+  const auto fieldAt = [&](double voxel) {
     scene.observers->voxel_m = voxel;
     scene.observers->block_m = 16.0 * voxel;
     const FieldSpec spec = fieldSpec(scene);
     const FieldProblem p = fieldProblem(scene, spec);
-    const ObserverField field = computeField(p.integrator, spec, p.excluded);
+    return computeField(p.integrator, spec, p.excluded);
+  };
+  double resolving_m = std::numeric_limits<double>::infinity();
+  for (const double voxel : {0.0625, 0.125, 0.25, 0.5, 1.0}) {
+    const ObserverField field = fieldAt(voxel);
+    const FieldSpec& spec = field.spec();
     const FieldStats& s = field.stats();
+    resolving_m = std::min(resolving_m, s.unresolved_resolving_voxel_m);
     EXPECT_GT(s.unresolved_points, 0) << voxel << " m";
     EXPECT_GE(s.unresolved_max_bound_w_m2, pencil_max)
         << voxel << " m: the bound reported must hold the pencil's largest irradiance";
@@ -474,6 +481,10 @@ TEST(ObserverField, AGlintBetweenTheLatticePointsIsMarkedWithItsBoundAtEveryVoxe
         voxel, s.peak_w_m2 / mpe, static_cast<long long>(s.unresolved_points),
         zone.narrow_glint_ratio_bound, pencil_max / mpe, s.unresolved_resolving_voxel_m);
   }
+  // At the voxel the runs suggest, the lattice meets the pencil and no bound is left above it.
+  const ObserverField resolved = fieldAt(resolving_m);
+  EXPECT_EQ(resolved.stats().unresolved_points, 0) << "at " << resolving_m << " m";
+  EXPECT_GE(resolved.stats().peak_w_m2, mpe) << "at " << resolving_m << " m";
 }
 
 }  // namespace
