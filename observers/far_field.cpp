@@ -547,22 +547,25 @@ struct Probe {
 };
 
 // The offset of the top of the parabola through (−h, lo), (0, mid), (h, hi), within ±h (the
-// larger end where it bends up or is flat), and its second difference; in log I where all
-// three are positive, where a Gaussian lobe is a parabola.
+// larger end where it bends up or is flat), in log I where all three are positive (where a
+// Gaussian lobe is a parabola); and how much higher than mid, relatively, a top within h/2 of
+// mid may rise on that parabola: |second difference| / 8.
 struct Step {
   double offset = 0.0;
-  double bend = 0.0;  // second difference, ≤ 0 at a top
+  double rise = 0.0;
 };
 Step parabolaStep(double lo, double mid, double hi, double h) {
-  if (lo > 0.0 && mid > 0.0 && hi > 0.0) {
+  const bool logs = lo > 0.0 && mid > 0.0 && hi > 0.0;
+  if (logs) {
     lo = std::log(lo);
     mid = std::log(mid);
     hi = std::log(hi);
   }
   const double bend = lo + hi - 2.0 * mid;
   if (!std::isfinite(bend)) return {};
-  if (bend < 0.0) return {std::clamp(0.5 * h * (lo - hi) / bend, -h, h), bend};
-  return {hi > lo ? h : lo > hi ? -h : 0.0, bend};
+  if (!(bend < 0.0)) return {hi > lo ? h : lo > hi ? -h : 0.0, 0.0};
+  const double rise = logs ? std::expm1(-0.125 * bend) : mid > 0.0 ? -0.125 * bend / mid : 0.0;
+  return {std::clamp(0.5 * h * (lo - hi) / bend, -h, h), rise};
 }
 
 }  // namespace
@@ -635,7 +638,7 @@ std::vector<FarField::Peak> locateLobeTops(const FarField& map, const FacetInteg
     const Vec3 e2 = glm::cross(best.direction, e1);
     const double h0 = latticeAngle(s.i, s.j, n);
     double h = h0;
-    std::array<double, 2> bend{0.0, 0.0};
+    std::array<double, 2> rise{0.0, 0.0};
     while (h > kFinestStep * h0 && probes + 5 <= kMaxProbes) {
       const Vec3 at = best.direction;
       const std::array<Probe, 4> around = {
@@ -645,7 +648,7 @@ std::vector<FarField::Peak> locateLobeTops(const FarField& map, const FacetInteg
           parabolaStep(around[0].intensity_w_sr, best.intensity_w_sr, around[1].intensity_w_sr, h);
       const Step s2 =
           parabolaStep(around[2].intensity_w_sr, best.intensity_w_sr, around[3].intensity_w_sr, h);
-      bend = {s1.bend, s2.bend};
+      rise = {s1.rise, s2.rise};
       Probe next = best;
       for (const Probe& p : around) {
         if (p.intensity_w_sr > next.intensity_w_sr) next = p;
@@ -659,10 +662,9 @@ std::vector<FarField::Peak> locateLobeTops(const FarField& map, const FacetInteg
       best = next;
     }
     // The top may rise above the best probe by what the last parabolas allow within half
-    // their step: |second difference| / 8 of log I per axis.
-    const double rise = std::exp(0.125 * (std::max(0.0, -bend[0]) + std::max(0.0, -bend[1])));
-    tops[k] = {(best.intensity_w_sr + best.error_w_sr) * rise, best.direction,
-               FarField::Basis::Located};
+    // their step.
+    tops[k] = {(best.intensity_w_sr + best.error_w_sr) * (1.0 + rise[0]) * (1.0 + rise[1]),
+               best.direction, FarField::Basis::Located};
   });
   if (evaluations != nullptr) {
     for (const std::int64_t e : spent) *evaluations += e;
