@@ -306,7 +306,7 @@ void writeBlocksVtu(std::ostream& out, const ObserverField& field,
     status.push_back(static_cast<int>(b.status));
   };
   for (const FieldBlock& b : field.blocks()) {
-    if (b.status != VoxelStatus::Evaluated || b.size != std::array<int, 3>{2, 2, 2}) {
+    if (!integratedHere(b.status) || b.size != std::array<int, 3>{2, 2, 2}) {
       cell(b);
       continue;
     }

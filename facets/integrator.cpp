@@ -1048,7 +1048,10 @@ BallBound FacetIntegrator::boundBall(const Vec3& centre_m, double radius_m,
         std::max(0.0, glm::length(x - c.geometry.centre_m) - c.fan_radius_m - radius_m);
     const double width = 2.0 * c.fan_radius_m + 4.0 * d_min * (c.fan_rad + 2.0 * sigma);
     // A width that cannot be computed counts as narrow: the block then looks closer.
-    if (!(width >= std::sqrt(3.0) * options.sample_spacing_m)) narrow.add(bounds[k]);
+    if (!(width >= std::sqrt(3.0) * options.sample_spacing_m)) {
+      narrow.add(bounds[k]);
+      result.resolving_spacing_m = std::min(result.resolving_spacing_m, width / std::sqrt(3.0));
+    }
     kept[out++] = c;
   }
   kept.resize(out);

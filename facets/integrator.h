@@ -123,6 +123,9 @@ struct BallBound {
   /// Bound of the kept candidates whose coarse facet's light is narrower than the sample
   /// spacing: a glint that samples alone could miss.
   double narrow_w_m2 = 0.0;
+  /// The largest sample spacing at which none of those is narrow any more (the narrowest
+  /// one's width / √3: a lattice that fine has a point inside its light); +∞ when none is.
+  double resolving_spacing_m = std::numeric_limits<double>::infinity();
   std::int64_t bound_evaluations = 0;  ///< contribution bounds computed
 
   /// @brief False when the ball reaches a lit facet (upper_w_m2 is +∞).

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <limits>
 
 namespace glint::field {
 namespace {
@@ -126,6 +127,18 @@ std::optional<Decision> decideByBound(const BallBound& bound, const BlockSize& s
   if (all == 0) return Decision{Verdict::Finest};
   if (!bound.bounded()) return Decision{Verdict::Refine, 0, all};  // (NaN included)
   return std::nullopt;
+}
+
+std::optional<double> narrowGlintBound(const BallBound& bound, double largest_sample_w_m2,
+                                       double tolerance, double floor_w_m2, double threshold_w_m2) {
+  const double vouched = kCheckShare * (tolerance * largest_sample_w_m2 + floor_w_m2);
+  if (std::isnan(vouched) || std::isnan(bound.narrow_w_m2) || std::isnan(bound.upper_w_m2)) {
+    return std::numeric_limits<double>::infinity();
+  }
+  if (bound.narrow_w_m2 <= vouched) return std::nullopt;
+  const double most = std::min(bound.upper_w_m2, largest_sample_w_m2 + vouched + bound.narrow_w_m2);
+  if (most <= largest_sample_w_m2 + vouched || most < threshold_w_m2) return std::nullopt;
+  return most;
 }
 
 Decision decideBySamples(const BlockSamples& samples, const BlockSize& size, const BallBound& bound,

@@ -93,6 +93,17 @@ std::uint8_t splittableAxes(const BlockSize& size);
 std::optional<Decision> decideByBound(const BallBound& bound, const BlockSize& size,
                                       double floor_w_m2);
 
+/// @brief What a block that decideByBound() made Finest may receive beyond what its samples
+/// show, where a glint narrower than its lattice (BallBound::narrow_w_m2) may pass between them:
+/// the light its samples vouch for (the largest, @p largest_sample_w_m2, plus tolerance × it +
+/// floor) plus that narrow light's bound, or the block's whole bound if lower. Nothing where
+/// the narrow light is within what the samples vouch for, or where that bound stays within
+/// it or below @p threshold_w_m2. Every lattice point of such a block is a sample, so nothing
+/// finer can be asked of the lattice: only the bound can say how bright the glint may be.
+/// +∞ where a bound or sample is NaN.
+std::optional<double> narrowGlintBound(const BallBound& bound, double largest_sample_w_m2,
+                                       double tolerance, double floor_w_m2, double threshold_w_m2);
+
 /// @brief What one block's samples show.
 struct BlockSamples {
   std::size_t count = 0;  ///< 27, or 35 with the octant centres (an axis of 4 voxels or more)

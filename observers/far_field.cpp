@@ -1,6 +1,9 @@
 // The far field: six adaptive observer planes far beyond the far radius, read as intensity.
 #include "observers/far_field.h"
 
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -33,6 +36,25 @@ constexpr double kMapDistanceInFarRadii = 1e3;
 // the forward cone) at that limit: the surface stays finite.
 constexpr double kForwardDisplayLimit = 10.0;
 
+// Where direction @p d (n · d > 0) crosses the plane of cube face @p face, in its lattice
+// units: 0 .. face_pixels on the face, beyond it on the plane's extension.
+struct PlanePoint {
+  double x = 0.0, y = 0.0;
+};
+PlanePoint onFacePlane(const Vec3& d, int face, int face_pixels) {
+  const FaceFrame& f = kFaceFrames[static_cast<std::size_t>(face)];
+  const double t = 1.0 / glm::dot(d, f.normal);
+  const double half = 0.5 * face_pixels;
+  return {(t * glm::dot(d, f.u) + 1.0) * half, (t * glm::dot(d, f.v) + 1.0) * half};
+}
+
+// The unit direction through point (x, y) of face @p face's plane, in its lattice units.
+Vec3 planeDirection(int face, double x, double y, int face_pixels) {
+  const FaceFrame& f = kFaceFrames[static_cast<std::size_t>(face)];
+  const double half = 0.5 * face_pixels;
+  return glm::normalize(f.normal + (x / half - 1.0) * f.u + (y / half - 1.0) * f.v);
+}
+
 // The face whose cone holds @p d, and where d crosses it in lattice units (0 .. face_pixels).
 struct FaceHit {
   int face = 0;
@@ -43,14 +65,10 @@ FaceHit faceHit(const Vec3& d, int face_pixels) {
   for (int a = 1; a < 3; ++a) {
     if (std::abs(d[a]) > std::abs(d[axis])) axis = a;
   }
-  FaceHit h;
-  h.face = 2 * axis + (d[axis] < 0.0 ? 1 : 0);
-  const FaceFrame& f = kFaceFrames[static_cast<std::size_t>(h.face)];
-  const double t = 1.0 / glm::dot(d, f.normal);  // > 0: the dominant axis
-  const double half = 0.5 * face_pixels;
-  h.x = std::clamp((t * glm::dot(d, f.u) + 1.0) * half, 0.0, 2.0 * half);
-  h.y = std::clamp((t * glm::dot(d, f.v) + 1.0) * half, 0.0, 2.0 * half);
-  return h;
+  const int face = 2 * axis + (d[axis] < 0.0 ? 1 : 0);  // n · d > 0: the dominant axis
+  const PlanePoint p = onFacePlane(d, face, face_pixels);
+  const auto n = static_cast<double>(face_pixels);
+  return {face, std::clamp(p.x, 0.0, n), std::clamp(p.y, 0.0, n)};
 }
 
 // The direction of the centre of pixel @p p of a width × height lat-long map (latLongMap()).
@@ -77,6 +95,20 @@ void validate(const FarFieldSpec& s) {
 // read as "no hazard" in a maximum.
 double hazardSafe(double intensity_w_sr) {
   return std::isnan(intensity_w_sr) ? std::numeric_limits<double>::infinity() : intensity_w_sr;
+}
+
+// The angle between lattice directions at face point (x, y) (lattice units), at least: a
+// lattice step turns the direction by 2/N / (1 + X² + Y²) or more, X and Y in −1 .. 1.
+double latticeAngle(double x, double y, int face_pixels) {
+  const double half = 0.5 * face_pixels;
+  const double u = x / half - 1.0, v = y / half - 1.0;
+  return (2.0 / face_pixels) / (1.0 + u * u + v * v);
+}
+
+// The key of the finest block (2 × 2 lattice cells) at lattice origin (2 a, 2 b) of a face.
+std::uint64_t narrowKey(int a, int b, int face_pixels) {
+  return static_cast<std::uint64_t>(a) * static_cast<std::uint64_t>(face_pixels) +
+         static_cast<std::uint64_t>(b);
 }
 
 }  // namespace
@@ -143,7 +175,7 @@ FarReach farReach(const FarField& field, double mpe_w_m2, double extinction_per_
   reach.far_radius_m = farRadiusToward(field.spec(), reach.direction);
   const double source_m = field.ball().radius_m;
   double best_w_sr = 0.0;  // the distance grows with intensity: only a brighter one can beat it
-  field.forEachDirection([&](const Vec3& d, double intensity_w_sr) {
+  const auto consider = [&](const Vec3& d, double intensity_w_sr) {
     const double intensity = hazardSafe(intensity_w_sr);
     if (!(intensity > best_w_sr)) return;
     const double nohd = hazardDistance(intensity, mpe_w_m2, extinction_per_m, source_m);
@@ -152,7 +184,16 @@ FarReach farReach(const FarField& field, double mpe_w_m2, double extinction_per_
       reach = {nohd, d, far_m};
       best_w_sr = intensity;
     }
-  });
+  };
+  // The located tops first: a lattice direction beside one, as bright by its allowance, does
+  // not take its place.
+  for (const FarField::Peak& p : field.located()) consider(p.direction, p.intensity_w_sr);
+  for (const FarField::Peak& p : field.narrowGlints()) consider(p.direction, p.intensity_w_sr);
+  for (int f = 0; f < FarField::kFaces; ++f) {
+    field.forEachDirectionOfFace(f, [&](int i, int j, const Vec3& d, double) {
+      consider(d, field.latticeUpperIntensity(f, i, j));
+    });
+  }
   return reach;
 }
 
@@ -174,11 +215,28 @@ FieldSpec cubeFaceSpec(int face, const Vec3& centre_m, double distance_m,
   return s;
 }
 
-FarField::Face::Face(const ObserverField& field)
-    : spec(field.spec()), stats(field.stats()), irradiance_w_m2(field.irradianceLattice()) {}
+FarField::Face::Face(const ObserverField& field, const Vec3& centre)
+    : spec(field.spec()), stats(field.stats()), intensity_w_sr(field.irradianceLattice()) {
+  const int n = stats.nodes[0];
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      float& e = intensity_w_sr[static_cast<std::size_t>(j) * static_cast<std::size_t>(n) +
+                                static_cast<std::size_t>(i)];
+      const Vec3 d = spec.position(i, j, 0) - centre;
+      e = static_cast<float>(std::min(static_cast<double>(e) * glm::dot(d, d), kFloatMax));
+    }
+  for (const FieldBlock& b : field.blocks()) {
+    if (b.status == VoxelStatus::Unresolved) unresolved.push_back(b);
+  }
+}
 
-FarField::FarField(LitBall ball, FarFieldSpec spec, double map_distance_m, std::vector<Face> faces)
-    : ball_(ball), spec_(spec), map_distance_m_(map_distance_m), faces_(std::move(faces)) {
+FarField::FarField(LitBall ball, FarFieldSpec spec, double map_distance_m, std::vector<Face> faces,
+                   std::vector<Peak> located)
+    : ball_(ball),
+      spec_(spec),
+      map_distance_m_(map_distance_m),
+      faces_(std::move(faces)),
+      located_(std::move(located)) {
   for (const Face& face : faces_) {
     const FieldStats& s = face.stats;
     stats_.lattice_points += s.lattice_points;
@@ -198,6 +256,8 @@ FarField::FarField(LitBall ball, FarFieldSpec spec, double map_distance_m, std::
     stats_.blocks_accepted_spread += s.blocks_accepted_spread;
     stats_.blocks_refined += s.blocks_refined;
     stats_.blocks_finest += s.blocks_finest;
+    stats_.unresolved_blocks += s.unresolved_blocks;
+    stats_.unresolved_points += s.unresolved_points;
     stats_.evaluations += s.evaluations;
     stats_.bound_evaluations += s.bound_evaluations;
     stats_.levels = std::max(stats_.levels, s.levels);
@@ -205,34 +265,411 @@ FarField::FarField(LitBall ball, FarFieldSpec spec, double map_distance_m, std::
     stats_.active_voxels += s.active_voxels;
     stats_.grid_bytes += s.grid_bytes;
   }
-  peak_.intensity_w_sr = 0.0;
+  lattice_peak_.intensity_w_sr = 0.0;
   forEachDirection([&](const Vec3& d, double intensity_w_sr) {
-    if (hazardSafe(intensity_w_sr) > peak_.intensity_w_sr) peak_ = {intensity_w_sr, d};
+    if (hazardSafe(intensity_w_sr) > lattice_peak_.intensity_w_sr) {
+      lattice_peak_ = {intensity_w_sr, d, Basis::Located};
+    }
   });
+  // A narrow glint's block bounds the irradiance in the ball about it, which holds the face's
+  // square of the block: as intensity, times the farthest distance in the ball, squared.
+  for (int f = 0; f < kFaces; ++f) {
+    const Face& face = faces_[static_cast<std::size_t>(f)];
+    for (const FieldBlock& b : face.unresolved) {
+      const Vec3 centre =
+          face.spec.position(b.origin[0] + b.size[0] / 2, b.origin[1] + b.size[1] / 2, 0);
+      const double radius_m = 0.5 * std::hypot(b.size[0], b.size[1]) * face.spec.voxel_m;
+      const double reach_m = glm::length(centre - ball_.centre_m) + radius_m;
+      narrow_glints_.push_back({hazardSafe(b.bound_w_m2) * reach_m * reach_m,
+                                glm::normalize(centre - ball_.centre_m), Basis::NarrowGlintBound});
+      auto& index = narrow_index_[static_cast<std::size_t>(f)];
+      index.emplace_back(narrowKey(b.origin[0] / 2, b.origin[1] / 2, spec_.face_pixels),
+                         narrow_glints_.back().intensity_w_sr);
+    }
+    auto& index = narrow_index_[static_cast<std::size_t>(f)];
+    std::sort(index.begin(), index.end());
+  }
+  const int n = spec_.face_pixels;
+  const int tiles = (n + kTile - 1) / kTile;
+  for (int f = 0; f < kFaces; ++f) {
+    std::vector<float>& tile = tile_max_[static_cast<std::size_t>(f)];
+    tile.assign(static_cast<std::size_t>(tiles) * static_cast<std::size_t>(tiles), 0.0f);
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        const auto e = static_cast<float>(hazardSafe(latticeIntensity(f, i, j)));
+        if (!(e > 0.0f)) continue;
+        // Every tile within two lattice points of (i, j) reads it.
+        for (int b = std::max(0, (j - 2) / kTile); b <= std::min(tiles - 1, (j + 2) / kTile); ++b)
+          for (int a = std::max(0, (i - 2) / kTile); a <= std::min(tiles - 1, (i + 2) / kTile);
+               ++a) {
+            float& t = tile[static_cast<std::size_t>(b) * static_cast<std::size_t>(tiles) +
+                            static_cast<std::size_t>(a)];
+            t = std::max(t, e);
+          }
+      }
+  }
+  std::stable_sort(located_.begin(), located_.end(), [](const Peak& a, const Peak& b) {
+    return a.intensity_w_sr > b.intensity_w_sr;
+  });
+  peak_ = lattice_peak_;
+  for (const std::vector<Peak>* list : {&located_, &narrow_glints_}) {
+    for (const Peak& p : *list) {
+      if (hazardSafe(p.intensity_w_sr) > peak_.intensity_w_sr) peak_ = p;
+    }
+  }
+  // Nothing was found above the floor: the floor is all the map knows of the peak.
+  if (peak_.intensity_w_sr < spec_.floor_w_sr)
+    peak_ = {spec_.floor_w_sr, peak_.direction, Basis::Floor};
 }
 
-Vec3 FarField::latticePoint(int face, int i, int j) const {
-  return faces_[static_cast<std::size_t>(face)].spec.position(i, j, 0);
+const char* FarField::basisName(Basis b) {
+  switch (b) {
+    case Basis::Located:
+      return "located";
+    case Basis::NarrowGlintBound:
+      return "narrow_glint_bound";
+    case Basis::Floor:
+      return "floor";
+  }
+  return "located";
 }
 
-double FarField::latticeIntensity(int face, int i, int j) const {
-  const double d = glm::length(latticePoint(face, i, j) - ball_.centre_m);
-  const Face& f = faces_[static_cast<std::size_t>(face)];
-  const auto row = static_cast<std::size_t>(spec_.face_pixels) + 1;
-  return static_cast<double>(
-             f.irradiance_w_m2[static_cast<std::size_t>(j) * row + static_cast<std::size_t>(i)]) *
-         d * d;
+Vec3 FarField::latticeDirection(int face, int i, int j) const {
+  return planeDirection(face, i, j, spec_.face_pixels);
 }
 
 double FarField::intensity(const Vec3& direction) const {
   const FaceHit h = faceHit(direction, spec_.face_pixels);
-  const int i = std::min(static_cast<int>(h.x), spec_.face_pixels - 1);
-  const int j = std::min(static_cast<int>(h.y), spec_.face_pixels - 1);
-  const double fx = h.x - i, fy = h.y - j;
-  return (1.0 - fy) * ((1.0 - fx) * latticeIntensity(h.face, i, j) +
-                       fx * latticeIntensity(h.face, i + 1, j)) +
-         fy * ((1.0 - fx) * latticeIntensity(h.face, i, j + 1) +
-               fx * latticeIntensity(h.face, i + 1, j + 1));
+  return bilinear(h.face, cellOf(h.x), cellOf(h.y), h.x, h.y);
+}
+
+int FarField::cellOf(double x) const {
+  return std::clamp(static_cast<int>(std::floor(x)), 0, spec_.face_pixels - 1);
+}
+
+double FarField::bilinear(int face, int i, int j, double x, double y) const {
+  const double fx = x - i, fy = y - j;
+  return (1.0 - fy) *
+             ((1.0 - fx) * latticeIntensity(face, i, j) + fx * latticeIntensity(face, i + 1, j)) +
+         fy * ((1.0 - fx) * latticeIntensity(face, i, j + 1) +
+               fx * latticeIntensity(face, i + 1, j + 1));
+}
+
+// Bilinear interpolation of a concave stretch errs by at most h²/8 × |f''| per axis, and f''
+// h² is about the lattice's second difference there. About a lobe's top that difference
+// averages f'' over ±h and reads low: for a Gaussian of width w sampled at h ≤ w, at worst
+// 0.56 of h² f''(top) (samples at ±h/2 about the top). Doubled, it covers that: the allowance
+// is (the largest concave second difference at the cell's corners along x, plus along y) / 4.
+double FarField::cellAllowance(int face, int i, int j) const {
+  const int n = spec_.face_pixels;
+  double corners_max = 0.0;
+  for (int c = 0; c < 4; ++c)
+    corners_max = std::max(corners_max, latticeIntensity(face, i + (c & 1), j + (c >> 1)));
+  if (!(corners_max > 0.0)) return std::isnan(corners_max) ? corners_max : 0.0;  // dark
+  double along_x = 0.0, along_y = 0.0;
+  for (int c = 0; c < 4; ++c) {
+    const int a = i + (c & 1), b = j + (c >> 1);
+    // On the face's edge, the difference one step in.
+    const int ax = std::clamp(a, 1, n - 1), by = std::clamp(b, 1, n - 1);
+    along_x =
+        std::max(along_x, 2.0 * latticeIntensity(face, ax, b) - latticeIntensity(face, ax - 1, b) -
+                              latticeIntensity(face, ax + 1, b));
+    along_y =
+        std::max(along_y, 2.0 * latticeIntensity(face, a, by) - latticeIntensity(face, a, by - 1) -
+                              latticeIntensity(face, a, by + 1));
+  }
+  return 0.25 * (along_x + along_y);
+}
+
+double FarField::narrowGlintBoundAt(int face, double x, double y) const {
+  const auto& index = narrow_index_[static_cast<std::size_t>(face)];
+  if (index.empty()) return 0.0;
+  // Finest blocks are 2 × 2 lattice cells at even origins; a point on their edge lies in both.
+  double bound = 0.0;
+  const auto blocksAlong = [](double c, int out[2]) {
+    const double k = std::floor(0.5 * c);
+    out[0] = static_cast<int>(k);
+    out[1] = 0.5 * c == k ? out[0] - 1 : out[0];
+  };
+  int bx[2], by[2];
+  blocksAlong(x, bx);
+  blocksAlong(y, by);
+  for (const int a : bx)
+    for (const int b : by) {
+      if (a < 0 || b < 0) continue;
+      const std::uint64_t key = narrowKey(a, b, spec_.face_pixels);
+      const auto it =
+          std::lower_bound(index.begin(), index.end(), std::make_pair(key, 0.0),
+                           [](const auto& l, const auto& r) { return l.first < r.first; });
+      if (it != index.end() && it->first == key) bound = std::max(bound, it->second);
+    }
+  return bound;
+}
+
+bool FarField::dark(int face, int i0, int j0, int i1, int j1) const {
+  if (!narrow_index_[static_cast<std::size_t>(face)].empty()) return false;
+  const int tiles = (spec_.face_pixels + kTile - 1) / kTile;
+  const std::vector<float>& tile = tile_max_[static_cast<std::size_t>(face)];
+  for (int b = std::max(0, j0 / kTile); b <= std::min(tiles - 1, j1 / kTile); ++b)
+    for (int a = std::max(0, i0 / kTile); a <= std::min(tiles - 1, i1 / kTile); ++a) {
+      if (tile[static_cast<std::size_t>(b) * static_cast<std::size_t>(tiles) +
+               static_cast<std::size_t>(a)] != 0.0f) {
+        return false;
+      }
+    }
+  return true;
+}
+
+double FarField::upperIntensityAt(int face, double x, double y) const {
+  const int i = cellOf(x), j = cellOf(y);
+  if (dark(face, i, j, i, j)) return 0.0;
+  const double upper = std::max(bilinear(face, i, j, x, y) + cellAllowance(face, i, j),
+                                narrowGlintBoundAt(face, x, y));
+  return std::min(hazardSafe(upper), peak_.intensity_w_sr);
+}
+
+double FarField::latticeUpperIntensity(int face, int i, int j) const {
+  const int n = spec_.face_pixels;
+  if (dark(face, std::max(0, i - 1), std::max(0, j - 1), std::min(i, n - 1), std::min(j, n - 1))) {
+    return 0.0;
+  }
+  double allowance = 0.0;
+  for (int c = 0; c < 4; ++c) {
+    const int a = i - 1 + (c & 1), b = j - 1 + (c >> 1);
+    if (a < 0 || b < 0 || a >= n || b >= n) continue;
+    allowance = std::max(allowance, hazardSafe(cellAllowance(face, a, b)));
+  }
+  const double upper =
+      std::max(latticeIntensity(face, i, j) + allowance, narrowGlintBoundAt(face, i, j));
+  return std::min(hazardSafe(upper), peak_.intensity_w_sr);
+}
+
+double FarField::upperIntensityAlong(const Vec3& a, const Vec3& b) const {
+  return upperIntensityAlong(a, b, 0);
+}
+
+// Exact for the estimate: on a face the arc is a straight segment, and between the lattice
+// lines it crosses it runs in one lattice cell, where the estimate is bilinear plus a
+// constant: quadratic along it, largest at an end or, where it bends down, at its vertex.
+double FarField::upperIntensityAlong(const Vec3& a, const Vec3& b, int depth) const {
+  const int n = spec_.face_pixels;
+  const FaceHit ha = faceHit(a, n), hb = faceHit(b, n);
+  if (ha.face != hb.face && depth < 4) {
+    // Split where the arc leaves a's face; the two sides meet within 2^-40 of the arc.
+    double lo = 0.0, hi = 1.0;
+    for (int k = 0; k < 40; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      (faceHit(glm::normalize(a + mid * (b - a)), n).face == ha.face ? lo : hi) = mid;
+    }
+    return std::max(upperIntensityAlong(a, glm::normalize(a + lo * (b - a)), depth + 1),
+                    upperIntensityAlong(glm::normalize(a + hi * (b - a)), b, depth + 1));
+  }
+  if (ha.face != hb.face) return std::max(upperIntensity(a), upperIntensity(b));
+  const int face = ha.face;
+  const int last = n - 1;
+  if (dark(face, std::clamp(static_cast<int>(std::min(ha.x, hb.x)), 0, last),
+           std::clamp(static_cast<int>(std::min(ha.y, hb.y)), 0, last),
+           std::clamp(static_cast<int>(std::max(ha.x, hb.x)), 0, last),
+           std::clamp(static_cast<int>(std::max(ha.y, hb.y)), 0, last))) {
+    return 0.0;
+  }
+  const double dx = hb.x - ha.x, dy = hb.y - ha.y;
+  // The parameters where the segment crosses a lattice line, ends included.
+  thread_local std::vector<double> cuts;
+  cuts.assign(1, 0.0);
+  const auto crossings = [&](double from, double step) {
+    if (step == 0.0) return;
+    const double to = from + step;
+    for (double k = std::floor(std::min(from, to)) + 1.0; k < std::max(from, to); k += 1.0) {
+      cuts.push_back((k - from) / step);
+    }
+  };
+  crossings(ha.x, dx);
+  crossings(ha.y, dy);
+  cuts.push_back(1.0);
+  std::sort(cuts.begin(), cuts.end());
+  const auto count = cuts.size();
+  // Points on a lattice line are put exactly on it, so that the cell test sees both sides.
+  const auto at = [&](double t) {
+    double x = ha.x + t * dx, y = ha.y + t * dy;
+    if (std::abs(x - std::round(x)) < 1e-9) x = std::round(x);
+    if (std::abs(y - std::round(y)) < 1e-9) y = std::round(y);
+    return PlanePoint{x, y};
+  };
+  double best = 0.0;
+  for (std::size_t c = 0; c < count; ++c) {
+    const PlanePoint p = at(cuts[c]);
+    best = std::max(best, upperIntensityAt(face, p.x, p.y));
+    if (c + 1 == count || !(cuts[c + 1] > cuts[c])) continue;
+    // The bilinear value along the piece to the next cut is e0 + e1 s + e2 s², s ∈ 0 .. 1.
+    const PlanePoint q = at(cuts[c + 1]);
+    const int i = cellOf(0.5 * (p.x + q.x)), j = cellOf(0.5 * (p.y + q.y));
+    const double f00 = latticeIntensity(face, i, j), f10 = latticeIntensity(face, i + 1, j);
+    const double f01 = latticeIntensity(face, i, j + 1);
+    const double f11 = latticeIntensity(face, i + 1, j + 1);
+    const double twist = f11 - f10 - f01 + f00;
+    const double u0 = p.x - i, v0 = p.y - j, du = q.x - p.x, dv = q.y - p.y;
+    const double e2 = twist * du * dv;
+    if (!(e2 < 0.0)) continue;  // no interior top
+    const double e1 = (f10 - f00) * du + (f01 - f00) * dv + twist * (u0 * dv + v0 * du);
+    const double s = -e1 / (2.0 * e2);
+    if (s > 0.0 && s < 1.0) {
+      best = std::max(best, upperIntensityAt(face, p.x + s * du, p.y + s * dv));
+    }
+  }
+  return best;
+}
+
+double FarField::upperIntensity(const Vec3& direction) const {
+  const FaceHit h = faceHit(direction, spec_.face_pixels);
+  return upperIntensityAt(h.face, h.x, h.y);
+}
+
+namespace {
+
+// The search for lobe tops (locateLobeTops()): how many lobes, how far apart their starts
+// must be (in lattice spacings), how many integrations each may take, and how finely it
+// closes in (a 64th of the lattice spacing: the top's rise over the rest is below 1e-4 for a
+// lobe as wide as the lattice, and the last parabolas bound it).
+constexpr std::size_t kMaxLobes = 8;
+constexpr double kLobesApart = 4.0;
+constexpr int kMaxProbes = 64;
+constexpr double kFinestStep = 1.0 / 64.0;
+// The integrator's tolerance in the search, as a share of the map's: the top's intensity is
+// reported, so it is integrated far more closely than the map's lattice.
+constexpr double kSearchToleranceShare = 1e-2;
+
+// The intensity toward a direction with its error estimate (W/sr).
+struct Probe {
+  Vec3 direction{1.0, 0.0, 0.0};
+  double intensity_w_sr = 0.0;
+  double error_w_sr = 0.0;
+};
+
+// The offset of the top of the parabola through (−h, lo), (0, mid), (h, hi), within ±h (the
+// larger end where it bends up or is flat), in log I where all three are positive (where a
+// Gaussian lobe is a parabola); and how much higher than mid, relatively, a top within h/2 of
+// mid may rise on that parabola: |second difference| / 8.
+struct Step {
+  double offset = 0.0;
+  double rise = 0.0;
+};
+Step parabolaStep(double lo, double mid, double hi, double h) {
+  const bool logs = lo > 0.0 && mid > 0.0 && hi > 0.0;
+  if (logs) {
+    lo = std::log(lo);
+    mid = std::log(mid);
+    hi = std::log(hi);
+  }
+  const double bend = lo + hi - 2.0 * mid;
+  if (!std::isfinite(bend)) return {};
+  if (!(bend < 0.0)) return {hi > lo ? h : lo > hi ? -h : 0.0, 0.0};
+  const double rise = logs ? std::expm1(-0.125 * bend) : mid > 0.0 ? -0.125 * bend / mid : 0.0;
+  return {std::clamp(0.5 * h * (lo - hi) / bend, -h, h), rise};
+}
+
+}  // namespace
+
+std::vector<FarField::Peak> locateLobeTops(const FarField& map, const FacetIntegrator& integrator,
+                                           std::int64_t* evaluations) {
+  const int n = map.spec().face_pixels;
+  const double brightest = map.latticePeak().intensity_w_sr;
+  if (!(brightest > 0.0) || !std::isfinite(brightest)) return {};
+  // Lattice directions at least as bright as their neighbours on the face and half the
+  // brightest: where a lobe's top may be near.
+  struct Start {
+    double intensity_w_sr;
+    int face, i, j;
+  };
+  std::vector<Start> starts;
+  for (int f = 0; f < FarField::kFaces; ++f) {
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        const double v = map.latticeIntensity(f, i, j);
+        if (!(v >= 0.5 * brightest)) continue;
+        bool top = true;
+        for (int dj = -1; dj <= 1 && top; ++dj)
+          for (int di = -1; di <= 1 && top; ++di) {
+            const int a = i + di, b = j + dj;
+            if (a < 0 || b < 0 || a > n || b > n) continue;
+            top = !(map.latticeIntensity(f, a, b) > v);
+          }
+        if (top) starts.push_back({v, f, i, j});
+      }
+  }
+  std::stable_sort(starts.begin(), starts.end(), [](const Start& a, const Start& b) {
+    return a.intensity_w_sr > b.intensity_w_sr;
+  });
+  std::vector<Start> chosen;
+  for (const Start& s : starts) {
+    if (chosen.size() == kMaxLobes) break;
+    const Vec3 d = map.latticeDirection(s.face, s.i, s.j);
+    const double apart_rad = kLobesApart * latticeAngle(s.i, s.j, n);
+    const bool near = std::any_of(chosen.begin(), chosen.end(), [&](const Start& c) {
+      return glm::dot(d, map.latticeDirection(c.face, c.i, c.j)) > std::cos(apart_rad);
+    });
+    if (!near) chosen.push_back(s);
+  }
+
+  const double distance_m = map.mapDistance();
+  const Vec3 centre = map.ball().centre_m;
+  const double d2 = distance_m * distance_m;
+  const FacetIntegrator search =
+      integrator
+          .withAccuracy(kSearchToleranceShare * map.spec().tolerance,
+                        kSearchToleranceShare * map.spec().floor_w_sr / d2)
+          .withReturnExtinction(0.0);
+  std::vector<FarField::Peak> tops(chosen.size());
+  std::vector<std::int64_t> spent(chosen.size(), 0);
+  tbb::enumerable_thread_specific<IntegratorWorkspace> workspaces;
+  tbb::parallel_for(std::size_t{0}, chosen.size(), [&](std::size_t k) {
+    IntegratorWorkspace& ws = workspaces.local();
+    int probes = 0;
+    const auto probe = [&](const Vec3& d) {
+      const ObserverResult r = search.adaptive(centre + distance_m * d, ws);
+      ++probes;
+      spent[k] += r.evaluations;
+      return Probe{d, r.irradiance_w_m2 * d2, r.error_estimate_w_m2 * d2};
+    };
+    const Start& s = chosen[k];
+    Probe best = probe(map.latticeDirection(s.face, s.i, s.j));
+    const Vec3 e1 = glm::normalize(glm::cross(
+        best.direction, std::abs(best.direction.z) < 0.9 ? Vec3(0, 0, 1) : Vec3(1, 0, 0)));
+    const Vec3 e2 = glm::cross(best.direction, e1);
+    const double h0 = latticeAngle(s.i, s.j, n);
+    double h = h0;
+    std::array<double, 2> rise{0.0, 0.0};
+    while (h > kFinestStep * h0 && probes + 5 <= kMaxProbes) {
+      const Vec3 at = best.direction;
+      const std::array<Probe, 4> around = {
+          probe(glm::normalize(at - h * e1)), probe(glm::normalize(at + h * e1)),
+          probe(glm::normalize(at - h * e2)), probe(glm::normalize(at + h * e2))};
+      const Step s1 =
+          parabolaStep(around[0].intensity_w_sr, best.intensity_w_sr, around[1].intensity_w_sr, h);
+      const Step s2 =
+          parabolaStep(around[2].intensity_w_sr, best.intensity_w_sr, around[3].intensity_w_sr, h);
+      rise = {s1.rise, s2.rise};
+      Probe next = best;
+      for (const Probe& p : around) {
+        if (p.intensity_w_sr > next.intensity_w_sr) next = p;
+      }
+      if (s1.offset != 0.0 || s2.offset != 0.0) {
+        const Probe p = probe(glm::normalize(at + s1.offset * e1 + s2.offset * e2));
+        if (p.intensity_w_sr > next.intensity_w_sr) next = p;
+      }
+      // The top lies within this stencil: look closer.
+      if (glm::length(next.direction - at) < 0.5 * h) h *= 0.5;
+      best = next;
+    }
+    // The top may rise above the best probe by what the last parabolas allow within half
+    // their step.
+    tops[k] = {(best.intensity_w_sr + best.error_w_sr) * (1.0 + rise[0]) * (1.0 + rise[1]),
+               best.direction, FarField::Basis::Located};
+  });
+  if (evaluations != nullptr) {
+    for (const std::int64_t e : spent) *evaluations += e;
+  }
+  return tops;
 }
 
 FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& spec,
@@ -251,9 +688,15 @@ FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& 
         integrator.withAccuracy(0.25 * face.tolerance, 0.25 * face.floor_w_m2)
             .withReturnExtinction(0.0);
     // Each face's grids are dropped as soon as its lattice is taken.
-    faces.emplace_back(computeField(at_face, face, ExcludedFn(), counter, exchange));
+    faces.emplace_back(computeField(at_face, face, ExcludedFn(), counter, exchange), ball.centre_m);
   }
-  return {ball, spec, distance_m, std::move(faces)};
+  // The lattice alone, to find where the lobes' tops are; then the map that reports them.
+  FarField lattice(ball, spec, distance_m, std::move(faces));
+  std::int64_t search_evaluations = 0;
+  std::vector<FarField::Peak> tops = locateLobeTops(lattice, integrator, &search_evaluations);
+  FarField far(ball, spec, distance_m, std::move(lattice.faces_), std::move(tops));
+  far.stats_.evaluations += search_evaluations;
+  return far;
 }
 
 LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2, double extinction_per_m,
@@ -262,21 +705,61 @@ LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2, double
   m.height = height;
   m.width = 2 * height;
   const auto w = static_cast<std::size_t>(m.width);
-  m.intensity_w_sr.assign(w * static_cast<std::size_t>(height), 0.0f);
-  std::vector<double> cell(m.intensity_w_sr.size(), 0.0);
-  for (std::size_t p = 0; p < cell.size(); ++p) {
-    cell[p] = hazardSafe(field.intensity(latLongDirection(p, m.width, height)));
+  const auto h = static_cast<std::size_t>(height);
+  std::vector<double> cos_az(w + 1), sin_az(w + 1), cos_el(h + 1), sin_el(h + 1);
+  for (std::size_t i = 0; i <= w; ++i) {
+    const double azimuth = -kPi + static_cast<double>(i) * 2.0 * kPi / m.width;
+    cos_az[i] = std::cos(azimuth);
+    sin_az[i] = std::sin(azimuth);
   }
-  field.forEachDirection([&](const Vec3& d, double intensity_w_sr) {
+  for (std::size_t j = 0; j <= h; ++j) {
+    const double elevation = -0.5 * kPi + static_cast<double>(j) * kPi / height;
+    cos_el[j] = std::cos(elevation);
+    sin_el[j] = std::sin(elevation);
+  }
+  const auto corner = [&](std::size_t i, std::size_t j) {
+    return Vec3(cos_el[j] * cos_az[i], cos_el[j] * sin_az[i], sin_el[j]);
+  };
+  // The cells' edges: along each parallel j (0 .. height) from meridian i to i + 1, and along
+  // each meridian i from parallel j to j + 1; each shared by the two cells beside it.
+  std::vector<double> along_parallel((h + 1) * w), along_meridian(h * w);
+  tbb::parallel_for(std::size_t{0}, h + 1, [&](std::size_t j) {
+    for (std::size_t i = 0; i < w; ++i) {
+      along_parallel[j * w + i] = field.upperIntensityAlong(corner(i, j), corner(i + 1, j));
+      if (j < h)
+        along_meridian[j * w + i] = field.upperIntensityAlong(corner(i, j), corner(i, j + 1));
+    }
+  });
+  std::vector<double> cell(w * h, 0.0);
+  for (std::size_t j = 0; j < h; ++j)
+    for (std::size_t i = 0; i < w; ++i) {
+      cell[j * w + i] = std::max({along_parallel[j * w + i], along_parallel[(j + 1) * w + i],
+                                  along_meridian[j * w + i], along_meridian[j * w + (i + 1) % w]});
+    }
+  // Inside a cell, the estimate is largest at a lattice direction or a located top.
+  const auto pixelOf = [&](const Vec3& d) {
     const double azimuth = std::atan2(d.y, d.x);
     const double elevation = std::asin(std::clamp(d.z, -1.0, 1.0));
     const int i =
         std::clamp(static_cast<int>((azimuth + kPi) / (2.0 * kPi) * m.width), 0, m.width - 1);
     const int j =
         std::clamp(static_cast<int>((elevation + 0.5 * kPi) / kPi * height), 0, height - 1);
-    double& c = cell[static_cast<std::size_t>(j) * w + static_cast<std::size_t>(i)];
-    c = std::max(c, hazardSafe(intensity_w_sr));
-  });
+    return static_cast<std::size_t>(j) * w + static_cast<std::size_t>(i);
+  };
+  for (int f = 0; f < FarField::kFaces; ++f) {
+    const int n = field.spec().face_pixels;
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        const double upper = field.latticeUpperIntensity(f, i, j);
+        if (!(upper > 0.0)) continue;
+        double& c = cell[pixelOf(field.latticeDirection(f, i, j))];
+        c = std::max(c, upper);
+      }
+  }
+  for (const FarField::Peak& top : field.located()) {
+    double& c = cell[pixelOf(top.direction)];
+    c = std::max(c, std::min(hazardSafe(top.intensity_w_sr), field.peak().intensity_w_sr));
+  }
   // The hazard distance toward the pixel where it lies beyond the far radius there, else 0.
   const double source_m = field.ball().radius_m;
   auto reach = [&](double intensity, double threshold_w_m2, const Vec3& d) {
@@ -284,6 +767,7 @@ LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2, double
     return nohd >= farRadiusToward(field.spec(), d) ? static_cast<float>(std::min(nohd, kFloatMax))
                                                     : 0.0f;
   };
+  m.intensity_w_sr.resize(cell.size());
   m.nohd_m.resize(cell.size());
   if (aided_mpe_w_m2 > 0.0) m.aided_nohd_m.resize(cell.size());
   for (std::size_t p = 0; p < cell.size(); ++p) {
@@ -300,25 +784,83 @@ HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mp
   const int n = field.spec().face_pixels;
   const int m = std::clamp(cells_per_face, 1, n);
   const int step = n / m;  // both powers of two
-  const auto vertices = static_cast<std::size_t>(m + 1) * static_cast<std::size_t>(m + 1);
+  const double half_cell = 0.5 * step;
+  const auto row = static_cast<std::size_t>(m + 1);
+  const auto vertices = row * row;
+  // The vertices (a, b) of a face whose cell, |x − a step| ≤ step/2 and likewise for y (its
+  // plane's lattice units, beyond the face's edges too), holds plane point (x, y).
+  const auto forEachVertexHolding = [&](double x, double y, auto&& fn) {
+    const auto range = [&](double c, int& lo, int& hi) {
+      lo = std::max(0, static_cast<int>(std::ceil((c - half_cell) / step)));
+      hi = std::min(m, static_cast<int>(std::floor((c + half_cell) / step)));
+    };
+    int a0, a1, b0, b1;
+    range(x, a0, a1);
+    range(y, b0, b1);
+    for (int b = b0; b <= b1; ++b)
+      for (int a = a0; a <= a1; ++a)
+        fn(static_cast<std::size_t>(b) * row + static_cast<std::size_t>(a));
+  };
+  // Each face's vertex cells, from their edges, then the lattice directions and located tops
+  // inside them (those beyond a face's edges too).
+  std::vector<std::vector<double>> vertex_max(FarField::kFaces);
+  tbb::parallel_for(0, FarField::kFaces, [&](int f) {
+    std::vector<double>& v = vertex_max[static_cast<std::size_t>(f)];
+    v.assign(vertices, 0.0);
+    for (int b = 0; b <= m; ++b)
+      for (int a = 0; a <= m; ++a) {
+        const double x0 = a * step - half_cell, x1 = a * step + half_cell;
+        const double y0 = b * step - half_cell, y1 = b * step + half_cell;
+        const Vec3 c00 = planeDirection(f, x0, y0, n), c10 = planeDirection(f, x1, y0, n);
+        const Vec3 c01 = planeDirection(f, x0, y1, n), c11 = planeDirection(f, x1, y1, n);
+        v[static_cast<std::size_t>(b) * row + static_cast<std::size_t>(a)] =
+            std::max({field.upperIntensityAlong(c00, c10), field.upperIntensityAlong(c10, c11),
+                      field.upperIntensityAlong(c11, c01), field.upperIntensityAlong(c01, c00)});
+      }
+    const auto lend = [&](const Vec3& d, double intensity_w_sr) {
+      if (!(glm::dot(d, kFaceFrames[static_cast<std::size_t>(f)].normal) > 0.0)) return;
+      const PlanePoint p = onFacePlane(d, f, n);
+      forEachVertexHolding(p.x, p.y, [&](std::size_t k) { v[k] = std::max(v[k], intensity_w_sr); });
+    };
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        const double upper = field.latticeUpperIntensity(f, i, j);
+        if (upper > 0.0) {
+          forEachVertexHolding(i, j, [&](std::size_t k) { v[k] = std::max(v[k], upper); });
+        }
+      }
+    // Another face's directions reach this face's cells only within half a cell (and a
+    // lattice step of slack) of their shared edge.
+    const int margin = static_cast<int>(half_cell) + 2;
+    for (int g = 0; g < FarField::kFaces; ++g) {
+      if (g == f) continue;
+      for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) {
+          if (i > margin && i < n - margin && j > margin && j < n - margin) {
+            i = n - margin - 1;  // skip the face's inside
+            continue;
+          }
+          const double upper = field.latticeUpperIntensity(g, i, j);
+          if (upper > 0.0) lend(field.latticeDirection(g, i, j), upper);
+        }
+    }
+    for (const FarField::Peak& top : field.located()) {
+      lend(top.direction, std::min(hazardSafe(top.intensity_w_sr), field.peak().intensity_w_sr));
+    }
+  });
+
   HazardSurface s;
   const Vec3 centre = field.ball().centre_m;
   for (int f = 0; f < FarField::kFaces; ++f) {
     const FarField::Face& face = field.faces()[static_cast<std::size_t>(f)];
-    // Each lattice direction lends its intensity to the nearest vertex.
-    std::vector<double> vertex_max(vertices, 0.0);
-    field.forEachDirectionOfFace(f, [&](int i, int j, const Vec3&, double intensity_w_sr) {
-      const int a = (i + step / 2) / step, b = (j + step / 2) / step;
-      double& v = vertex_max[static_cast<std::size_t>(b) * (m + 1) + static_cast<std::size_t>(a)];
-      v = std::max(v, hazardSafe(intensity_w_sr));
-    });
+    const std::vector<double>& vertex = vertex_max[static_cast<std::size_t>(f)];
     const auto first = static_cast<std::int64_t>(s.points_m.size());
     for (int b = 0; b <= m; ++b)
       for (int a = 0; a <= m; ++a) {
         const Vec3 p = face.spec.position(a * step, b * step, 0);
         const Vec3 dir = glm::normalize(p - centre);
         const double intensity =
-            vertex_max[static_cast<std::size_t>(b) * (m + 1) + static_cast<std::size_t>(a)];
+            vertex[static_cast<std::size_t>(b) * row + static_cast<std::size_t>(a)];
         const double nohd =
             hazardDistance(intensity, mpe_w_m2, extinction_per_m, field.ball().radius_m);
         const double far_m = farRadiusToward(field.spec(), dir);

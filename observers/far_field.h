@@ -11,10 +11,16 @@
 /// Each cube face is an observer plane (observers/field.h) at a distance far beyond r_far, so
 /// the map is refined, bounded and interpolated by the same block check as the box: a glint
 /// narrower than its samples is found by bound, never interpolated away.
+///
+/// What the map reports fails safe: each bright lobe's top is located between the lattice
+/// directions by a search with the integrator, a lobe narrower than the lattice is reported by
+/// its bound, and the maps hold for each cell an upper estimate of the intensity anywhere in it
+/// (upperIntensity()).
 
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "facets/integrator.h"
@@ -83,17 +89,48 @@ class FarField {
   /// @brief Cube faces in the order +x, −x, +y, −y, +z, −z.
   static constexpr int kFaces = 6;
 
-  /// @brief A computed cube face, kept as its lattice of irradiance: a face's OpenVDB grids
+  /// @brief A computed cube face, kept as its lattice of intensity: a face's OpenVDB grids
   /// hold a one-voxel layer in 8³ leaves (and level and status beside it), 20× the 4 bytes a
   /// direction needs (the 2 km example: 470 MB against 25 MB).
   struct Face {
     FieldSpec spec;
     FieldStats stats;
-    std::vector<float> irradiance_w_m2;  ///< (face_pixels + 1)², row j at j (face_pixels + 1)
-    explicit Face(const ObserverField& field);
+    /// The irradiance computed at each lattice point × its distance² from the centre (W/sr):
+    /// (face_pixels + 1)², row j at j (face_pixels + 1).
+    std::vector<float> intensity_w_sr;
+    /// The finest blocks where a glint narrower than the lattice may pass between the
+    /// directions (VoxelStatus::Unresolved, with their bound).
+    std::vector<FieldBlock> unresolved;
+    /// @brief From the face's field, the cube's centre at @p centre.
+    Face(const ObserverField& field, const Vec3& centre);
   };
 
-  FarField(LitBall ball, FarFieldSpec spec, double map_distance_m, std::vector<Face> faces);
+  /// @brief Where a reported intensity comes from.
+  enum class Basis : std::uint8_t {
+    /// Computed: the largest intensity a search with the integrator found about a lobe's top
+    /// (plus its error estimate), or a lattice direction's.
+    Located,
+    /// A bound: a glint narrower than the lattice may pass between the directions of a face
+    /// block, and no located lobe is brighter than the block's bound.
+    NarrowGlintBound,
+    /// A bound: no direction was found above the floor, which bounds them all.
+    Floor,
+  };
+
+  /// @brief The basis's name in the outputs: `located`, `narrow_glint_bound` or `floor`.
+  static const char* basisName(Basis b);
+
+  /// @brief A direction of the map and the intensity there.
+  struct Peak {
+    double intensity_w_sr = 0.0;
+    Vec3 direction{1.0, 0.0, 0.0};
+    Basis basis = Basis::Located;
+  };
+
+  /// @brief The map from its faces; @p located: lobe tops found between the lattice
+  /// directions (locateLobeTops()).
+  FarField(LitBall ball, FarFieldSpec spec, double map_distance_m, std::vector<Face> faces,
+           std::vector<Peak> located = {});
 
   [[nodiscard]] const LitBall& ball() const { return ball_; }
   [[nodiscard]] const FarFieldSpec& spec() const { return spec_; }
@@ -105,13 +142,24 @@ class FarField {
   /// @brief I(ω) in W/sr for unit @p direction, bilinear between the map's lattice points.
   [[nodiscard]] double intensity(const Vec3& direction) const;
 
-  /// @brief A direction of the map and the intensity there.
-  struct Peak {
-    double intensity_w_sr = 0.0;
-    Vec3 direction{1.0, 0.0, 0.0};
-  };
-  /// @brief The brightest lattice direction of the map.
+  /// @brief What the map says the intensity toward unit @p direction may be at most: the
+  /// bilinear value plus the error bilinear interpolation makes where the lattice bends down
+  /// (h²/8 × the curvature per axis, which the lattice's second differences, doubled,
+  /// overestimate for a lobe at least as wide as the lattice), the bound of a narrow glint's
+  /// block where there is one, and never more than peak().
+  [[nodiscard]] double upperIntensity(const Vec3& direction) const;
+
+  /// @brief The peak intensity the map reports, never below the truth: the brightest located
+  /// lobe top, or the bound of a narrow glint's block or of the floor where that is higher.
   [[nodiscard]] const Peak& peak() const { return peak_; }
+  /// @brief The brightest lattice direction (below the true peak where a lobe's top falls
+  /// between the directions).
+  [[nodiscard]] const Peak& latticePeak() const { return lattice_peak_; }
+  /// @brief The lobe tops located between the lattice directions, the brightest first.
+  [[nodiscard]] const std::vector<Peak>& located() const { return located_; }
+  /// @brief Each face block where a glint narrower than the lattice may pass: its bound as an
+  /// intensity toward the block's centre (basis NarrowGlintBound; +∞ where it has none).
+  [[nodiscard]] const std::vector<Peak>& narrowGlints() const { return narrow_glints_; }
 
   /// @brief Sums of the faces' statistics (lattice points, evaluations, time); the
   /// unconverged points' largest irradiance plus error is given as an intensity (W/sr).
@@ -121,17 +169,10 @@ class FarField {
   /// face @p face.
   template <class Fn>
   void forEachDirectionOfFace(int face, Fn&& fn) const {
-    const std::vector<float>& e = faces_[static_cast<std::size_t>(face)].irradiance_w_m2;
     const int n = spec_.face_pixels + 1;
     for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const Vec3 p = latticePoint(face, i, j);
-        const double d = glm::length(p - ball_.centre_m);
-        fn(i, j, (p - ball_.centre_m) / d,
-           static_cast<double>(e[static_cast<std::size_t>(j) * static_cast<std::size_t>(n) +
-                                 static_cast<std::size_t>(i)]) *
-               d * d);
-      }
+      for (int i = 0; i < n; ++i)
+        fn(i, j, latticeDirection(face, i, j), latticeIntensity(face, i, j));
   }
 
   /// @brief Calls fn(direction, intensity_w_sr) for every lattice point of every face.
@@ -142,9 +183,42 @@ class FarField {
     }
   }
 
+  /// @brief The unit direction of lattice point (@p i, @p j) of cube face @p face.
+  [[nodiscard]] Vec3 latticeDirection(int face, int i, int j) const;
+  /// @brief Its intensity as computed (W/sr).
+  [[nodiscard]] double latticeIntensity(int face, int i, int j) const {
+    const auto row = static_cast<std::size_t>(spec_.face_pixels) + 1;
+    return static_cast<double>(
+        faces_[static_cast<std::size_t>(face)]
+            .intensity_w_sr[static_cast<std::size_t>(j) * row + static_cast<std::size_t>(i)]);
+  }
+  /// @brief upperIntensity() at lattice point (i, j): its own intensity plus the largest
+  /// interpolation allowance of the lattice cells around it, capped as upperIntensity() is.
+  [[nodiscard]] double latticeUpperIntensity(int face, int i, int j) const;
+  /// @brief The largest upperIntensity() along the great-circle arc from unit @p a to unit
+  /// @p b (a map cell's edge: short).
+  [[nodiscard]] double upperIntensityAlong(const Vec3& a, const Vec3& b) const;
+
  private:
-  [[nodiscard]] Vec3 latticePoint(int face, int i, int j) const;
-  [[nodiscard]] double latticeIntensity(int face, int i, int j) const;
+  friend FarField computeFarField(const FacetIntegrator&, const FarFieldSpec&, WorkCounter*,
+                                  PointExchange*);
+  // The lattice cell (along one axis) that holds face coordinate x (lattice units).
+  [[nodiscard]] int cellOf(double x) const;
+  // The bilinear intensity at (x, y) of a face, in lattice cell (i, j).
+  [[nodiscard]] double bilinear(int face, int i, int j, double x, double y) const;
+  // upperIntensity() at face coordinates (x, y) of a face, in lattice units (0 .. face_pixels).
+  [[nodiscard]] double upperIntensityAt(int face, double x, double y) const;
+  // upperIntensityAlong() of an arc that @p depth splits at face edges have made.
+  [[nodiscard]] double upperIntensityAlong(const Vec3& a, const Vec3& b, int depth) const;
+  // Whether upperIntensity() is 0 throughout lattice cells (i0 .. i1, j0 .. j1) of a face (cell
+  // (i, j) spans lattice points i .. i + 1, j .. j + 1): every intensity their estimate reads
+  // is 0 and the face has no narrow glint. False may be answered for a dark region, never
+  // true for a lit one.
+  [[nodiscard]] bool dark(int face, int i0, int j0, int i1, int j1) const;
+  // The interpolation allowance of lattice cell (i, j) .. (i + 1, j + 1) of a face.
+  [[nodiscard]] double cellAllowance(int face, int i, int j) const;
+  // The largest bound of a narrow glint's block whose closed square holds (x, y); 0 if none.
+  [[nodiscard]] double narrowGlintBoundAt(int face, double x, double y) const;
 
   LitBall ball_;
   FarFieldSpec spec_;
@@ -152,7 +226,27 @@ class FarField {
   std::vector<Face> faces_;
   FieldStats stats_;
   Peak peak_;
+  Peak lattice_peak_;
+  std::vector<Peak> located_;
+  std::vector<Peak> narrow_glints_;
+  // Per face: the narrow glints' blocks (2 × 2 lattice cells at even origins) by their
+  // origin's key, sorted, with their intensity bound.
+  std::array<std::vector<std::pair<std::uint64_t, double>>, kFaces> narrow_index_;
+  // Per face: the largest lattice intensity of each tile of kTile × kTile cells and of the two
+  // lattice points around it (what the cells' estimates read), row-major by tile.
+  static constexpr int kTile = 8;
+  std::array<std::vector<float>, kFaces> tile_max_;
 };
+
+/// @brief Locates the top of each bright lobe of @p map between its lattice directions: from
+/// each lattice direction at least as bright as its eight neighbours and half the brightest
+/// (the brightest few, apart), a pattern search with parabolic steps on log I(ω), I read at
+/// the map's distance with @p integrator at a hundredth of the map's tolerance, down to a
+/// 64th of the lattice spacing. Each top is reported as I plus its error estimate plus the
+/// rise the last parabolas allow within half their step: not below the lobe's true top.
+/// @p evaluations, if given, is increased by the reflection calculations spent.
+std::vector<FarField::Peak> locateLobeTops(const FarField& map, const FacetIntegrator& integrator,
+                                           std::int64_t* evaluations = nullptr);
 
 /// @brief The lattice of cube face @p face (FarField order) at @p distance_m from @p centre_m,
 /// as an observer plane: axes u, v, u × v = the face's outward normal.
@@ -174,9 +268,10 @@ double hazardDistance(double intensity_w_sr, double threshold_w_m2, double extin
 
 /// @brief The hazard distance map in longitude and latitude: column i at azimuth
 /// φ = −π + (i + ½) 2π/width from +x toward +y, row j at elevation −π/2 + (j + ½) π/height
-/// toward +z. Each pixel holds the largest intensity of its cell: the value interpolated at
-/// its centre or any lattice direction of the map inside it, so no glint narrower than a
-/// pixel is lost. Arrays are indexed [j × width + i].
+/// toward +z. Each pixel holds the largest upperIntensity() over its cell: along its edges
+/// (where they cross lattice lines, and where the interpolant bends down between) and at
+/// the lattice directions and located lobe tops inside it, so no glint narrower than a pixel
+/// is lost and none is cut short. Arrays are indexed [j × width + i].
 struct LatLongMap {
   int width = 0;
   int height = 0;
@@ -193,7 +288,8 @@ LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2,
 /// @brief The hazard boundary as a closed surface about the lit centre: a cube-sphere of
 /// cells_per_face² quads per face, each vertex at the distance √(I/MPE) of its direction where
 /// that is beyond the far radius toward it, else at that far radius (where the box decides).
-/// A vertex takes the largest intensity of the map's lattice directions around it.
+/// A vertex takes the largest upperIntensity() of its cell (the square of half a cell's
+/// width about it, on its face and beyond its edges), as a pixel of latLongMap() does.
 struct HazardSurface {
   std::vector<Vec3> points_m;
   std::vector<std::array<std::int64_t, 4>> quads;
@@ -204,9 +300,10 @@ struct HazardSurface {
 HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mpe_w_m2,
                             double extinction_per_m = 0.0);
 
-/// @brief The farthest hazard the far field proves: the largest √(I/MPE) over the map's
-/// lattice directions where it is at least the far radius toward them (0 and the map's peak
-/// direction where there is none).
+/// @brief The farthest hazard the far field proves: the largest √(I/MPE) where it is at least
+/// the far radius toward its direction, over the located lobe tops, the narrow glints' bounds
+/// and the lattice directions' upperIntensity() (0 and the map's peak direction where there
+/// is none).
 struct FarReach {
   double nohd_m = 0.0;
   Vec3 direction{1.0, 0.0, 0.0};

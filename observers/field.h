@@ -44,6 +44,10 @@ struct FieldSpec {
   /// resolved across itself and interpolated along itself); false halves every axis, as the
   /// octree of the first versions did (kept to measure the difference).
   bool anisotropic = true;
+  /// The least irradiance that matters (the MPE, or the aided MPE if lower): a finest block
+  /// whose bound reaches it while a glint narrower than its lattice may pass unseen marks its
+  /// points below it VoxelStatus::Unresolved. 0: every such block marks all its points.
+  double hazard_threshold_w_m2 = 0.0;
 
   /// @brief Lattice points per axis (voxels + 1), after extending to whole blocks.
   [[nodiscard]] std::array<int, 3> nodes() const;
@@ -65,18 +69,23 @@ enum class VoxelStatus : int {
   /// Integrated here, but the integrator hit its depth or evaluation limit before its
   /// tolerance: the value is its best estimate, not a converged one.
   Unconverged = 5,
+  /// Integrated here (a finest block's point), but the block's bound reaches the hazard
+  /// threshold while a glint narrower than the lattice may pass between its points unseen.
+  Unresolved = 6,
 };
 
 /// @brief What each VoxelStatus value means, in one line for files that carry the codes.
 inline const char* voxelStatusMeanings() {
   return "0 outside the box, 1 evaluated, 2 interpolated, 3 proven below floor_w_m2 (not "
          "computed), 4 inside or on the target, 5 evaluated but unconverged (integrator limit "
-         "reached)";
+         "reached), 6 evaluated, but a bound above the hazard threshold says a glint narrower "
+         "than the lattice may pass here";
 }
 
 /// @brief Whether the irradiance of a voxel with status @p s was integrated at that point.
 inline bool integratedHere(VoxelStatus s) {
-  return s == VoxelStatus::Evaluated || s == VoxelStatus::Unconverged;
+  return s == VoxelStatus::Evaluated || s == VoxelStatus::Unconverged ||
+         s == VoxelStatus::Unresolved;
 }
 
 /// @brief Counts and figures of one field computation.
@@ -104,7 +113,23 @@ struct FieldStats {
   /// because E itself failed the check: the far field's fall-off.
   std::int64_t blocks_accepted_spread = 0;
   std::int64_t blocks_refined = 0;
-  std::int64_t blocks_finest = 0;      ///< every point evaluated
+  std::int64_t blocks_finest = 0;  ///< every point evaluated
+  /// Finest blocks whose bound says a glint narrower than the lattice may pass between their
+  /// points above the hazard threshold (FieldSpec::hazard_threshold_w_m2), and the points
+  /// they mark VoxelStatus::Unresolved.
+  std::int64_t unresolved_blocks = 0;
+  std::int64_t unresolved_points = 0;
+  /// The largest finite bound of those blocks (W/m²) and the centre of its block; the blocks
+  /// whose ball reaches a lit facet have none and are counted apart.
+  double unresolved_max_bound_w_m2 = 0.0;
+  Vec3 unresolved_bound_at_m{0.0};
+  std::int64_t unresolved_unbounded_blocks = 0;
+  /// The box around the marked points (meaningful when there are any).
+  Vec3 unresolved_min_m{std::numeric_limits<double>::infinity()};
+  Vec3 unresolved_max_m{-std::numeric_limits<double>::infinity()};
+  /// A voxel size that resolves every one of those blocks: the narrowest light among their
+  /// narrow facets / √3 (BallBound::resolving_spacing_m); 0 where none could be computed.
+  double unresolved_resolving_voxel_m = 0.0;
   std::int64_t evaluations = 0;        ///< reflection calculations, all points
   std::int64_t bound_evaluations = 0;  ///< contribution bounds of candidate facets
   int levels = 0;                      ///< refinement levels used (0 = coarsest blocks only)
@@ -119,9 +144,13 @@ struct FieldStats {
 /// each axis a (a plane's blocks: 2 along the normal, folded onto its one layer).
 struct FieldBlock {
   std::array<int, 3> origin{};
-  std::array<int, 3> size{};                    ///< edges in voxels
-  int level = 0;                                ///< 0 = coarsest
-  VoxelStatus status = VoxelStatus::Evaluated;  ///< Evaluated, Interpolated or BelowFloor
+  std::array<int, 3> size{};  ///< edges in voxels
+  int level = 0;              ///< 0 = coarsest
+  /// Evaluated, Interpolated, BelowFloor or Unresolved.
+  VoxelStatus status = VoxelStatus::Evaluated;
+  /// Unresolved blocks only: what a point of the block may receive at most
+  /// (field::narrowGlintBound(), W/m²; +∞ where its ball reaches a lit facet).
+  double bound_w_m2 = 0.0;
 };
 
 /// @brief Observer positions glint does not evaluate (inside or on the target).

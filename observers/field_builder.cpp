@@ -130,7 +130,7 @@ class FieldBuilder {
             break;
           case Verdict::Finest:
             ++stats_.blocks_finest;
-            final_.push_back({blk, decisions[i]});
+            final_.push_back({blk, decisions[i], unresolvedBound(blk, bounds[i])});
             break;
           case Verdict::Refine: {
             ++stats_.blocks_refined;
@@ -172,8 +172,10 @@ class FieldBuilder {
       const Verdict v = f.decision.verdict;
       const VoxelStatus status = v == Verdict::Skip     ? VoxelStatus::BelowFloor
                                  : v == Verdict::Accept ? VoxelStatus::Interpolated
+                                 : f.unresolved         ? VoxelStatus::Unresolved
                                                         : VoxelStatus::Evaluated;
-      blocks_out.push_back({f.block.o, f.block.size, f.block.level, status});
+      blocks_out.push_back({f.block.o, f.block.size, f.block.level, status,
+                            f.unresolved ? f.unresolved->bound_w_m2 : 0.0});
     }
     stats_.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -190,10 +192,71 @@ class FieldBuilder {
     if (stopRequested()) throw WorkStopped();
   }
 
+  // A finest block that may hide a glint narrower than its lattice (narrowGlintBound()).
+  struct Unresolved {
+    double bound_w_m2 = 0.0;  // narrowGlintBound() (+∞ where the ball reaches the target)
+    double resolving_spacing_m = 0.0;  // BallBound::resolving_spacing_m
+  };
   struct FinalBlock {
     Block block;
     Decision decision;
+    std::optional<Unresolved> unresolved = std::nullopt;
   };
+
+  // What a finest block's bound says that its samples (all its lattice points) cannot.
+  [[nodiscard]] std::optional<Unresolved> unresolvedBound(const Block& b,
+                                                          const BallBound& bound) const {
+    double largest = 0.0;
+    field::forEachSample(b.size, [&](int di, int dj, int dk) {
+      const PointValue& v = values_.at(keyAt(b, di, dj, dk));
+      if (!v.excluded) largest = std::max(largest, v.irradiance_w_m2);
+    });
+    const std::optional<double> most = field::narrowGlintBound(
+        bound, largest, spec_.tolerance, spec_.floor_w_m2, spec_.hazard_threshold_w_m2);
+    if (!most) return std::nullopt;
+    return Unresolved{*most, bound.resolving_spacing_m};
+  }
+
+  // Marks status Unresolved the evaluated points of the unresolved blocks that lie below the
+  // hazard threshold (all of them without one), and counts them.
+  void markUnresolved(FieldGrids& grids) {
+    auto irradiance = grids.irradiance->getAccessor();
+    auto status = grids.status->getAccessor();
+    const double threshold = spec_.hazard_threshold_w_m2;
+    for (FinalBlock& f : final_) {
+      if (!f.unresolved) continue;
+      std::int64_t marked = 0;
+      const openvdb::CoordBBox box = ownedBox(f.block, lattice_);
+      for (auto it = box.begin(); it; ++it) {
+        const openvdb::Coord& p = *it;
+        if (status.getValue(p) != statusCode(VoxelStatus::Evaluated)) continue;
+        if (threshold > 0.0 && !(static_cast<double>(irradiance.getValue(p)) < threshold)) continue;
+        status.setValue(p, statusCode(VoxelStatus::Unresolved));
+        const Vec3 x = spec_.position(p[0], p[1], p[2]);
+        stats_.unresolved_min_m = glm::min(stats_.unresolved_min_m, x);
+        stats_.unresolved_max_m = glm::max(stats_.unresolved_max_m, x);
+        ++marked;
+      }
+      if (marked == 0) {  // every point already at the threshold: the samples say it all
+        f.unresolved.reset();
+        continue;
+      }
+      stats_.unresolved_points += marked;
+      ++stats_.unresolved_blocks;
+      const Unresolved& u = *f.unresolved;
+      if (!std::isfinite(u.bound_w_m2)) {
+        ++stats_.unresolved_unbounded_blocks;
+      } else if (u.bound_w_m2 > stats_.unresolved_max_bound_w_m2) {
+        stats_.unresolved_max_bound_w_m2 = u.bound_w_m2;
+        stats_.unresolved_bound_at_m = centre(f.block);
+      }
+      if (std::isfinite(u.resolving_spacing_m) && u.resolving_spacing_m > 0.0 &&
+          (stats_.unresolved_resolving_voxel_m == 0.0 ||
+           u.resolving_spacing_m < stats_.unresolved_resolving_voxel_m)) {
+        stats_.unresolved_resolving_voxel_m = u.resolving_spacing_m;
+      }
+    }
+  }
 
   // r^power, r the distance of lattice point (i, j, k) from the lit facets' centre.
   [[nodiscard]] double spreadWeight(int i, int j, int k, int power) const {
@@ -598,6 +661,7 @@ class FieldBuilder {
         stats_.peak_at_m = spec_.position(p[0], p[1], p[2]);
       }
     }
+    markUnresolved(*grids);
     // Blocks fill whole regions with one status and level; as tiles they cost nothing per voxel.
     grids->status->tree().prune();
     grids->level->tree().prune();

@@ -316,6 +316,7 @@ nlohmann::json scenarioFarFieldJson(const FarField& far, const HazardSpec& h) {
   const Vec3& peak = far.peak().direction;
   nlohmann::json j = {{"far_radius_m", far.spec().far_radius_m},
                       {"peak_intensity_w_sr", far.peak().intensity_w_sr},
+                      {"peak_intensity_basis", FarField::basisName(far.peak().basis)},
                       {"peak_direction", {peak.x, peak.y, peak.z}},
                       {"evaluations", far.stats().evaluations},
                       {"unconverged_directions", far.stats().unconverged_points}};

@@ -193,6 +193,9 @@ HazardZone hazardZone(const ObserverField& field, const HazardSpec& h,
   z.target_centre_m = target_centre_m;
   z.unconverged_ratio_upper =
       std::max(h.ratio(s.unconverged_max_upper_w_m2), h.aidedRatio(s.unconverged_max_upper_w_m2));
+  z.narrow_glint_ratio_bound =
+      std::max(h.ratio(s.unresolved_max_bound_w_m2), h.aidedRatio(s.unresolved_max_bound_w_m2));
+  z.narrow_glint_may_be_hazardous = s.unresolved_points > 0;
   return z;
 }
 
@@ -244,6 +247,7 @@ nlohmann::json hazardJson(const HazardSpec& h, const HazardZone* zone) {
   if (h.aid) j["aided_peak_hazard_ratio"] = z.aided_peak_ratio;
   if (h.pulse) j["peak_radiant_exposure_j_m2_per_pulse"] = z.peak_pulse_j_m2;
   j["unconverged_may_be_hazardous"] = z.unconvergedMayBeHazardous();
+  j["narrow_glint_may_be_hazardous"] = z.narrow_glint_may_be_hazardous;
   j["nominal_hazard_zone"] = zoneJson(z.above_mpe, z.target_centre_m);
   if (z.aided_above_mpe) {
     j["aided_nominal_hazard_zone"] = zoneJson(*z.aided_above_mpe, z.target_centre_m);

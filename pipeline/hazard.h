@@ -170,6 +170,11 @@ struct HazardZone {
   double unconverged_ratio_upper = 0.0;
 
   [[nodiscard]] bool unconvergedMayBeHazardous() const { return !(unconverged_ratio_upper < 1.0); }
+  /// The largest (aided, where there is an aid) hazard ratio the finite bound of a finest block
+  /// allows where a glint narrower than the lattice may pass (status 6); 0 where there is none.
+  /// Such points exist only where the bound reaches the MPE: they may be hazardous.
+  double narrow_glint_ratio_bound = 0.0;
+  bool narrow_glint_may_be_hazardous = false;  ///< some point has status 6
 };
 
 /// @brief The zones of @p field under @p h, distances from @p target_centre_m.

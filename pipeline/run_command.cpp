@@ -140,6 +140,12 @@ FarField sceneFarField(const SceneTarget& target, const Scene& scene, const Memo
     throw std::runtime_error("the far field: " + std::to_string(far.stats().non_finite_points) +
                              " directions have a non-finite intensity; nothing was written");
   }
+  // A narrow glint's block a thousand far radii out never reaches the target: an unbounded
+  // one is a fault, not a bound to report.
+  if (!std::isfinite(far.peak().intensity_w_sr)) {
+    throw std::runtime_error(
+        "the far field: the peak intensity is not a finite number; nothing was written");
+  }
   return far;
 }
 

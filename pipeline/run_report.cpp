@@ -40,6 +40,47 @@ void printUnconverged(std::ostream& err, const FieldStats& s, const HazardZone& 
       << "\n";
 }
 
+// What the summary says of the points a glint narrower than the lattice may pass unseen:
+// where they are (status 6 marks each), the bound of the brightest and the lattice that
+// would resolve them.
+nlohmann::json narrowGlintsJson(const FieldStats& s, const HazardZone& zone) {
+  const Vec3& at = s.unresolved_bound_at_m;
+  return {{"points", s.unresolved_points},
+          {"blocks", s.unresolved_blocks},
+          {"box",
+           {{"min_m", {s.unresolved_min_m.x, s.unresolved_min_m.y, s.unresolved_min_m.z}},
+            {"max_m", {s.unresolved_max_m.x, s.unresolved_max_m.y, s.unresolved_max_m.z}}}},
+          {"max_bound_w_m2", s.unresolved_max_bound_w_m2},
+          {"max_bound_hazard_ratio", zone.narrow_glint_ratio_bound},
+          {"max_bound_block_centre_m", {at.x, at.y, at.z}},
+          {"blocks_without_finite_bound", s.unresolved_unbounded_blocks},
+          {"resolving_voxel_m", s.unresolved_resolving_voxel_m}};
+}
+
+// One warning on the points where a glint narrower than the lattice may pass above the MPE.
+void printNarrowGlints(std::ostream& err, const FieldStats& s, const HazardZone& zone,
+                       const char* spacing_key) {
+  if (s.unresolved_points == 0) return;
+  err << "  warning: a glint narrower than the lattice may pass unseen between the points of "
+      << s.unresolved_points << " voxels (status 6), within (" << s.unresolved_min_m.x << ", "
+      << s.unresolved_min_m.y << ", " << s.unresolved_min_m.z << ") .. (" << s.unresolved_max_m.x
+      << ", " << s.unresolved_max_m.y << ", " << s.unresolved_max_m.z << ")";
+  if (s.unresolved_max_bound_w_m2 > 0.0) {
+    const Vec3& at = s.unresolved_bound_at_m;
+    err << ": its bound allows hazard ratio " << formatNumber("%.3g", zone.narrow_glint_ratio_bound)
+        << " (block at (" << at.x << ", " << at.y << ", " << at.z << "))";
+  }
+  if (s.unresolved_unbounded_blocks > 0) {
+    err << "; " << s.unresolved_unbounded_blocks
+        << " blocks next to the target have no finite bound";
+  }
+  if (s.unresolved_resolving_voxel_m > 0.0) {
+    err << "; " << spacing_key << " ≤ " << formatNumber("%.3g", s.unresolved_resolving_voxel_m)
+        << " m resolves it";
+  }
+  err << "\n";
+}
+
 }  // namespace
 
 nlohmann::json runJson(const RunInfo& info) {
@@ -163,8 +204,10 @@ nlohmann::json volumeSummaryJson(const ObserverField& field, const HazardZone& z
                  {"interpolated", s.interpolated_points},
                  {"proven_below_floor", s.below_floor_points},
                  {"inside_target", s.excluded_points},
-                 {"unconverged", s.unconverged_points}};
+                 {"unconverged", s.unconverged_points},
+                 {"narrow_glint_unresolved", s.unresolved_points}};
   if (s.unconverged_points > 0) j["unconverged"] = unconvergedJson(s, zone);
+  if (s.unresolved_points > 0) j["narrow_glints"] = narrowGlintsJson(s, zone);
   j["blocks"] = {{"skipped", s.blocks_skipped},
                  {"accepted", s.blocks_accepted},
                  {"accepted_interpolating_e_r_or_e_r2", s.blocks_accepted_spread},
@@ -224,7 +267,10 @@ void printVolume(std::ostream& err, const ObserverField& field, const Scene& sce
   err << "\n";
   auto printZone = [&](const ObserverField::Exceedance& r, const char* name) {
     if (r.points == 0) {
-      err << "  " << name << ": none in the box (no point reaches the MPE)\n";
+      err << "  " << name
+          << (zone.narrow_glint_may_be_hazardous
+                  ? ": none at the lattice points, but not proven: see the narrow glint below\n"
+                  : ": none in the box (no point reaches the MPE)\n");
       return;
     }
     err << "  " << name << ": " << formatNumber("%.4g", r.volume_m3) << " m³, reaching "
@@ -240,6 +286,7 @@ void printVolume(std::ostream& err, const ObserverField& field, const Scene& sce
   printZone(zone.above_mpe, "nominal hazard zone (ratio ≥ 1)");
   if (zone.aided_above_mpe) printZone(*zone.aided_above_mpe, "aided hazard zone (aided ratio ≥ 1)");
   printUnconverged(err, s, zone, "  ");
+  printNarrowGlints(err, s, zone, "voxel_m");
   err << "  memory: " << formatNumber("%.3g", static_cast<double>(s.grid_bytes) / 1e6)
       << " MB of grids, "
       << formatNumber("%.3g", s.active_voxels > 0 ? static_cast<double>(s.grid_bytes) /
@@ -258,6 +305,7 @@ void printPlane(std::ostream& err, const PlaneSpec& plane, const ObserverField& 
       << formatNumber("%.3g", zone.peak_ratio) << ", hazardous area "
       << formatNumber("%.4g", hazardousArea(field, zone.above_mpe)) << " m²\n";
   printUnconverged(err, s, zone, "  ");
+  printNarrowGlints(err, s, zone, "pixel_m");
 }
 
 nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
@@ -276,7 +324,8 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
                         {"interpolated", s.interpolated_points},
                         {"proven_below_floor", s.below_floor_points},
                         {"inside_target", s.excluded_points},
-                        {"unconverged", s.unconverged_points}}},
+                        {"unconverged", s.unconverged_points},
+                        {"narrow_glint_unresolved", s.unresolved_points}}},
                       {"evaluations", s.evaluations},
                       {"seconds", s.seconds},
                       {"peak_irradiance_w_m2", s.peak_w_m2},
@@ -288,6 +337,7 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
     j["aided_hazardous_area_m2"] = hazardousArea(field, *zone.aided_above_mpe);
   }
   if (s.unconverged_points > 0) j["unconverged"] = unconvergedJson(s, zone);
+  if (s.unresolved_points > 0) j["narrow_glints"] = narrowGlintsJson(s, zone);
   if (r.points > 0) {
     j["hazard_farthest_from_target_m"] = r.farthest_m;
     j["hazard_farthest_at_m"] = {r.farthest_at_m.x, r.farthest_at_m.y, r.farthest_at_m.z};
@@ -321,6 +371,11 @@ nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard,
       {"evaluations", s.evaluations},
       {"seconds", s.seconds},
       {"peak_intensity_w_sr", field.peak().intensity_w_sr},
+      {"peak_intensity_basis", FarField::basisName(field.peak().basis)},
+      {"peak_intensity_is_bound", field.peak().basis != FarField::Basis::Located},
+      {"lattice_peak_intensity_w_sr", field.latticePeak().intensity_w_sr},
+      {"lobe_tops_located", field.located().size()},
+      {"narrow_glint_blocks", field.narrowGlints().size()},
       {"peak_direction", {d.x, d.y, d.z}},
       {"peak_azimuth_deg", azimuth_deg},
       {"peak_elevation_deg", elevation_deg},
@@ -346,10 +401,27 @@ void printFarField(std::ostream& err, const FarField& field, const FarHazard& fa
       << formatNumber("%g", spec.tolerance) << " of the peak beyond "
       << formatNumber("%.4g", spec.far_radius_m)
       << " m (farther within 51° of the beam's direction)\n";
-  const Vec3& peak = field.peak().direction;
-  err << "  peak intensity " << formatNumber("%.4g", field.peak().intensity_w_sr)
-      << " W/sr toward (" << formatNumber("%.4f", peak.x) << ", " << formatNumber("%.4f", peak.y)
-      << ", " << formatNumber("%.4f", peak.z) << ")";
+  const FarField::Peak& peak = field.peak();
+  const Vec3& toward = peak.direction;
+  switch (peak.basis) {
+    case FarField::Basis::Located:
+      err << "  peak intensity " << formatNumber("%.4g", peak.intensity_w_sr)
+          << " W/sr, located toward (";
+      break;
+    case FarField::Basis::NarrowGlintBound:
+      err << "  peak intensity at most " << formatNumber("%.4g", peak.intensity_w_sr)
+          << " W/sr, a bound: a glint narrower than the map's directions may pass in "
+          << field.narrowGlints().size() << " blocks, the brightest toward (";
+      break;
+    case FarField::Basis::Floor:
+      err << "  peak intensity at most the floor, " << formatNumber("%.4g", peak.intensity_w_sr)
+          << " W/sr (no direction was found above it)";
+      break;
+  }
+  if (peak.basis != FarField::Basis::Floor) {
+    err << formatNumber("%.4f", toward.x) << ", " << formatNumber("%.4f", toward.y) << ", "
+        << formatNumber("%.4f", toward.z) << ")";
+  }
   if (hazard.nohd_m > 0.0) {
     err << "; the hazard reaches " << formatNumber("%.4g", hazard.nohd_m)
         << " m from the target centre toward (" << formatNumber("%.4f", hazard.direction.x) << ", "

@@ -78,6 +78,7 @@ FieldSpec fieldSpec(const Scene& scene) {
   f.block_voxels = static_cast<int>(std::lround(o.block_m / o.voxel_m));
   f.tolerance = o.tolerance;
   f.floor_w_m2 = o.floor_w_m2.value_or(scene.hazard.negligibleW_m2());
+  f.hazard_threshold_w_m2 = scene.hazard.lowestHazardousW_m2();
   return f;
 }
 
@@ -91,6 +92,7 @@ FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane) {
   f.block_voxels = static_cast<int>(std::lround(plane.block_m / plane.pixel_m));
   f.tolerance = plane.tolerance;
   f.floor_w_m2 = plane.floor_w_m2.value_or(scene.hazard.negligibleW_m2());
+  f.hazard_threshold_w_m2 = scene.hazard.lowestHazardousW_m2();
   return f;
 }
 

@@ -164,6 +164,28 @@ TEST(BlockCheck, RefinesWhereASampleIsNotFiniteInsideTheTargetOrAGlintMayPassBet
       << "a NaN narrow bound refines";
 }
 
+TEST(BlockCheck, AFinestBlockReportsANarrowGlintOnlyWhereItsBoundOutgrowsItsSamples) {
+  // Samples up to 5, tolerance 0.01, floor 0.05: they vouch for 5 + 0.01 × 5 + 0.05 = 5.1.
+  const auto most = [](double upper, double narrow, double threshold) {
+    return narrowGlintBound(boundOf(upper, narrow), 5.0, 0.01, 0.05, threshold);
+  };
+  EXPECT_EQ(most(20.0, 15.0, 10.0), std::optional<double>(20.0))
+      << "a pencil the samples miss, bounded above 10 as a whole";
+  ASSERT_TRUE(most(30.0, 15.0, 10.0).has_value());
+  EXPECT_NEAR(*most(30.0, 15.0, 10.0), 5.1 + 15.0, 1e-12)
+      << "what the samples vouch for plus the narrow light, below the whole bound";
+  EXPECT_EQ(most(20.0, 0.09, 10.0), std::nullopt) << "narrow light the samples vouch for";
+  EXPECT_EQ(most(5.09, 5.09, 0.0), std::nullopt) << "the whole bound within 5.1";
+  EXPECT_EQ(most(9.9, 9.9, 10.0), std::nullopt) << "a bound below the threshold cannot reach it";
+  EXPECT_EQ(most(9.9, 9.9, 0.0), std::optional<double>(9.9)) << "without a threshold it counts";
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(most(inf, inf, 10.0), std::optional<double>(inf)) << "no finite bound";
+  EXPECT_EQ(most(std::nan(""), 1.0, 10.0), std::optional<double>(inf)) << "NaN: unbounded";
+  EXPECT_EQ(narrowGlintBound(boundOf(20.0, 15.0), std::nan(""), 0.01, 0.05, 10.0),
+            std::optional<double>(inf))
+      << "a NaN sample vouches for nothing";
+}
+
 TEST(BlockCheck, OctantFillMatchesTheCornersAndIsTrilinearWithinEachOctant) {
   std::array<double, kLatticeSamples> u{};
   for (int a = 0; a < 3; ++a)

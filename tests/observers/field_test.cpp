@@ -5,9 +5,13 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "observers/field_compare.h"
+#include "pipeline/hazard.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
 
@@ -406,6 +410,81 @@ TEST(ObserverField, SphereFarFieldIsInterpolatedAlongItsFallOff) {
   EXPECT_GT(c.adaptive.blocks_accepted_spread, 0) << "the 1/r² fall-off must be followed";
   EXPECT_LT(c.adaptive.evaluated_points, c.dense.evaluated_points / 2)
       << "a smooth field in front of the ball needs few integrated points";
+}
+
+TEST(ObserverField, AGlintBetweenTheLatticePointsIsMarkedWithItsBoundAtEveryVoxelSize) {
+  // Issue 34: a 5 cm mirror (σ = 0.001) sends a pencil about 9 times the MPE along +y through
+  // a 10 m box, 0.3 m off the lattice planes x = 0 and z = 0 (tests/data/subvoxel_pencil.json).
+  // At 0.0625 m the lattice meets it; from 0.125 m to 1 m the pencil passes between the
+  // lattice points and only the finest blocks' bounds know it is there. Wherever it is
+  // hazardous, a corner of the lattice cell holding it must be above the MPE or marked status
+  // 6, and the largest bound reported must cover what the pencil truly carries.
+  Scene scene = loadScene(std::string(GLINT_TEST_DATA_DIR) + "/subvoxel_pencil.json");
+  const double mpe = scene.hazard.mpe_w_m2;
+  // The pencil's own irradiance on its axis (the disk's centre reflected along +y), integrated
+  // directly at the field's accuracy.
+  FieldProblem reference = fieldProblem(scene, fieldSpec(scene));
+  IntegratorWorkspace ws;
+  std::vector<std::pair<Vec3, double>> axis;
+  double pencil_max = 0.0;
+  for (double y = 2.5; y <= 12.0; y += 0.5) {
+    const Vec3 x(0.3, y, 0.3);
+    const double e = reference.integrator.adaptive(x, ws).irradiance_w_m2;
+    axis.emplace_back(x, e);
+    pencil_max = std::max(pencil_max, e);
+  }
+  ASSERT_GT(pencil_max, 5.0 * mpe) << "the premise: the pencil is hazardous about 9 times over";
+  const auto fieldAt = [&](double voxel) {
+    scene.observers->voxel_m = voxel;
+    scene.observers->block_m = 16.0 * voxel;
+    const FieldSpec spec = fieldSpec(scene);
+    const FieldProblem p = fieldProblem(scene, spec);
+    return computeField(p.integrator, spec, p.excluded);
+  };
+  double resolving_m = std::numeric_limits<double>::infinity();
+  for (const double voxel : {0.0625, 0.125, 0.25, 0.5, 1.0}) {
+    const ObserverField field = fieldAt(voxel);
+    const FieldSpec& spec = field.spec();
+    const FieldStats& s = field.stats();
+    resolving_m = std::min(resolving_m, s.unresolved_resolving_voxel_m);
+    EXPECT_GT(s.unresolved_points, 0) << voxel << " m";
+    EXPECT_GE(s.unresolved_max_bound_w_m2, pencil_max)
+        << voxel << " m: the bound reported must hold the pencil's largest irradiance";
+    EXPECT_GT(s.unresolved_resolving_voxel_m, 0.0) << voxel << " m";
+    EXPECT_LT(s.unresolved_resolving_voxel_m, voxel)
+        << voxel << " m: a finer lattice is what would resolve it";
+    for (const auto& [x, e] : axis) {
+      if (e < mpe) continue;
+      // The lattice cell that holds x: one of its corners must see the hazard or say that it
+      // may pass.
+      const Vec3 at = (x - spec.min_m) / spec.voxel_m;
+      const int i = static_cast<int>(at.x), j = static_cast<int>(at.y), k = static_cast<int>(at.z);
+      bool seen = false;
+      for (int c = 0; c < 8; ++c) {
+        const int a = i + (c >> 2), b = j + ((c >> 1) & 1), d = k + (c & 1);
+        seen = seen || field.status(a, b, d) == VoxelStatus::Unresolved ||
+               field.irradiance(a, b, d) >= mpe;
+      }
+      EXPECT_TRUE(seen) << voxel << " m: the pencil at y = " << x.y << " (ratio " << e / mpe
+                        << ") passes through the cell at (" << i << ", " << j << ", " << k
+                        << "), none of whose corners reaches the MPE or has status 6";
+    }
+    const HazardZone zone = hazardZone(field, scene.hazard, Vec3(0.3, 0.0, 0.3));
+    EXPECT_TRUE(zone.narrow_glint_may_be_hazardous) << voxel << " m";
+    EXPECT_GE(zone.narrow_glint_ratio_bound, pencil_max / mpe) << voxel << " m";
+    if (voxel >= 0.125) {
+      EXPECT_EQ(zone.above_mpe.points, 0) << voxel << " m: the premise, no lattice point sees it";
+    }
+    std::printf(
+        "[ pencil ] voxel %g m: lattice peak ratio %.3g, %lld points status 6, bound "
+        "ratio %.4g (pencil %.3g), resolving voxel %.4g m\n",
+        voxel, s.peak_w_m2 / mpe, static_cast<long long>(s.unresolved_points),
+        zone.narrow_glint_ratio_bound, pencil_max / mpe, s.unresolved_resolving_voxel_m);
+  }
+  // At the voxel the runs suggest, the lattice meets the pencil and no bound is left above it.
+  const ObserverField resolved = fieldAt(resolving_m);
+  EXPECT_EQ(resolved.stats().unresolved_points, 0) << "at " << resolving_m << " m";
+  EXPECT_GE(resolved.stats().peak_w_m2, mpe) << "at " << resolving_m << " m";
 }
 
 }  // namespace

@@ -255,6 +255,41 @@ TEST_F(CliTest, RunWritesEachPlaneAsAnExrMapAndSummarisesIt) {
   EXPECT_NEAR(paper_peak, peak, 2e-3 * peak) << "the paper scheme's peak on the wall";
 }
 
+// Issue 34: a pencil 9 times the MPE crosses a 10 m box at 0.5 m between every lattice point
+// (tests/data/subvoxel_pencil.json). glint run once said "none in the box" and, for the far
+// field, "peak intensity 0 W/sr". Now the terminal and the summary say that a glint narrower
+// than the lattice may pass, with its bound and the voxel that would resolve it, and the far
+// field reports its floor, flagged as a bound.
+TEST_F(CliTest, RunReportsAGlintBetweenTheLatticePointsWithItsBound) {
+  const Outcome r =
+      glint({"run", std::string(GLINT_TEST_DATA_DIR) + "/subvoxel_pencil.json", "-o", path("out")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("nominal hazard zone (ratio ≥ 1): none at the lattice points, but not "
+                       "proven"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("none in the box"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("warning: a glint narrower than the lattice may pass unseen"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("voxel_m ≤ "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("peak intensity at most the floor"), std::string::npos) << r.err;
+  const auto summary = nlohmann::json::parse(readFile(path("out/summary.json")));
+  EXPECT_EQ(summary.at("hazard").at("nominal_hazard_zone").at("points").get<int>(), 0);
+  EXPECT_TRUE(summary.at("hazard").at("narrow_glint_may_be_hazardous").get<bool>());
+  const auto& narrow = summary.at("narrow_glints");
+  EXPECT_GT(narrow.at("points").get<int>(), 0);
+  EXPECT_EQ(narrow.at("points"), summary.at("points").at("narrow_glint_unresolved"));
+  // The pencil carries about 9 × the MPE: the bound holds at least that.
+  EXPECT_GE(narrow.at("max_bound_hazard_ratio").get<double>(), 8.0) << narrow.dump();
+  EXPECT_GT(narrow.at("resolving_voxel_m").get<double>(), 0.0) << narrow.dump();
+  EXPECT_LT(narrow.at("resolving_voxel_m").get<double>(), 0.5) << narrow.dump();
+  const auto& far = summary.at("far_field");
+  EXPECT_EQ(far.at("peak_intensity_basis"), "floor") << far.dump();
+  EXPECT_TRUE(far.at("peak_intensity_is_bound").get<bool>());
+  EXPECT_EQ(far.at("peak_intensity_w_sr").get<double>(), far.at("floor_w_sr").get<double>());
+}
+
 // issue 15: `glint run /dev/zero` once grew by 250 MB/s; a box of 64 000 voxels a side
 // climbed to 6 GB showing "0/0 points". Now the inputs are capped, a region is refused before
 // it starts with what it needs, and a run that passes the budget stops with nothing written.
