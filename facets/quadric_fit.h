@@ -24,6 +24,10 @@ enum class QuadricFitStatus {
   IllConditioned,  ///< unique in exact arithmetic but too close to singular to trust
   Inconsistent,    ///< the quadric's gradient opposes some vertex normals, or vanishes
   Unstable,        ///< projecting edge midpoints onto it fails or moves them too far
+  /// Its gradient is not bounded away from zero over the facet's ball (2 L r ≥ |∇Q| at the
+  /// centroid, L the gradient's Lipschitz constant): no normal cone narrower than a hemisphere
+  /// bounds the facet, and observers refine it blind.
+  Unbounded,
 };
 
 /// @brief Human-readable name of a fit status, for summaries.

@@ -790,9 +790,12 @@ HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mp
   // The vertices (a, b) of a face whose cell, |x − a step| ≤ step/2 and likewise for y (its
   // plane's lattice units, beyond the face's edges too), holds plane point (x, y).
   const auto forEachVertexHolding = [&](double x, double y, auto&& fn) {
+    // A direction nearly in the face's plane lands far out on it: clamped before the cast to
+    // int, which would overflow (and is undefined) beyond the vertex range anyway.
     const auto range = [&](double c, int& lo, int& hi) {
-      lo = std::max(0, static_cast<int>(std::ceil((c - half_cell) / step)));
-      hi = std::min(m, static_cast<int>(std::floor((c + half_cell) / step)));
+      const auto vertex = [&](double at) { return std::clamp(at / step, -1.0, m + 1.0); };
+      lo = std::max(0, static_cast<int>(std::ceil(vertex(c - half_cell))));
+      hi = std::min(m, static_cast<int>(std::floor(vertex(c + half_cell))));
     };
     int a0, a1, b0, b1;
     range(x, a0, a1);

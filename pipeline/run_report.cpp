@@ -123,17 +123,19 @@ nlohmann::json meshesJson(const Scene& scene, const std::vector<MeshStats>& stat
 
 namespace {
 
-// "pn against quadric_fit" for each distinct pair of the scene's meshes.
+// "pn against quadric_fit, nagata" for each distinct surface of the scene's meshes.
 std::string comparedSurfaces(const Scene& scene) {
   std::vector<std::string> pairs;
   for (const ObjectSpec& o : scene.objects) {
     if (!o.mesh) continue;
-    const std::string pair = std::string(toString(o.mesh->surface)) + " against " +
-                             toString(alternativeSurface(o.mesh->surface));
+    std::string pair = std::string(toString(o.mesh->surface)) + " against ";
+    const std::vector<MeshSurface> others = alternativeSurfaces(o.mesh->surface);
+    for (std::size_t k = 0; k < others.size(); ++k)
+      pair += (k ? ", " : "") + std::string(toString(others[k]));
     if (std::find(pairs.begin(), pairs.end(), pair) == pairs.end()) pairs.push_back(pair);
   }
   std::string list;
-  for (const std::string& p : pairs) list += (list.empty() ? "" : ", ") + p;
+  for (const std::string& p : pairs) list += (list.empty() ? "" : "; ") + p;
   return list;
 }
 
@@ -155,6 +157,8 @@ nlohmann::json surfaceCheckJson(const Scene& scene, const SurfaceModelCheck& che
     probes.push_back({{"where", p.where},
                       {"at_m", {p.at_m.x, p.at_m.y, p.at_m.z}},
                       {"irradiance_w_m2", p.irradiance_w_m2},
+                      {"alternative", p.alternative.empty() ? nlohmann::json(nullptr)
+                                                            : nlohmann::json(p.alternative)},
                       {"alternative_w_m2", p.alternative_w_m2},
                       {"relative_change", changeJson(p.relativeChange())}});
   }
@@ -176,7 +180,11 @@ void printSurfaceCheck(std::ostream& err, const Scene& scene, const SurfaceModel
                                         return a.relativeChange() < b.relativeChange();
                                       });
   const double change = worst->relativeChange();
-  err << "the other surface changes " << worst->where << " by "
+  if (worst->alternative.empty()) {
+    err << "no other surface converged at the brightest observers\n";
+    return;
+  }
+  err << worst->alternative << " changes " << worst->where << " by "
       << (std::isfinite(change) ? formatNumber("%.2g", 100.0 * change) + " %" : "all it sees")
       << (check.probes.size() > 1 ? " (the most of " + std::to_string(check.probes.size()) + ")"
                                   : std::string())

@@ -8,20 +8,23 @@
 
 namespace glint {
 
-MeshSurface alternativeSurface(MeshSurface surface) {
+std::vector<MeshSurface> alternativeSurfaces(MeshSurface surface) {
   switch (surface) {
     case MeshSurface::PN:
-    case MeshSurface::Nagata:
     case MeshSurface::PNVlachos:
-      return MeshSurface::QuadricFit;
+      return {MeshSurface::QuadricFit, MeshSurface::Nagata};
+    case MeshSurface::Nagata:
+      return {MeshSurface::PN, MeshSurface::QuadricFit};
     case MeshSurface::QuadricFit:
+      return {MeshSurface::PN, MeshSurface::Nagata};
     case MeshSurface::Flat:
       break;
   }
-  return MeshSurface::PN;
+  return {MeshSurface::PN};
 }
 
 double SurfaceProbe::relativeChange() const {
+  if (alternative.empty()) return 0.0;
   if (irradiance_w_m2 > 0.0) return std::abs(alternative_w_m2 / irradiance_w_m2 - 1.0);
   return alternative_w_m2 > 0.0 ? std::numeric_limits<double>::infinity() : 0.0;
 }
@@ -29,12 +32,11 @@ double SurfaceProbe::relativeChange() const {
 SurfaceModelCheck checkSurfaceModel(const Scene& scene, const FacetIntegrator& integrator,
                                     const std::vector<std::pair<std::string, Vec3>>& probes) {
   SurfaceModelCheck check;
-  Scene alternative = scene;  // the meshes themselves are shared, not copied
-  std::size_t triangles = 0;
-  for (ObjectSpec& o : alternative.objects) {
+  std::size_t triangles = 0, alternatives = 0;
+  for (const ObjectSpec& o : scene.objects) {
     if (!o.mesh) continue;
-    o.mesh->surface = alternativeSurface(o.mesh->surface);
     triangles += o.mesh->mesh->triangles.size();
+    alternatives = std::max(alternatives, alternativeSurfaces(o.mesh->surface).size());
   }
   if (triangles == 0) {
     check.skipped = "no mesh";
@@ -43,21 +45,36 @@ SurfaceModelCheck checkSurfaceModel(const Scene& scene, const FacetIntegrator& i
   if (triangles > kSurfaceCheckMaxTriangles) {
     check.skipped = std::to_string(triangles) + " triangles: over the check's " +
                     std::to_string(kSurfaceCheckMaxTriangles) +
-                    " (a second target would double the run's largest allocation)";
+                    " (each other surface's target would double the run's largest allocation)";
     return check;
   }
   IntegratorWorkspace ws;
   for (const auto& [where, at_m] : probes) {
-    SurfaceProbe p{where, at_m, integrator.adaptive(at_m, ws).irradiance_w_m2, 0.0};
+    SurfaceProbe p{where, at_m, integrator.adaptive(at_m, ws).irradiance_w_m2, 0.0, ""};
     if (p.irradiance_w_m2 > 0.0) check.probes.push_back(p);
   }
   if (check.probes.empty()) {
     check.skipped = "no observer of the run sees the target";
     return check;
   }
-  const FacetIntegrator other(buildTarget(alternative), integrator.beam(), integrator.options());
-  for (SurfaceProbe& p : check.probes) {
-    p.alternative_w_m2 = other.adaptive(p.at_m, ws).irradiance_w_m2;
+  for (std::size_t k = 0; k < alternatives; ++k) {
+    Scene other = scene;  // the meshes themselves are shared, not copied
+    std::string name;
+    for (ObjectSpec& o : other.objects) {
+      if (!o.mesh) continue;
+      const std::vector<MeshSurface> list = alternativeSurfaces(o.mesh->surface);
+      o.mesh->surface = list[std::min(k, list.size() - 1)];
+      if (name.empty()) name = toString(o.mesh->surface);
+    }
+    const FacetIntegrator alternative(buildTarget(other), integrator.beam(), integrator.options());
+    for (SurfaceProbe& p : check.probes) {
+      const ObserverResult r = alternative.adaptive(p.at_m, ws);
+      if (!r.converged) continue;  // its answer is not one: no estimate of the mesh's error
+      const SurfaceProbe candidate{p.where, p.at_m, p.irradiance_w_m2, r.irradiance_w_m2, name};
+      if (p.alternative.empty() || candidate.relativeChange() > p.relativeChange()) p = candidate;
+    }
+  }
+  for (const SurfaceProbe& p : check.probes) {
     check.max_relative_change = std::max(check.max_relative_change, p.relativeChange());
   }
   return check;

@@ -19,18 +19,25 @@
 
 namespace glint {
 
-/// @brief The surface a mesh is compared with: the quadric fit for PN triangles and Nagata
-/// patches (the paper's surface from the same vertices and normals, fitted facet by facet),
-/// PN triangles for the quadric fit and flat facets.
-MeshSurface alternativeSurface(MeshSurface surface);
+/// @brief The surfaces a mesh is compared with, built from the same vertices and normals in
+/// other ways: the quadric fit (facet by facet, PN where a fit fails) and Nagata patches for PN
+/// triangles; PN and one of those for the others; PN for flat facets. Each can fail where the
+/// other holds (the fit falls back to PN on thin cylinders' long facets, where it is PN again;
+/// Nagata bulges where neighbouring normals are nearly parallel), so the check takes the
+/// largest change among those that converge.
+std::vector<MeshSurface> alternativeSurfaces(MeshSurface surface);
 
-/// @brief One observer at which the two surfaces are compared.
+/// @brief One observer at which the surfaces are compared.
 struct SurfaceProbe {
-  std::string where;              ///< e.g. "the observer box's peak"
-  Vec3 at_m{0.0};                 ///< world position
-  double irradiance_w_m2 = 0.0;   ///< with the meshes' own surfaces
-  double alternative_w_m2 = 0.0;  ///< with alternativeSurface() for every mesh
-  /// |alternative / irradiance − 1|; 0 where both are 0, +∞ where only the alternative is lit.
+  std::string where;             ///< e.g. "the box's peak"
+  Vec3 at_m{0.0};                ///< world position
+  double irradiance_w_m2 = 0.0;  ///< with the meshes' own surfaces
+  /// With the alternative surfaces (alternativeSurfaces()) that changed it most, of those that
+  /// converged here; `alternative` names it for the first mesh ("" where none converged).
+  double alternative_w_m2 = 0.0;
+  std::string alternative;
+  /// |alternative / irradiance − 1|; 0 where both are 0 or no alternative converged, +∞ where
+  /// only the alternative is lit.
   [[nodiscard]] double relativeChange() const;
 };
 
@@ -42,14 +49,15 @@ struct SurfaceModelCheck {
   double max_relative_change = 0.0;  ///< over the probes
 };
 
-/// @brief Meshes whose triangles together exceed this are not checked: the alternative target
+/// @brief Meshes whose triangles together exceed this are not checked: each alternative target
 /// would double the run's largest allocation.
 inline constexpr std::size_t kSurfaceCheckMaxTriangles = 1'000'000;
 
 /// @brief Integrates each probe (a label and a world position) with @p integrator, the run's,
-/// and again with every mesh of @p scene rebuilt on alternativeSurface() under the same beam and
-/// options. Probes that see nothing are dropped. Skipped (SurfaceModelCheck::skipped) for a
-/// scene without meshes, without a lit probe, or with more than kSurfaceCheckMaxTriangles.
+/// and again with every mesh of @p scene rebuilt on each of alternativeSurfaces() under the
+/// same beam and options. Probes that see nothing are dropped; an alternative's value at a probe
+/// counts only where it converged. Skipped (SurfaceModelCheck::skipped) for a scene without
+/// meshes, without a lit probe, or with more than kSurfaceCheckMaxTriangles.
 SurfaceModelCheck checkSurfaceModel(const Scene& scene, const FacetIntegrator& integrator,
                                     const std::vector<std::pair<std::string, Vec3>>& probes);
 

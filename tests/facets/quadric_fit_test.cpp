@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <utility>
+
 #include "facets/tessellate.h"
 
 namespace glint {
@@ -89,6 +91,26 @@ TEST(QuadricFit, OpposedNormalsAreRefused) {
   f.n[1] = -f.n[1];
   const QuadricFit fit = fitQuadric(f.p, f.n);
   EXPECT_NE(fit.status, QuadricFitStatus::Ok) << "rank gap " << fit.rank_gap;
+}
+
+TEST(QuadricFit, AFitWhoseNormalsNoConeBoundsIsRefused) {
+  // Facets of a cylinder of radius 0.15 m with its exact normals: a short one is fitted; one
+  // 0.6 m long is not, because over a ball that large the gradient of the fitted quadric (that
+  // of the cylinder, up to the chord plane's z² term) may vanish by its Lipschitz bound
+  // (2 L r ≥ |∇Q|): no normal cone could bound it, and observers would refine it blind.
+  const double r = 0.15;
+  auto on = [&](double phi, double z) {
+    return std::pair{Vec3(r * std::cos(phi), r * std::sin(phi), z),
+                     Vec3(std::cos(phi), std::sin(phi), 0.0)};
+  };
+  for (const auto& [length, expected] :
+       {std::pair{0.05, QuadricFitStatus::Ok}, std::pair{0.6, QuadricFitStatus::Unbounded}}) {
+    const auto [p0, n0] = on(0.0, 0.0);
+    const auto [p1, n1] = on(0.3, 0.0);
+    const auto [p2, n2] = on(0.15, length);
+    const QuadricFit fit = fitQuadric({p0, p1, p2}, {n0, n1, n2});
+    EXPECT_EQ(fit.status, expected) << "facet " << length << " m long: " << toString(fit.status);
+  }
 }
 
 }  // namespace

@@ -196,6 +196,55 @@ TEST(Examples, UnconvergedPointsWarnOnlyWhereTheirBoundReachesTheMpe) {
   }
 }
 
+TEST(Examples, TheCarBodyWithoutNormalsGlintsOnEverySurface) {
+  // examples/targets/car_body.glb has no normals: they come from its faces, smooth within the
+  // 30° crease angle and split across its sharper edges. PN triangles, the quadric fit and flat
+  // facets must give each observer a finite, converged irradiance, and the curved two must
+  // agree on the brightest observer to within what the mesh's coarseness allows (its 1 458
+  // triangles: the surface check says 0.4 %; 25 % leaves room for the glint's curvature, which
+  // computed normals fix only to first order). The quadric fit used to refine every observer
+  // to the depth limit and report 0 here (fits whose gradient may vanish within the facet: now
+  // refused, QuadricFitStatus::Unbounded). Nagata patches still bulge on this body (README,
+  // "Meshes"), so they are not asked to.
+  const nlohmann::json scene = {
+      {"laser",
+       {{"position", {-40, -30, 8}},
+        {"direction", {40, 30, -7}},
+        {"power_w", 2000.0},
+        {"wavelength_nm", 1064},
+        {"beam", {{"profile", "gaussian"}, {"w_m", 2.0}}}}},
+      {"materials",
+       {{"paint", {{"specular_reflectance", 0.5}, {"sigma", 0.05}, {"diffuse_reflectance", 0.1}}}}},
+      {"objects", {{{"shape", "mesh"}, {"file", "targets/car_body.glb"}, {"material", "paint"}}}}};
+  std::vector<Vec3> observers;
+  for (int i = 0; i < 12; ++i) {
+    const double a = -2.6 + 0.1 * i;  // a fan of directions back toward the laser's side
+    observers.push_back(Vec3(20.0 * std::cos(a), 20.0 * std::sin(a), 1.0 + 0.5 * i));
+  }
+  std::vector<double> brightest;
+  std::size_t peak = 0;
+  for (const char* surface : {"pn", "quadric_fit", "flat"}) {
+    nlohmann::json s = scene;
+    s["objects"][0]["surface"] = surface;
+    const Scene parsed = parseScene(s.dump(), "car.json", GLINT_EXAMPLES_DIR);
+    ASSERT_GT(parsed.objects[0].mesh->normals_computed, 0u) << "the file gives no normals";
+    const FacetIntegrator fi(buildTarget(parsed), beamOf(parsed), integratorOptions(parsed));
+    const auto results = evaluatePoints(fi, observers, PointScheme{});
+    double lit = 0.0;
+    for (std::size_t k = 0; k < results.size(); ++k) {
+      EXPECT_TRUE(std::isfinite(results[k].irradiance_w_m2)) << surface << " observer " << k;
+      EXPECT_TRUE(results[k].converged) << surface << " observer " << k;
+      if (std::string(surface) == "pn" &&
+          results[k].irradiance_w_m2 > results[peak].irradiance_w_m2)
+        peak = k;
+      lit += results[k].irradiance_w_m2;
+    }
+    EXPECT_GT(lit, 0.0) << surface << ": the car's flank faces the observers";
+    brightest.push_back(results[peak].irradiance_w_m2);
+  }
+  EXPECT_NEAR(brightest[1] / brightest[0], 1.0, 0.25) << "quadric_fit against pn";
+}
+
 TEST(Examples, FinnedMissileRunsThroughGlintRun) {
   const std::filesystem::path out =
       std::filesystem::temp_directory_path() / "glint_finned_missile_run";
@@ -214,9 +263,9 @@ TEST(Examples, FinnedMissileRunsThroughGlintRun) {
   EXPECT_GT(summary["planes"][0]["peak_hazard_ratio"].get<double>(), 1.0);
   EXPECT_TRUE(std::filesystem::exists(out / "eye_level.exr"));
   // The mesh's surface checked at the plane's brightest point: the same integration as the
-  // plane's there, and the quadric fit a few percent off (the mesh has 2 064 triangles).
+  // plane's there, and the other surfaces a little off (the mesh has 2 064 triangles).
   const auto& check = summary["surface_check"];
-  EXPECT_EQ(check["compared"], "pn against quadric_fit") << check.dump();
+  EXPECT_EQ(check["compared"], "pn against quadric_fit, nagata") << check.dump();
   ASSERT_EQ(check["probes"].size(), 1u) << check.dump();
   const auto& probe = check["probes"][0];
   EXPECT_EQ(probe["where"], "plane eye_level's peak");
@@ -224,9 +273,13 @@ TEST(Examples, FinnedMissileRunsThroughGlintRun) {
                   summary["planes"][0]["peak_irradiance_w_m2"].get<double>(),
               1.0, 1e-6)
       << "the probe is the plane's peak, integrated at the plane's accuracy";
+  // The body is a cylinder with its exporter's normals, where every surface converges at second
+  // order: they agree on the plane's peak to 2e-5 (a quadric fit that bulged on its long facets
+  // once made it 3.8 %: now refused, QuadricFitStatus::Unbounded).
+  EXPECT_FALSE(probe["alternative"].is_null()) << "an other surface converged there";
   const double change = check["max_relative_change"].get<double>();
-  EXPECT_GT(change, 1e-4) << "two surfaces of 2 064 triangles never agree to the bit";
-  EXPECT_LT(change, 0.1) << "nor by more than the mesh's own coarseness allows";
+  EXPECT_GE(change, 0.0);
+  EXPECT_LT(change, 1e-3) << check.dump();
   std::filesystem::remove_all(out);
 }
 

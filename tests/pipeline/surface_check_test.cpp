@@ -38,10 +38,14 @@ Scene sphereScene(int level, bool analytic) {
 }
 
 TEST(SurfaceCheck, ComparesEachSurfaceWithAnotherBuiltFromTheSameVertices) {
-  EXPECT_EQ(alternativeSurface(MeshSurface::PN), MeshSurface::QuadricFit);
-  EXPECT_EQ(alternativeSurface(MeshSurface::Nagata), MeshSurface::QuadricFit);
-  EXPECT_EQ(alternativeSurface(MeshSurface::QuadricFit), MeshSurface::PN);
-  EXPECT_EQ(alternativeSurface(MeshSurface::Flat), MeshSurface::PN);
+  using S = std::vector<MeshSurface>;
+  EXPECT_EQ(alternativeSurfaces(MeshSurface::PN),
+            (S{MeshSurface::QuadricFit, MeshSurface::Nagata}));
+  EXPECT_EQ(alternativeSurfaces(MeshSurface::Nagata),
+            (S{MeshSurface::PN, MeshSurface::QuadricFit}));
+  EXPECT_EQ(alternativeSurfaces(MeshSurface::QuadricFit),
+            (S{MeshSurface::PN, MeshSurface::Nagata}));
+  EXPECT_EQ(alternativeSurfaces(MeshSurface::Flat), S{MeshSurface::PN});
 }
 
 TEST(SurfaceCheck, SaysWhyItWasNotMade) {
@@ -57,9 +61,9 @@ TEST(SurfaceCheck, SaysWhyItWasNotMade) {
 }
 
 TEST(SurfaceCheck, IsAtLeastTheMeshErrorOnASphereAndFallsWithTheTessellation) {
-  // Observers in the glint's own directions. The default surface (PN) is the more accurate of
-  // the two on a sphere, so the change to the quadric fit is mostly the fit's own error: at
-  // least PN's, and falling with the edge length as both do.
+  // Observers in the glint's own directions. The default surface (PN) is the most accurate of
+  // the three on a sphere, so the change to the others is mostly their own error: at least
+  // PN's, and falling with the edge length as all do.
   const Scene analytic = sphereScene(0, true);
   const FacetIntegrator exact(buildTarget(analytic), beamOf(analytic), integratorOptions(analytic));
   const std::vector<Vec3> observers =
