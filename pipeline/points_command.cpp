@@ -36,8 +36,8 @@ std::size_t brightest(std::span<const ObserverResult> results) {
 
 void printSummary(std::ostream& err, const PointsArgs& args, const Scene& scene,
                   const FacetIntegrator& integrator, std::span<const Vec3> points,
-                  std::span<const ObserverResult> results, double seconds, int threads,
-                  const SurfaceModelCheck* surface_check) {
+                  std::span<const ObserverResult> results, std::size_t peak, double seconds,
+                  int threads, const SurfaceModelCheck* surface_check) {
   const HazardSpec& hazard = scene.hazard;
   const IntegratorOptions& opt = integrator.options();
   const CullStats& cull = integrator.cullStats();
@@ -50,7 +50,6 @@ void printSummary(std::ostream& err, const PointsArgs& args, const Scene& scene,
     unconverged += r.converged ? 0 : 1;
     depth_limited += r.depth_limited ? 1 : 0;
   }
-  const std::size_t peak = brightest(results);
   const std::string scheme = args.uniform_level
                                  ? "uniform twin, level " + std::to_string(*args.uniform_level)
                                  : "adaptive, tolerance " + formatNumber("%g", opt.tolerance) +
@@ -184,13 +183,12 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   if (args.quiet) return;
   // The meshes' surface model, checked where it matters most: at the brightest observer.
   std::optional<SurfaceModelCheck> surface_check;
-  const bool has_meshes = scene.hasMeshes();
-  if (has_meshes && !args.uniform_level && !points.empty()) {
-    const std::size_t peak = brightest(results);
+  const std::size_t peak = brightest(results);
+  if (scene.hasMeshes() && !args.uniform_level && !points.empty()) {
     surface_check =
         checkSurfaceModel(scene, integrator, {{"row " + std::to_string(peak + 1), points[peak]}});
   }
-  printSummary(err, args, scene, integrator, points, results, seconds, threads,
+  printSummary(err, args, scene, integrator, points, results, peak, seconds, threads,
                surface_check ? &*surface_check : nullptr);
 }
 
