@@ -147,7 +147,39 @@ void sweepOnce(const std::filesystem::path& folder) {
   removeStaleTemporaries(folder);
 }
 
+// Refuses a target that exists and is not a regular file (see the class's comment).
+void requireReplaceable(const std::filesystem::path& target) {
+  if (const auto kind = nonRegularKind(target)) {
+    throw OutputError(target.string() + " is " + *kind +
+                      ", not a regular file: glint writes only regular files and never "
+                      "replaces anything else; name a new or regular file");
+  }
+}
+
 }  // namespace
+
+std::optional<std::string> nonRegularKind(const std::filesystem::path& path) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0) return std::nullopt;  // nothing there (or unreachable)
+  switch (st.st_mode & S_IFMT) {
+    case S_IFREG:
+      return std::nullopt;
+    case S_IFCHR:
+      return "a character device";
+    case S_IFBLK:
+      return "a block device";
+    case S_IFIFO:
+      return "a FIFO";
+    case S_IFSOCK:
+      return "a socket";
+    case S_IFDIR:
+      return "a folder";
+    case S_IFLNK:
+      return "a symbolic link";
+    default:
+      return "not a regular file";
+  }
+}
 
 // A streambuf over a file descriptor that remembers whether any write failed.
 struct AtomicFile::Stream {
@@ -205,6 +237,7 @@ struct AtomicFile::Stream {
 };
 
 AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)) {
+  requireReplaceable(target_);
   // Same folder as the target, so the final rename never crosses file systems.
   std::filesystem::path folder = target_.parent_path();
   if (folder.empty()) folder = ".";
@@ -240,26 +273,26 @@ void AtomicFile::commit() {
   const bool written = static_cast<bool>(out_->out) && !out_->buf.failed();
   const bool closed = ::close(out_->fd) == 0;
   out_->fd = -1;
-  if (!written || !closed) {
-    awaitInterruptExit();
-    std::error_code ignored;
-    std::filesystem::remove(temporary_, ignored);
-    unregisterTemporary(slot_);
-    committed_ = true;  // nothing left for the destructor
-    throw OutputError("cannot write " + target_.string());
+  if (!written || !closed) abandon("cannot write " + target_.string());
+  // Again at the last moment: a FIFO or a link may have appeared while the run computed.
+  if (const auto kind = nonRegularKind(target_)) {
+    abandon(target_.string() + " became " + *kind +
+            " while glint ran; it was left as it is and nothing was written there");
   }
   std::error_code ec;
   std::filesystem::rename(temporary_, target_, ec);
-  if (ec) {
-    awaitInterruptExit();
-    std::error_code ignored;
-    std::filesystem::remove(temporary_, ignored);
-    unregisterTemporary(slot_);
-    committed_ = true;
-    throw OutputError("cannot write " + target_.string() + ": " + ec.message());
-  }
+  if (ec) abandon("cannot write " + target_.string() + ": " + ec.message());
   unregisterTemporary(slot_);
   committed_ = true;
+}
+
+void AtomicFile::abandon(const std::string& message) {
+  awaitInterruptExit();
+  std::error_code ignored;
+  std::filesystem::remove(temporary_, ignored);
+  unregisterTemporary(slot_);
+  committed_ = true;  // nothing left for the destructor
+  throw OutputError(message);
 }
 
 void installInterruptCleanup() {

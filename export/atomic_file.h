@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <ostream>
 #include <stdexcept>
 #include <string>
@@ -27,11 +28,15 @@ class OutputError : public std::runtime_error {
 ///   O_NOFOLLOW under an unpredictable name (`.<name>.glint-<pid>-<random>`), so a link planted
 ///   in advance can neither redirect the write nor be followed; rename() then replaces the
 ///   target itself, never a file a link at the target points to.
+/// - Never replaces what is not a regular file: a target that exists as a device, FIFO,
+///   socket, folder or symbolic link is refused, when constructed and again just before the
+///   rename (rename() would put a file where `/dev/null` or a user's link was).
 /// - A process killed outright (SIGKILL) leaves its temporaries; the next AtomicFile in that
 ///   folder removes those whose process is gone.
 class AtomicFile {
  public:
-  /// @throw OutputError when the temporary cannot be created (missing folder, permissions).
+  /// @throw OutputError when the target exists and is not a regular file, or when the
+  /// temporary cannot be created (missing folder, permissions).
   explicit AtomicFile(std::filesystem::path target);
   ~AtomicFile();
   AtomicFile(const AtomicFile&) = delete;
@@ -48,6 +53,10 @@ class AtomicFile {
   [[nodiscard]] const std::filesystem::path& temporaryPath() const { return temporary_; }
 
  private:
+  // Removes the temporary and throws OutputError(message), after an interrupt's exit if one
+  // is under way.
+  [[noreturn]] void abandon(const std::string& message);
+
   struct Stream;
   std::filesystem::path target_;
   std::filesystem::path temporary_;
@@ -55,6 +64,11 @@ class AtomicFile {
   int slot_ = -1;  // in the interrupt cleanup's registry
   bool committed_ = false;
 };
+
+/// @brief What @p path is when it exists and is not a regular file ("a character device", "a
+/// FIFO", "a folder", "a symbolic link", ...; a link is not followed), else nothing: the
+/// paths an output must never replace.
+std::optional<std::string> nonRegularKind(const std::filesystem::path& path);
 
 /// @brief Installs handlers for SIGINT, SIGTERM and SIGHUP that remove every uncommitted
 /// AtomicFile temporary, say so on standard error and exit with 128 + the signal's number

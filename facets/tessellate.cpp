@@ -240,6 +240,23 @@ std::size_t fillNormals(TriangleMesh& mesh, double crease_angle_rad) {
   return filled;
 }
 
+std::optional<Vec3> usableTriangleNormal(const std::array<Vec3, 3>& corners_m) {
+  for (const Vec3& p : corners_m) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return std::nullopt;
+  }
+  return tryNormalize(glm::cross(corners_m[1] - corners_m[0], corners_m[2] - corners_m[0]));
+}
+
+std::size_t usableTriangles(const TriangleMesh& mesh) {
+  std::size_t usable = 0;
+  for (const auto& tri : mesh.triangles) {
+    const std::array<Vec3, 3> p = {mesh.positions_m.at(tri[0]), mesh.positions_m.at(tri[1]),
+                                   mesh.positions_m.at(tri[2])};
+    if (usableTriangleNormal(p)) ++usable;
+  }
+  return usable;
+}
+
 MeshStats addMesh(Target& target, const Vec3& origin_m, std::uint32_t material,
                   const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
                   const std::vector<std::array<std::uint32_t, 3>>& triangles, MeshSurface surface) {
@@ -261,15 +278,11 @@ MeshStats addMesh(Target& target, const Vec3& origin_m, std::uint32_t material,
   faces.reserve(mesh.triangles.size());
   for (const auto& tri : mesh.triangles) {
     Face f{tri, {}, {}};
-    bool finite = true;
     for (int i = 0; i < 3; ++i) {
       f.p[i] = mesh.positions_m.at(tri[i]);
       f.n[i] = mesh.normals.at(tri[i]);
-      finite =
-          finite && std::isfinite(f.p[i].x) && std::isfinite(f.p[i].y) && std::isfinite(f.p[i].z);
     }
-    const auto face =
-        finite ? tryNormalize(glm::cross(f.p[1] - f.p[0], f.p[2] - f.p[0])) : std::nullopt;
+    const auto face = usableTriangleNormal(f.p);
     if (!face) {
       ++stats.degenerate_dropped;
       continue;

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "facets/target.h"
@@ -81,6 +82,13 @@ struct TriangleMesh {
 /// vertices, one per position and normal (shared by the corners that agree).
 /// @return the number of corners given a normal.
 std::size_t fillNormals(TriangleMesh& mesh, double crease_angle_rad);
+
+/// @brief The unit normal of triangle @p corners_m (counter-clockwise from outside), or
+/// nothing for one that has zero area or a non-finite corner: the triangles addMesh() drops.
+std::optional<Vec3> usableTriangleNormal(const std::array<Vec3, 3>& corners_m);
+
+/// @brief How many of @p mesh's triangles addMesh() would keep.
+std::size_t usableTriangles(const TriangleMesh& mesh);
 
 /// @brief What happened to a mesh's triangles: counts for the run summary.
 struct MeshStats {

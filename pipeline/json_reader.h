@@ -137,8 +137,12 @@ class ObjectReader {
   // A direction: any non-zero length, returned normalised.
   Vec3 direction(const std::string& key) {
     const Vec3 v = vec3(key);
-    const auto unit = tryNormalize(v);
-    if (!unit) fail(key, "must not be zero-length");
+    // Scaled by its largest component first: [1e300, 1e300, 0] is a direction, whose length
+    // alone would overflow, and [1e-310, 0, 0] one whose square would underflow.
+    const double largest = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+    if (!(largest > 0.0)) fail(key, "must not be zero-length (all three components are 0)");
+    const auto unit = tryNormalize(v / largest);
+    if (!unit) fail(key, "must be a direction of finite, non-zero length");
     return *unit;
   }
 

@@ -14,6 +14,7 @@
 #include "export/atomic_file.h"
 #include "export/points_csv.h"
 #include "observers/point_set.h"
+#include "pipeline/input_files.h"
 #include "pipeline/memory_budget.h"
 #include "pipeline/points_file.h"
 #include "pipeline/progress.h"
@@ -129,9 +130,21 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   IntegratorOptions options = integratorOptions(scene);
   if (args.tolerance) options.tolerance = *args.tolerance;
 
-  // Open the output first: a missing folder should stop the run before the work, not after.
+  // Open the output first: a missing folder, a device or an input named as the output should
+  // stop the run before the work, not after.
   std::unique_ptr<AtomicFile> file;
-  if (args.out_path != "-") file = std::make_unique<AtomicFile>(args.out_path);
+  if (args.out_path != "-") {
+    if (const auto kind = nonRegularKind(args.out_path)) {
+      throw OutputError(args.out_path + " is " + *kind +
+                        ", not a regular file: glint never replaces one; name a new or regular "
+                        "file, or write to standard output with --out -");
+    }
+    InputFiles inputs;
+    inputs.addScene(args.scene_path, scene);
+    inputs.add(args.points_path, "points file");
+    inputs.requireNotAnInput(args.out_path);
+    file = std::make_unique<AtomicFile>(args.out_path);
+  }
   if (file) pauseForTestsAfterTemporaries(err);
 
   std::unique_ptr<tbb::global_control> thread_limit;

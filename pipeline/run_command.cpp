@@ -16,6 +16,7 @@
 #include "export/vtk_files.h"
 #include "glint/version.h"
 #include "pipeline/input_error.h"
+#include "pipeline/input_files.h"
 #include "pipeline/json_reader.h"
 #include "pipeline/memory_budget.h"
 #include "pipeline/output_names.h"
@@ -202,7 +203,10 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     dir = std::filesystem::path("out") / (std::filesystem::path(args.scene_path).stem().string() +
                                           (args.uniform ? "_uniform" : ""));
   }
+  InputFiles inputs;
+  inputs.addScene(args.scene_path, scene);
   if (writer) {
+    inputs.requireNotHeldBy(dir);
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) throw OutputError(dir.string() + ": cannot create the output folder: " + ec.message());
@@ -214,6 +218,7 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   auto open = [&](const std::string& name) -> AtomicFile* {
     written.push_back(name);
     if (!writer) return nullptr;
+    inputs.requireNotAnInput(dir / name);  // a hard link to an input, named otherwise
     files.push_back(std::make_unique<AtomicFile>(dir / name));
     return files.back().get();
   };

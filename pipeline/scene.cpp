@@ -270,6 +270,13 @@ MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder, const Gl
   if (t.scale.x * t.scale.y * t.scale.z < 0.0) {
     for (auto& tri : model.mesh.triangles) std::swap(tri[1], tri[2]);
   }
+  // A target that is not there must not read as a safe one.
+  if (usableTriangles(model.mesh) == 0) {
+    r.fail("file", m.file.string() + ": none of its " +
+                       std::to_string(model.mesh.triangles.size()) +
+                       " triangles is usable (each has zero area or a non-finite corner, as "
+                       "transformed), so there is no target to judge");
+  }
   m.normals_computed = fillNormals(model.mesh, m.crease_angle_deg * kPi / 180.0);
   m.primitives_skipped = model.primitives_skipped;
   m.mirrored_instances = model.mirrored_instances;

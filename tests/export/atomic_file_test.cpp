@@ -1,10 +1,11 @@
 // Output files in a folder others may write to: the temporary cannot be predicted or
-// redirected, a link at the target is replaced rather than followed, and temporaries of
-// processes that died are swept.
+// redirected, a target that is not a regular file (a link, a device, a FIFO) is refused
+// rather than replaced or followed, and temporaries of processes that died are swept.
 #include "export/atomic_file.h"
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -61,19 +62,69 @@ TEST(AtomicFile, TemporaryIsANewFileUnderAnUnpredictableName) {
   }
 }
 
-TEST(AtomicFile, ALinkAtTheTargetIsReplacedNotFollowed) {
+TEST(AtomicFile, ALinkAtTheTargetIsRefusedNeitherFollowedNorReplaced) {
   // Someone who can write to a shared output folder plants summary.json → a file of the user's
-  // elsewhere. glint must replace the link, not write through it.
+  // elsewhere; or the user's own link stands there. glint writes through neither and leaves
+  // the link as it is.
   const fs::path dir = freshFolder("link");
   const fs::path outside = freshFolder("link_outside") / "precious.txt";
   std::ofstream(outside) << "keep me";
   fs::create_symlink(outside, dir / "summary.json");
-  AtomicFile f(dir / "summary.json");
-  f.stream() << "{}";
-  f.commit();
-  EXPECT_FALSE(fs::is_symlink(dir / "summary.json")) << "the link itself was replaced";
-  EXPECT_EQ(contents(dir / "summary.json"), "{}");
-  EXPECT_EQ(contents(outside), "keep me") << "the file the link pointed to is untouched";
+  try {
+    AtomicFile f(dir / "summary.json");
+    ADD_FAILURE() << "a link at the target was accepted";
+  } catch (const OutputError& e) {
+    EXPECT_NE(std::string(e.what()).find("summary.json is a symbolic link, not a regular file"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_TRUE(fs::is_symlink(dir / "summary.json")) << "the link itself stays";
+  EXPECT_EQ(contents(outside), "keep me") << "the file the link points to is untouched";
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1)
+      << "no temporary was left beside the link";
+  fs::remove_all(dir);
+  fs::remove_all(outside.parent_path());
+}
+
+// The kinds of file rename() would replace by a regular one: each made in the test's own
+// folder (the character device is /dev/null's numbers, 1:3, so nothing reads or writes a real
+// device if the refusal failed; root may mknod).
+TEST(AtomicFile, ADeviceFifoOrFolderAtTheTargetIsRefusedAndStays) {
+  const fs::path dir = freshFolder("special");
+  ASSERT_EQ(::mknod((dir / "null").c_str(), S_IFCHR | 0666, ::makedev(1, 3)), 0)
+      << "mknod needs root, which the tests run as";
+  ASSERT_EQ(::mkfifo((dir / "fifo").c_str(), 0666), 0);
+  fs::create_directory(dir / "folder");
+  const std::pair<const char*, const char*> cases[] = {
+      {"null", "a character device"}, {"fifo", "a FIFO"}, {"folder", "a folder"}};
+  for (const auto& [name, kind] : cases) {
+    try {
+      AtomicFile f(dir / name);
+      ADD_FAILURE() << name << " was accepted as an output";
+    } catch (const OutputError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string(name) + " is " + kind), std::string::npos)
+          << e.what();
+    }
+  }
+  struct stat st {};
+  ASSERT_EQ(::lstat((dir / "null").c_str(), &st), 0);
+  EXPECT_TRUE(S_ISCHR(st.st_mode)) << "the device node is still a device";
+  EXPECT_TRUE(fs::is_fifo(dir / "fifo"));
+  EXPECT_TRUE(fs::is_directory(dir / "folder"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 3)
+      << "no temporary was left";
+  fs::remove_all(dir);
+}
+
+TEST(AtomicFile, ATargetThatBecomesAFifoDuringTheRunIsLeftAndNothingWritten) {
+  const fs::path dir = freshFolder("late_fifo");
+  AtomicFile f(dir / "out.csv");
+  f.stream() << "x,y,z\n";
+  ASSERT_EQ(::mkfifo((dir / "out.csv").c_str(), 0666), 0);
+  EXPECT_THROW(f.commit(), OutputError) << "the rename would have replaced the FIFO";
+  EXPECT_TRUE(fs::is_fifo(dir / "out.csv"));
+  EXPECT_FALSE(fs::exists(f.temporaryPath())) << "the temporary was removed";
+  fs::remove_all(dir);
 }
 
 TEST(AtomicFile, UncommittedTemporaryIsRemoved) {

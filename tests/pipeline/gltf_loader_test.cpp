@@ -202,6 +202,26 @@ TEST_F(GltfLoader, QuotesNoContentOfAFileThatIsNotGltf) {
   EXPECT_NE(message.find("not a readable glTF model"), std::string::npos) << message;
 }
 
+TEST_F(GltfLoader, AMeshWithNoUsableTriangleIsRefusedNamingTheFileAndTheCount) {
+  // Two triangles, one with three corners on a line and one with a corner repeated: a model
+  // that loads, and leaves no surface to reflect. The run must not read it as a safe target.
+  write("flat", {0, 0, 0, 1, 0, 0, 2, 0, 0, 0, 1, 0}, {0, 1, 2, 0, 3, 3});
+  const json scene = {
+      {"laser",
+       {{"position", {0, 0, 10}},
+        {"direction", {0, 0, -1}},
+        {"power_w", 1.0},
+        {"wavelength_nm", 532},
+        {"beam", {{"profile", "flat_top"}, {"radius_m", 1.0}}}}},
+      {"materials", {{"m", {{"specular_reflectance", 0.5}, {"sigma", 0.1}}}}},
+      {"objects", {{{"shape", "mesh"}, {"file", "model/flat.gltf"}, {"material", "m"}}}}};
+  const std::string message =
+      test::refusalOf([&] { parseScene(scene.dump(), "scene.json", dir_); });
+  EXPECT_NE(message.find("scene.json: /objects/0/file: "), std::string::npos) << message;
+  EXPECT_NE(message.find("flat.gltf: none of its 2 triangles is usable"), std::string::npos)
+      << message;
+}
+
 TEST(GltfExamples, TheExampleTargetsLoadWhole) {
   const fs::path dir = fs::path(GLINT_EXAMPLES_DIR) / "targets";
   const GltfModel capsule = loadGltf(dir / "capsule.glb");

@@ -67,6 +67,19 @@ TEST(Scene, DirectionsAreNormalised) {
   EXPECT_NEAR(s.objects[0].axis.z, 1.0, 1e-15);
 }
 
+TEST(Scene, DirectionsOfAnyRepresentableLengthAreNormalised) {
+  // |v|² of the first overflows a double and of the second underflows to 0; both are still
+  // directions, and the laser's must not be refused as zero-length.
+  json j = minimal();
+  j["laser"]["direction"] = {1e300, 1e300, 0};
+  j["objects"][0]["axis"] = {0, 1e-310, 1e-310};
+  const Scene s = parseScene(j.dump(), "scene.json");
+  EXPECT_NEAR(s.laser.direction.x, std::sqrt(0.5), 1e-15) << "(1e300, 1e300, 0) → (1, 1, 0)/√2";
+  EXPECT_NEAR(s.laser.direction.y, std::sqrt(0.5), 1e-15);
+  EXPECT_NEAR(s.objects[0].axis.y, std::sqrt(0.5), 1e-15) << "subnormal components";
+  EXPECT_NEAR(s.objects[0].axis.z, std::sqrt(0.5), 1e-15);
+}
+
 TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
   struct Case {
     std::function<void(json&)> edit;
@@ -117,11 +130,11 @@ TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
       {[](json& j) {
          j["laser"]["direction"] = {0, 0, 0};
        },
-       "scene.json: /laser/direction: must not be zero-length"},
+       "scene.json: /laser/direction: must not be zero-length (all three components are 0)"},
       {[](json& j) {
          j["objects"][0]["axis"] = {0, 0, 0};
        },
-       "scene.json: /objects/0/axis: must not be zero-length"},
+       "scene.json: /objects/0/axis: must not be zero-length (all three components are 0)"},
       {[](json& j) { j["objects"][0]["material"] = "chrome"; },
        "scene.json: /objects/0/material: no material named \"chrome\" (defined: \"polished\")"},
       {[](json& j) { j["objects"][0]["shape"] = "cone"; },

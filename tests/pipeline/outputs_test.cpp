@@ -1,0 +1,134 @@
+// What an output may replace: never a device, a FIFO or a link (the system's /dev/full was
+// once left a regular file), never one of the command's own inputs, whatever name it is given,
+// and no output folder that holds an input.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "support/cli.h"
+
+namespace glint {
+namespace {
+
+namespace fs = std::filesystem;
+using test::glint;
+using test::Outcome;
+
+std::string readFile(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::size_t entries(const fs::path& dir) {
+  return static_cast<std::size_t>(
+      std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
+}
+
+// A fresh folder per test holding a copy of the cylinder example and one observer.
+class Outputs : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("glint_outputs_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    scene_ = dir_ / "scene.json";
+    fs::copy_file(fs::path(GLINT_EXAMPLES_DIR) / "cylinder.json", scene_);
+    points_ = dir_ / "p.csv";
+    std::ofstream(points_) << "x,y,z\n-3,0,0.1\n";
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  Outcome points(const fs::path& out) const {
+    return glint({"points", scene_.string(), "--points", points_.string(), "--out", out.string(),
+                  "--quiet"});
+  }
+
+  fs::path dir_, scene_, points_;
+};
+
+TEST_F(Outputs, ADeviceFifoOrLinkNamedAsTheOutputIsRefusedAndLeftAsItWas) {
+  // The character device has /dev/null's numbers (1:3), made here, never the system's node.
+  const fs::path device = dir_ / "null";
+  ASSERT_EQ(::mknod(device.c_str(), S_IFCHR | 0666, ::makedev(1, 3)), 0) << "tests run as root";
+  const fs::path fifo = dir_ / "fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0666), 0);
+  const fs::path link = dir_ / "link.csv";
+  fs::create_symlink(dir_ / "elsewhere.csv", link);
+  const std::size_t before = entries(dir_);
+  const std::pair<fs::path, const char*> cases[] = {
+      {device, "a character device"}, {fifo, "a FIFO"}, {link, "a symbolic link"}};
+  for (const auto& [out, kind] : cases) {
+    const Outcome r = points(out);
+    EXPECT_EQ(r.status, 2) << out << ": " << r.err;
+    EXPECT_NE(r.err.find(out.string() + " is " + kind + ", not a regular file"), std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("--out -"), std::string::npos) << "says how to reach standard output";
+  }
+  struct stat st {};
+  ASSERT_EQ(::lstat(device.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISCHR(st.st_mode)) << "the device node is still a device";
+  EXPECT_EQ(::major(st.st_rdev), 1u);
+  EXPECT_EQ(::minor(st.st_rdev), 3u);
+  EXPECT_TRUE(fs::is_fifo(fifo));
+  EXPECT_TRUE(fs::is_symlink(link));
+  EXPECT_FALSE(fs::exists(dir_ / "elsewhere.csv")) << "nothing written through the link";
+  EXPECT_EQ(entries(dir_), before) << "no temporary or other file was left";
+}
+
+TEST_F(Outputs, AnOutputThatIsAnInputIsRefusedWhateverItsName) {
+  const std::string scene_text = readFile(scene_);
+  const std::string points_text = readFile(points_);
+  fs::create_hard_link(points_, dir_ / "hard_link.csv");
+  const std::pair<fs::path, const char*> cases[] = {{points_, "is the points file"},
+                                                    {dir_ / "." / "p.csv", "is the points file"},
+                                                    {dir_ / "hard_link.csv", "is the points file"},
+                                                    {scene_, "is the scene file"}};
+  for (const auto& [out, says] : cases) {
+    const Outcome r = points(out);
+    EXPECT_EQ(r.status, 2) << out << ": " << r.err;
+    EXPECT_NE(r.err.find(out.string() + " " + says), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("never writes over its own input"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(readFile(scene_), scene_text) << "the scene is intact";
+  EXPECT_EQ(readFile(points_), points_text) << "the points file is intact";
+  EXPECT_EQ(readFile(dir_ / "hard_link.csv"), points_text);
+
+  // A mesh the scene names is an input too.
+  const fs::path targets = fs::path(GLINT_EXAMPLES_DIR) / "targets";
+  fs::copy_file(targets / "capsule.glb", dir_ / "capsule.glb");
+  std::string mesh_scene = readFile(fs::path(GLINT_EXAMPLES_DIR) / "finned_missile.json");
+  const std::string from = "\"file\": \"targets/finned_missile.glb\"";
+  ASSERT_NE(mesh_scene.find(from), std::string::npos) << "the example names its mesh";
+  mesh_scene.replace(mesh_scene.find(from), from.size(), "\"file\": \"capsule.glb\"");
+  std::ofstream(scene_) << mesh_scene;
+  const std::string mesh_bytes = readFile(dir_ / "capsule.glb");
+  const Outcome r = points(dir_ / "capsule.glb");
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("capsule.glb is the mesh file"), std::string::npos) << r.err;
+  EXPECT_EQ(readFile(dir_ / "capsule.glb"), mesh_bytes) << "the mesh is intact";
+}
+
+TEST_F(Outputs, RunRefusesAnOutputFolderThatHoldsItsSceneAtAnyDepth) {
+  const std::size_t before = entries(dir_);
+  for (const fs::path& out : {dir_, dir_.parent_path()}) {
+    const Outcome r = glint({"run", scene_.string(), "-o", out.string(), "--quiet"});
+    EXPECT_EQ(r.status, 2) << out << ": " << r.err;
+    EXPECT_NE(r.err.find(out.string() + " holds the scene file " + scene_.string()),
+              std::string::npos)
+        << r.err;
+  }
+  EXPECT_EQ(entries(dir_), before) << "nothing was written beside the scene";
+}
+
+}  // namespace
+}  // namespace glint
