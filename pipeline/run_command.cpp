@@ -21,6 +21,7 @@
 #include "pipeline/memory_budget.h"
 #include "pipeline/output_names.h"
 #include "pipeline/progress.h"
+#include "pipeline/run_folder.h"
 #include "pipeline/run_report.h"
 #include "pipeline/scene.h"
 #include "pipeline/surface_check.h"
@@ -205,8 +206,11 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   }
   InputFiles inputs;
   inputs.addScene(args.scene_path, scene);
+  EarlierRun earlier;
   if (writer) {
     inputs.requireNotHeldBy(dir);
+    earlier = earlierRun(dir);
+    requireSameScene(dir, earlier, args.scene_path);
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) throw OutputError(dir.string() + ": cannot create the output folder: " + ec.message());
@@ -246,6 +250,15 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   std::vector<AtomicFile*> exrs;
   for (const PlaneSpec& plane : scene.planes)
     exrs.push_back(open(output_names::planeExr(plane.name)));
+  // An earlier run of this scene may have written files this one will not (a plane since
+  // renamed): said, so that no stale map passes for a new one.
+  const std::vector<std::string> stale = staleOutputs(dir, earlier, written);
+  if (!stale.empty() && !args.quiet) {
+    std::string list;
+    for (const std::string& name : stale) list += (list.empty() ? "" : ", ") + name;
+    err << "glint run: note: " << dir.string() << " keeps " << list
+        << " from an earlier run of this scene, which this run does not rewrite\n";
+  }
   if (writer) pauseForTestsAfterTemporaries(err);
 
   std::unique_ptr<tbb::global_control> thread_limit;
@@ -378,6 +391,9 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     if (!args.quiet) printSurfaceCheck(err, scene, check);
   }
   if (!writer) return;
+  j["scene_path"] = sceneIdentity(args.scene_path);
+  j["files"] = written;
+  if (!stale.empty()) j["earlier_files_kept"] = stale;
   summary->stream() << j.dump(2) << "\n";
   watch.check("writing the outputs");  // a file written short of memory is not committed
   for (const auto& f : files) f->commit();

@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 
@@ -128,6 +129,49 @@ TEST_F(Outputs, RunRefusesAnOutputFolderThatHoldsItsSceneAtAnyDepth) {
         << r.err;
   }
   EXPECT_EQ(entries(dir_), before) << "nothing was written beside the scene";
+}
+
+TEST_F(Outputs, RunRefusesAFolderOfAnotherScenesOutputsAndNamesItsOwnStaleOnes) {
+  // One coarse plane, no far field: a run of well under a second.
+  nlohmann::json scene =
+      nlohmann::json::parse(readFile(fs::path(GLINT_EXAMPLES_DIR) / "cylinder_planes.json"));
+  scene["planes"][0]["pixel_m"] = 0.5;
+  scene["planes"][0]["block_m"] = 4.0;
+  scene["planes"][0]["name"] = "first";
+  scene["far_field"] = {{"enabled", false}};
+  fs::create_directories(dir_ / "scenes");
+  const fs::path tiny = dir_ / "scenes" / "tiny.json";
+  std::ofstream(tiny) << scene.dump();
+  const fs::path out = dir_ / "out";
+  const Outcome first = glint({"run", tiny.string(), "-o", out.string()});
+  ASSERT_EQ(first.status, 0) << first.err;
+  const nlohmann::json summary = nlohmann::json::parse(readFile(out / "summary.json"));
+  EXPECT_EQ(summary.at("files"), nlohmann::json({"summary.json", "first.exr"})) << summary.dump();
+  EXPECT_EQ(summary.at("scene_path"), fs::canonical(tiny).string());
+
+  // The same scene, its plane renamed: the old map stays, and both the terminal and the
+  // summary say it is not this run's.
+  scene["planes"][0]["name"] = "second";
+  std::ofstream(tiny) << scene.dump();
+  const Outcome again = glint({"run", tiny.string(), "-o", out.string()});
+  ASSERT_EQ(again.status, 0) << again.err;
+  EXPECT_NE(again.err.find("keeps first.exr from an earlier run of this scene"), std::string::npos)
+      << again.err;
+  EXPECT_EQ(nlohmann::json::parse(readFile(out / "summary.json")).at("earlier_files_kept"),
+            nlohmann::json({"first.exr"}));
+
+  // Another scene file, even with the same content: refused, and the folder is as it was.
+  const fs::path other = dir_ / "scenes" / "other.json";
+  fs::copy_file(tiny, other);
+  const std::string before = readFile(out / "summary.json");
+  const Outcome refused = glint({"run", other.string(), "-o", out.string(), "--quiet"});
+  EXPECT_EQ(refused.status, 2) << refused.err;
+  EXPECT_NE(refused.err.find(out.string() + " holds the outputs of another scene (" +
+                             fs::canonical(tiny).string() + ")"),
+            std::string::npos)
+      << refused.err;
+  EXPECT_EQ(readFile(out / "summary.json"), before);
+  EXPECT_EQ(entries(out), 3u) << "summary.json, first.exr, second.exr and nothing else";
 }
 
 }  // namespace
