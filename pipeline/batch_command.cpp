@@ -3,20 +3,26 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
+#include <fstream>
+#include <functional>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <stdexcept>
 
 #include "export/atomic_file.h"
 #include "export/exr_map.h"
 #include "export/field_files.h"
+#include "export/fnv1a.h"
 #include "export/lattice_vdb.h"
 #include "glint/version.h"
 #include "pipeline/batch_report.h"
 #include "pipeline/cluster.h"
+#include "pipeline/folder_lock.h"
 #include "pipeline/input_error.h"
 #include "pipeline/json_reader.h"
 #include "pipeline/memory_budget.h"
@@ -39,6 +45,121 @@ std::string scenarioDirName(std::size_t index) {
   return buf;
 }
 
+bool isScenarioDirName(const std::string& name) {
+  return name.size() == 7 && name[0] == 's' &&
+         std::all_of(name.begin() + 1, name.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+// result.json vouches for its own figures and for the files beside it: a checksum of the record
+// without this field, and one of each file's bytes (scene.json and the maps, by name).
+constexpr const char* kRecordChecksum = "result_fnv1a64";
+constexpr const char* kFileChecksums = "files_fnv1a64";
+
+std::string hex64(std::uint64_t h) {
+  char buf[20];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+// The record's own checksum: of its canonical text (nlohmann's dump, keys sorted, numbers in
+// their shortest round-trip form), so a record read back gives the text it was written from.
+std::string recordChecksum(nlohmann::json record) {
+  record.erase(kRecordChecksum);
+  return fnv1a64Hex(record.dump());
+}
+
+// FNV-1a 64 of a file's bytes.
+// @throw OutputError when it cannot be read.
+std::string fileChecksum(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw OutputError(path.string() + ": cannot be read");
+  std::uint64_t h = kFnv1aOffsetBasis;
+  std::array<char, 1 << 16> buf{};
+  while (in) {
+    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+    h = fnv1a64(std::string_view(buf.data(), static_cast<std::size_t>(in.gcount())), h);
+  }
+  if (in.bad()) throw OutputError(path.string() + ": cannot be read");
+  return hex64(h);
+}
+
+// The names glint writes in a scenario folder: all that --fresh and a failed run may remove.
+std::vector<std::string> scenarioFileNames(const std::vector<StudyLattice>& lattices) {
+  std::vector<std::string> names = {output_names::kScenarioScene, output_names::kScenarioResult,
+                                    output_names::kIrradianceVdb};
+  for (const StudyLattice& r : lattices) names.push_back(r.scenarioFile());
+  return names;
+}
+
+// One of @p names, or a temporary of one (export/atomic_file.h: `.<name>.glint-<pid>-<random>`,
+// and glint 0.1's `<name>.tmp.<pid>`).
+bool isGlintFile(const std::string& file, const std::vector<std::string>& names) {
+  return std::any_of(names.begin(), names.end(), [&](const std::string& n) {
+    return file == n || file.rfind("." + n + ".glint-", 0) == 0 || file.rfind(n + ".tmp.", 0) == 0;
+  });
+}
+
+// Removes the scenario folders (sNNNNNN) under @p scenarios with glint's files in them, and
+// nothing else: a file or folder of someone else's stays, and so does the scenario folder
+// holding it. Returns what stayed.
+std::vector<fs::path> removeScenarioFolders(const fs::path& scenarios,
+                                            const std::vector<std::string>& names) {
+  std::vector<fs::path> kept;
+  std::error_code ec;
+  std::vector<fs::directory_entry> entries;
+  for (fs::directory_iterator it(scenarios, ec), end; !ec && it != end; it.increment(ec))
+    entries.push_back(*it);
+  for (const fs::directory_entry& e : entries) {
+    // symlink_status: a link named like a scenario folder is someone else's, never followed.
+    if (!isScenarioDirName(e.path().filename().string()) ||
+        e.symlink_status(ec).type() != fs::file_type::directory) {
+      kept.push_back(e.path());
+      continue;
+    }
+    std::vector<fs::directory_entry> files;
+    for (fs::directory_iterator it(e.path(), ec), end; !ec && it != end; it.increment(ec))
+      files.push_back(*it);
+    for (const fs::directory_entry& f : files) {
+      const bool ours = isGlintFile(f.path().filename().string(), names) &&
+                        f.symlink_status(ec).type() != fs::file_type::directory;
+      if (!ours || !fs::remove(f.path(), ec)) kept.push_back(f.path());
+    }
+    fs::remove(e.path(), ec);  // rmdir: stays if anything is left in it
+  }
+  return kept;
+}
+
+// "a, b, c and 4 more".
+std::string listed(const std::vector<fs::path>& paths) {
+  std::string s;
+  const std::size_t shown = std::min<std::size_t>(paths.size(), 5);
+  for (std::size_t i = 0; i < shown; ++i) s += (i > 0 ? ", " : "") + paths[i].string();
+  if (paths.size() > shown) s += " and " + std::to_string(paths.size() - shown) + " more";
+  return s;
+}
+
+// After a failed run: the folders it made go again, unless a scenario in them is finished (the
+// next run resumes from it). Scenario folders only inside a scenarios/ this run made: every
+// glint file in them is this run's (rank 0 holds the folder's lock).
+void removeFailedRun(const fs::path& out_dir, CreatedFolders& created,
+                     const std::vector<std::string>& names) noexcept {
+  try {
+    const fs::path scenarios = out_dir / output_names::kScenariosFolder;
+    if (created.made(scenarios)) {
+      std::error_code ec;
+      for (fs::directory_iterator it(scenarios, ec), end; !ec && it != end; it.increment(ec)) {
+        if (isScenarioDirName(it->path().filename().string()) &&
+            fs::exists(it->path() / output_names::kScenarioResult, ec)) {
+          return;
+        }
+      }
+      removeScenarioFolders(scenarios, names);
+    }
+  } catch (...) {
+    // Cleaning up after an error: the error is what the user must see.
+  }
+}
+
 // Computes one scenario on this rank, writes its folder (result.json last: its presence means
 // the scenario is done) and adds it to the rank's aggregates. Returns result.json's text.
 std::string runScenario(const Study& study, const Scenario& s, std::vector<StudyLattice>& lattices,
@@ -59,6 +180,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
 
   const RunInfo info =
       runInfo(scene, (dir / output_names::kScenarioScene).string(), scene_json, "adaptive");
+  nlohmann::json files = {{output_names::kScenarioScene, fnv1a64Hex(scene_json)}};
 
   nlohmann::json record = {{"study_fnv1a64", study.fnv1a64},
                            {"scenario", s.index},
@@ -94,6 +216,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
       writeVdb(map.stream(), std::move(field), info);
     }
     map.commit();
+    files[r.scenarioFile()] = fileChecksum(dir / r.scenarioFile());
     results.push_back(scenarioRegionJson(r, st, scene.hazard, r.add(e, scene.hazard)));
     evaluations += st.evaluations;
     unconverged += st.unconverged_points;
@@ -109,6 +232,8 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
   record["evaluations"] = evaluations;
   record["unconverged_points"] = unconverged;
   record["seconds"] = std::chrono::duration<double>(Clock::now() - start).count();
+  record[kFileChecksums] = files;
+  record[kRecordChecksum] = recordChecksum(record);
   const std::string text = record.dump(2) + "\n";
   AtomicFile result(dir / output_names::kScenarioResult);
   result.stream() << text;
@@ -116,13 +241,17 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
   return text;
 }
 
-// A finished scenario of an earlier run: its record and maps, when they are whole and belong
-// to this study. Nothing when the scenario must be (re)computed.
+// A finished scenario of an earlier run: its record and maps, when they are whole, unedited and
+// belong to this study. Nothing when the scenario must be (re)computed.
 std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario& s,
                                              std::vector<StudyLattice>& lattices,
                                              const fs::path& out_dir, bool fresh, std::ostream& err,
                                              bool quiet) {
   const fs::path dir = out_dir / output_names::kScenariosFolder / scenarioDirName(s.index);
+  auto redo = [&](const std::string& why) -> std::optional<nlohmann::json> {
+    if (!quiet) err << "glint batch: scenario " << s.index << " redone: " << why << "\n";
+    return std::nullopt;
+  };
   std::error_code ec;
   if (!fs::is_regular_file(dir / output_names::kScenarioResult, ec)) return std::nullopt;
   nlohmann::json record;
@@ -139,23 +268,48 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
         // A result from before the scene had an optical aid lacks the aided figures.
         (!study.base.hazard.aid || record.at("regions").at(0).contains("aided_peak_hazard_ratio"));
   } catch (const std::exception&) {
-    if (!quiet)
-      err << "glint batch: " << (dir / output_names::kScenarioResult).string()
-          << " unreadable: redone\n";
-    return std::nullopt;
+    return redo((dir / output_names::kScenarioResult).string() + " unreadable");
   }
   if (fnv != study.fnv1a64) {
     if (fresh) return std::nullopt;
     throw InputError(out_dir.string() + ": holds results of another study (or of this study " +
                      "before it changed): " + (dir / output_names::kScenarioResult).string() +
-                     " has study " + fnv + ", this study is " + study.fnv1a64 +
+                     " has study " + printable(fnv) + ", this study is " + study.fnv1a64 +
                      ". Use --fresh to discard them, or another --out folder");
   }
-  if (!matches) {
-    if (!quiet)
-      err << "glint batch: " << (dir / output_names::kScenarioResult).string()
-          << " does not match: redone\n";
-    return std::nullopt;
+  // Its figures as written: an edited number (or a record of a glint without checksums) is not
+  // carried into the study's table and summary.
+  const auto stated = record.find(kRecordChecksum);
+  if (stated == record.end() || !stated->is_string()) {
+    return redo((dir / output_names::kScenarioResult).string() +
+                " has no checksum (written by an older glint)");
+  }
+  if (stated->get<std::string>() != recordChecksum(record)) {
+    return redo((dir / output_names::kScenarioResult).string() +
+                " does not match its checksum (edited or damaged)");
+  }
+  if (!matches) return redo((dir / output_names::kScenarioResult).string() + " does not match");
+  // Each file as written: a map edited, damaged or swapped for another scenario's would
+  // otherwise enter the aggregates while the record's figures say something else.
+  std::vector<std::string> names = {output_names::kScenarioScene};
+  for (const StudyLattice& r : lattices) names.push_back(r.scenarioFile());
+  const nlohmann::json* files = nullptr;
+  if (const auto it = record.find(kFileChecksums); it != record.end() && it->is_object())
+    files = &*it;
+  for (const std::string& name : names) {
+    const fs::path path = dir / name;
+    std::string actual;
+    try {
+      actual = fileChecksum(path);
+    } catch (const std::exception& e) {
+      return redo(e.what());
+    }
+    const bool vouched = files != nullptr && files->contains(name) && files->at(name).is_string() &&
+                         files->at(name).get<std::string>() == actual;
+    if (!vouched) {
+      return redo(path.string() + " does not match its checksum in " +
+                  output_names::kScenarioResult + " (edited, damaged or replaced)");
+    }
   }
   // Maps read in full before any is added, so a damaged file leaves the aggregates untouched.
   std::vector<std::vector<float>> maps;
@@ -172,8 +326,7 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
       }
     }
   } catch (const std::exception& e) {
-    if (!quiet) err << "glint batch: scenario " << s.index << " redone: " << e.what() << "\n";
-    return std::nullopt;
+    return redo(e.what());
   }
   for (std::size_t i = 0; i < lattices.size(); ++i) lattices[i].add(maps[i], study.base.hazard);
   return record;
@@ -213,12 +366,35 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   std::map<std::size_t, nlohmann::json> records;  // rank 0: every scenario's result
   std::vector<std::size_t> todo;
   std::size_t resumed = 0;
+  // Rank 0 holds the folder for the whole run (the other ranks write only the scenarios it hands
+  // them), and on failure takes away the folders the run made, if nothing in them is worth
+  // resuming from.
+  CreatedFolders created;
+  std::optional<FolderLock> lock;
+  const std::vector<std::string> own_files = scenarioFileNames(lattices);
+  struct OnFailure {
+    std::function<void()> cleanup;
+    ~OnFailure() {
+      if (cleanup) cleanup();
+    }
+  } on_failure;
   if (root) {
-    std::error_code ec;
-    if (args.fresh) fs::remove_all(out_dir / output_names::kScenariosFolder, ec);
-    fs::create_directories(out_dir / output_names::kScenariosFolder, ec);
-    if (ec)
-      throw OutputError(out_dir.string() + ": cannot create the output folder: " + ec.message());
+    on_failure.cleanup = [&] {
+      removeFailedRun(out_dir, created, own_files);
+      lock.reset();  // before the folder holding the lock file can go
+      created.removeEmpty();
+    };
+    created.create(out_dir);
+    lock.emplace(out_dir, "glint batch");
+    const fs::path scenarios = out_dir / output_names::kScenariosFolder;
+    if (args.fresh) {
+      const std::vector<fs::path> kept = removeScenarioFolders(scenarios, own_files);
+      if (talk && !kept.empty()) {
+        err << "glint batch: --fresh kept " << kept.size() << " file(s) or folder(s) glint did "
+            << "not write (and the scenario folders holding them): " << listed(kept) << "\n";
+      }
+    }
+    created.create(scenarios);
     for (const Scenario& s : study.scenarios) {
       if (auto rec = resumeScenario(study, s, lattices, out_dir, args.fresh, err, args.quiet)) {
         records[s.index] = std::move(*rec);
@@ -289,6 +465,7 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   AtomicFile summary_file(out_dir / output_names::kSummary);
   summary_file.stream() << summary.dump(2) << "\n";
   summary_file.commit();
+  on_failure.cleanup = nullptr;
   if (talk) printBatchSummary(err, summary, lattices, out_dir, wall_s);
 }
 

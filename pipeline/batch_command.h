@@ -24,12 +24,14 @@ struct BatchArgs {
 };
 
 /// @brief Runs the study. Each scenario leaves scenarios/sNNNNNN/ (its scene.json, maps and
-/// result.json, written last); a later run in the same folder redoes only the scenarios
-/// without a result. Rank 0 then writes scenarios.csv, the aggregated `<plane>.exr` and
-/// `box.vdb`, and summary.json, each whole or not at all, the same bytes on any number of
-/// ranks (summary.json aside: it records the ranks and the wall time).
-/// @throw InputError, OutputError on bad input, an unwritable folder, or an output folder
-/// holding another study's results (without `fresh`).
+/// result.json, written last, with checksums of its figures and of those files); a later run
+/// in the same folder redoes only the scenarios without a result that matches its checksums.
+/// Rank 0 then writes scenarios.csv, the aggregated `<plane>.exr` and `box.vdb`, and
+/// summary.json, each whole or not at all, the same bytes on any number of ranks (summary.json
+/// aside: it records the ranks and the wall time). Rank 0 holds the folder's FolderLock for the
+/// whole run; a run that fails removes the folders it made unless a scenario in them finished.
+/// @throw InputError, OutputError on bad input, an unwritable folder, a folder another process
+/// holds, or an output folder holding another study's results (without `fresh`).
 void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err);
 
 }  // namespace glint

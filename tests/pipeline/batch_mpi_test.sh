@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # `mpirun -np 2 glint batch` against `glint batch` on one process: the aggregated maps must be
 # the same bytes, and scenarios.csv the same but for its last column (each scenario's seconds,
-# a wall-clock time). Also reads box.vdb back with OpenVDB's Python module.
+# a wall-clock time). Also reads box.vdb back with OpenVDB's Python module, and checks that a
+# job into a folder another process holds is refused.
 # Usage: batch_mpi_test.sh GLINT MPIEXEC STUDY SERIAL_RUN_DIR WORKDIR
 # (SERIAL_RUN_DIR: the study run on one process, by the ctest fixture GlintBatch.RunsTheTestStudy)
 set -euo pipefail
@@ -33,4 +34,17 @@ lo, hi = grids["coverage_probability"].evalMinMax()
 assert 0.0 <= lo and hi <= 1.0 and hi > 0.0, (lo, hi)
 print("box.vdb: grids", sorted(grids), "coverage in", (lo, hi))
 PY
-echo "PASS: 2 ranks gave the same maps and table as 1 process"
+
+# A folder another glint holds (here flock(1) with a glint-style lock file) is refused by rank 0
+# for the whole job: exit status 2, the holder named, nothing written.
+mkdir -p "$work/held"
+printf 'pid=%d\nhost=%s\n' $$ "$(hostname)" > "$work/held/.glint-lock"
+status=0
+flock -n "$work/held/.glint-lock" "$mpiexec" --allow-run-as-root --oversubscribe -np 2 "$glint" \
+  batch "$study" -o "$work/held" --threads 1 2> "$work/held.log" || status=$?
+[ "$status" -eq 2 ] || { cat "$work/held.log" >&2; echo "FAIL: a held folder gave exit $status, not 2" >&2; exit 1; }
+grep -q "held is in use by glint process $$ on host" "$work/held.log" ||
+  { cat "$work/held.log" >&2; echo "FAIL: the refusal does not name the holder" >&2; exit 1; }
+[ "$(ls -A "$work/held")" = ".glint-lock" ] ||
+  { ls -A "$work/held" >&2; echo "FAIL: the refused job wrote into the held folder" >&2; exit 1; }
+echo "PASS: 2 ranks gave the same maps and table as 1 process; a held folder was refused"

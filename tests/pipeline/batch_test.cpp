@@ -1,9 +1,14 @@
 // `glint batch` on one process: the aggregated maps against the scenarios' own maps, the
 // scenario table, resuming, and refusing another study's folder. (The MPI run is compared with
 // this one by tests/pipeline/batch_mpi_test.sh.)
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -12,6 +17,7 @@
 
 #include "export/exr_map.h"
 #include "export/lattice_vdb.h"
+#include "pipeline/folder_lock.h"
 #include "pipeline/progress.h"
 #include "pipeline/scene.h"
 #include "pipeline/study.h"
@@ -334,6 +340,201 @@ TEST(BatchHazard, PulsesFogAndBinocularsReachEveryScenarioAndTheSummary) {
   EXPECT_GT(plane.at("aided_hazardous_in_any_scenario_m2").get<double>(),
             plane.at("hazardous_in_any_scenario_m2").get<double>())
       << plane.dump();
+  fs::remove_all(dir);
+}
+
+// The lines of a scenarios.csv without their last cell (each scenario's seconds, a wall-clock
+// time).
+std::string withoutSeconds(const std::string& csv) {
+  std::istringstream in(csv);
+  std::string out;
+  for (std::string line; std::getline(in, line);) out += line.substr(0, line.rfind(',')) + "\n";
+  return out;
+}
+
+std::string hostName() {
+  char buf[256] = {};
+  ::gethostname(buf, sizeof buf - 1);
+  return buf;
+}
+
+// The names in @p dir, sorted.
+std::vector<std::string> namesIn(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// The mirror study (2 scenarios, under a second) with a plane in the glint, run into dir/out.
+void runMirrorStudyWithAPlane(const fs::path& dir) {
+  runMirrorStudy(dir, R"(
+    "laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "power_w": 1.0e6,
+              "wavelength_nm": 1064, "exposure_s": 10,
+              "beam": {"profile": "flat_top", "radius_m": 0.5}})",
+                 R"(
+    "planes": [{"name": "ground", "origin": [-1, 0.5, 0], "u_axis": [1, 0, 0],
+                "v_axis": [0, 1, 0], "size_m": [1, 1], "pixel_m": 0.125}],)");
+}
+
+TEST(BatchFolder, AFolderHeldByAnotherProcessIsRefusedWithItsPidAndNothingIsWritten) {
+  const fs::path dir = fs::temp_directory_path() / "glint_batch_held";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  {
+    // This test holds the folder as another `glint batch` would: flock is per open file, so the
+    // command run in this same process is refused like a second process.
+    const FolderLock held(dir, "glint batch");
+    const std::string holder = bytes(dir / FolderLock::kFileName);
+    const Outcome refused = glint({"batch", kStudy, "-o", dir.string()});
+    EXPECT_EQ(refused.status, 2) << refused.err;
+    const std::string expect = dir.string() + " is in use by glint process " +
+                               std::to_string(::getpid()) + " on host " + hostName() +
+                               " (glint batch, since ";
+    EXPECT_NE(refused.err.find(expect), std::string::npos) << refused.err;
+    EXPECT_EQ(namesIn(dir), std::vector<std::string>{FolderLock::kFileName})
+        << "the refused run wrote nothing into the held folder";
+    EXPECT_EQ(bytes(dir / FolderLock::kFileName), holder) << "nor into the holder's lock file";
+  }
+  EXPECT_FALSE(fs::exists(dir / FolderLock::kFileName)) << "the holder removes its lock file";
+  fs::remove_all(dir);
+}
+
+TEST(BatchFolder, ALinkPlantedAsTheLockFileIsRefusedNotFollowed) {
+  const fs::path dir = fs::temp_directory_path() / "glint_batch_lock_link";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "out");
+  fs::create_symlink(dir / "elsewhere", dir / "out" / FolderLock::kFileName);
+  const Outcome refused = glint({"batch", kStudy, "-o", (dir / "out").string()});
+  EXPECT_EQ(refused.status, 2) << refused.err;
+  EXPECT_NE(refused.err.find("it is a symbolic link; remove it"), std::string::npos) << refused.err;
+  EXPECT_FALSE(fs::exists(dir / "elsewhere")) << "the link was not followed";
+  EXPECT_EQ(namesIn(dir / "out"), std::vector<std::string>{FolderLock::kFileName})
+      << "nothing written";
+  fs::remove_all(dir);
+}
+
+TEST(BatchFolder, ALockFileLeftByAKilledProcessBlocksNothingAndTheRunRemovesIt) {
+  const fs::path dir = fs::temp_directory_path() / "glint_batch_stale_lock";
+  ASSERT_NO_FATAL_FAILURE(runMirrorStudyWithAPlane(dir));
+  // A child takes the lock and dies without releasing it (as under SIGKILL): its lock file stays,
+  // its flock goes with it. Only async-signal-safe calls in the child of a threaded process.
+  const std::string lock_file = (dir / "out" / FolderLock::kFileName).string();
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    const int fd = ::open(lock_file.c_str(), O_RDWR | O_CREAT, 0644);
+    if (fd < 0 || ::flock(fd, LOCK_EX | LOCK_NB) != 0) ::_exit(1);
+    char text[64];
+    const int n = std::snprintf(text, sizeof text, "pid=%d\n", static_cast<int>(::getpid()));
+    ::_exit(::write(fd, text, static_cast<std::size_t>(n)) == n ? 0 : 1);
+  }
+  int status = -1;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "the child took the lock";
+  ASSERT_NE(bytes(lock_file).find("pid=" + std::to_string(child)), std::string::npos)
+      << "premise: the dead process's lock file is there";
+
+  const Outcome again =
+      glint({"batch", (dir / "study.json").string(), "-o", (dir / "out").string()});
+  ASSERT_EQ(again.status, 0) << again.err;
+  EXPECT_NE(again.err.find("(2 done before, 0 to run)"), std::string::npos) << again.err;
+  EXPECT_FALSE(fs::exists(lock_file)) << "the run took the stale lock over and removed it";
+  fs::remove_all(dir);
+}
+
+TEST(BatchFolder, AnEditedResultOrASwappedMapIsRedoneAndTheStudyIsAsIfUntouched) {
+  const fs::path dir = fs::temp_directory_path() / "glint_batch_tampered";
+  ASSERT_NO_FATAL_FAILURE(runMirrorStudyWithAPlane(dir));
+  const fs::path out = dir / "out", untouched = dir / "untouched";
+  fs::copy(out, untouched, fs::copy_options::recursive);
+  const fs::path s0 = out / "scenarios" / "s000000", s1 = out / "scenarios" / "s000001";
+  // Scenario 0's box peak edited to 0, as in the issue: the figure is carried into the table
+  // and the summary unless the record is checked.
+  auto result = nlohmann::json::parse(bytes(s0 / "result.json"));
+  ASSERT_GT(result.at("regions")[0].at("peak_hazard_ratio").get<double>(), 0.0) << "premise";
+  result["regions"][0]["peak_hazard_ratio"] = 0;
+  std::ofstream(s0 / "result.json") << result.dump(2) << "\n";
+  // Scenario 1's plane map replaced by scenario 0's: a whole, readable map, but not its own.
+  ASSERT_TRUE(bytes(s1 / "ground.exr") != bytes(s0 / "ground.exr"))
+      << "premise: the two scenarios' maps differ";
+  fs::copy_file(s0 / "ground.exr", s1 / "ground.exr", fs::copy_options::overwrite_existing);
+
+  const Outcome again = glint({"batch", (dir / "study.json").string(), "-o", out.string()});
+  ASSERT_EQ(again.status, 0) << again.err;
+  EXPECT_NE(again.err.find("scenario 0 redone: " + (s0 / "result.json").string() +
+                           " does not match its checksum (edited or damaged)"),
+            std::string::npos)
+      << again.err;
+  EXPECT_NE(again.err.find("scenario 1 redone: " + (s1 / "ground.exr").string() +
+                           " does not match its checksum in result.json"),
+            std::string::npos)
+      << again.err;
+
+  // Compared as booleans: a difference of binary maps printed in full says nothing.
+  EXPECT_TRUE(bytes(out / "ground.exr") == bytes(untouched / "ground.exr")) << "the coverage map";
+  EXPECT_TRUE(bytes(out / "box.vdb") == bytes(untouched / "box.vdb")) << "the box's maps";
+  EXPECT_EQ(withoutSeconds(bytes(out / "scenarios.csv")),
+            withoutSeconds(bytes(untouched / "scenarios.csv")))
+      << "the table, scenario 0's peak among it";
+  const auto summary = nlohmann::json::parse(bytes(out / "summary.json"));
+  const auto before = nlohmann::json::parse(bytes(untouched / "summary.json"));
+  EXPECT_EQ(summary.at("regions"), before.at("regions")) << "the peak quantiles and areas";
+  EXPECT_EQ(summary.at("far_field"), before.at("far_field"));
+  EXPECT_EQ(summary.at("scenarios").at("computed"), 2) << "both scenarios redone";
+  fs::remove_all(dir);
+}
+
+TEST(BatchFolder, FreshRemovesOnlyGlintsOwnFilesAndSaysWhatItKept) {
+  const fs::path dir = fs::temp_directory_path() / "glint_batch_fresh";
+  ASSERT_NO_FATAL_FAILURE(runMirrorStudyWithAPlane(dir));
+  const fs::path scenarios = dir / "out" / "scenarios";
+  std::ofstream(scenarios / "notes.txt") << "mine";
+  fs::create_directories(scenarios / "mine");
+  std::ofstream(scenarios / "mine" / "result.json") << "mine too";
+  std::ofstream(scenarios / "s000000" / "notes.txt") << "about scenario 0";
+  std::ofstream(scenarios / "s000001" / "notes.txt") << "about scenario 1";
+  fs::create_directories(scenarios / "s000002");
+  std::ofstream(scenarios / "s000002" / "result.json") << "{}";  // an old study's, glint's name
+  // The base scene alone: another study, so the folder's scenarios are discarded.
+  std::ofstream(dir / "one.json") << R"({"scene": "scene.json"})";
+
+  const Outcome fresh =
+      glint({"batch", (dir / "one.json").string(), "-o", (dir / "out").string(), "--fresh"});
+  ASSERT_EQ(fresh.status, 0) << fresh.err;
+  EXPECT_EQ(bytes(scenarios / "notes.txt"), "mine");
+  EXPECT_EQ(bytes(scenarios / "mine" / "result.json"), "mine too") << "a folder not glint's";
+  EXPECT_EQ(bytes(scenarios / "s000000" / "notes.txt"), "about scenario 0");
+  EXPECT_EQ(namesIn(scenarios / "s000001"), std::vector<std::string>{"notes.txt"})
+      << "glint's files go, the user's stay (and the folder holding them)";
+  EXPECT_FALSE(fs::exists(scenarios / "s000002")) << "a scenario folder of glint's files alone";
+  EXPECT_TRUE(fs::exists(scenarios / "s000000" / "result.json")) << "the new study's scenario";
+  EXPECT_NE(fresh.err.find("--fresh kept 4 file(s) or folder(s) glint did not write"),
+            std::string::npos)
+      << fresh.err;
+  EXPECT_NE(fresh.err.find((scenarios / "s000001" / "notes.txt").string()), std::string::npos)
+      << fresh.err;
+  fs::remove_all(dir);
+}
+
+TEST(BatchFolder, AFailedRunTakesAwayTheFoldersItMadeAndNoOther) {
+  const fs::path dir = fs::temp_directory_path() / "glint_batch_failed";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "empty");
+  const fs::path study = dir / "one.json";
+  std::ofstream(study) << R"({"scene": ")" << GLINT_TEST_DATA_DIR << R"(/study_scene.json"})";
+  // A budget above the study's memory floor but below what this process already holds: the
+  // memory watch stops the first scenario once its folder and scene.json are written.
+  for (const fs::path& out : {dir / "new" / "out", dir / "empty"}) {
+    const Outcome failed = glint({"batch", study.string(), "-o", out.string(), "--memory", "4M"});
+    EXPECT_EQ(failed.status, 2) << failed.err;
+    EXPECT_NE(failed.err.find("scenario 0, region box: stopped when the resident memory reached"),
+              std::string::npos)
+        << "premise: the run failed during a scenario: " << failed.err;
+  }
+  EXPECT_FALSE(fs::exists(dir / "new")) << "out and its parent new/, both made by the run, go";
+  ASSERT_TRUE(fs::is_directory(dir / "empty")) << "a folder the run found stays, though empty";
+  EXPECT_TRUE(fs::is_empty(dir / "empty")) << "and holds nothing of the run";
   fs::remove_all(dir);
 }
 

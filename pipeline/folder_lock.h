@@ -1,0 +1,71 @@
+#pragma once
+/// @file
+/// @brief One glint process at a time in an output folder, and a failed run that takes away
+/// the folders it made (README "Reliability": one study per folder).
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace glint {
+
+/// @brief An exclusive lock on an output folder for the life of this object: flock(2) on the
+/// folder's lock file, `FOLDER/.glint-lock`.
+///
+/// - The holder writes its PID, host name, start time (UTC) and command into the lock file, so
+///   that a second process is refused with a message naming it.
+/// - The kernel drops a flock with its process, so a lock file left by a process that was
+///   killed is not held by anyone and blocks nothing: the next process takes it over.
+/// - The lock file is removed when the lock is released. A process that opened it just before
+///   is not fooled: after locking, the constructor checks that the path still names the file it
+///   locked, and starts again if not.
+/// - Across machines, as strong as the file system's locks (local file systems and NFSv4 lock
+///   for every client; some cluster file systems need a mount option for flock).
+/// An MPI job takes it on rank 0 alone: the other ranks write only what rank 0 hands them.
+class FolderLock {
+ public:
+  /// @brief The lock file's name inside the folder.
+  static constexpr const char* kFileName = ".glint-lock";
+
+  /// @brief Takes the lock of @p folder (which must exist) for this process; @p command names
+  /// what holds it ("glint batch") in another process's refusal.
+  /// @throw OutputError "FOLDER is in use by glint process PID on host HOST (since TIME, glint
+  /// batch)..." when another process holds it, or when the lock file cannot be made or is not
+  /// a regular file (a link or a FIFO planted there is refused, never followed).
+  FolderLock(const std::filesystem::path& folder, std::string_view command);
+  /// @brief Removes the lock file and releases the lock.
+  ~FolderLock();
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+
+  /// @brief The lock file.
+  [[nodiscard]] const std::filesystem::path& file() const { return file_; }
+
+ private:
+  std::filesystem::path folder_;
+  std::filesystem::path file_;
+  int fd_ = -1;
+};
+
+/// @brief The folders a run made itself (`mkdir -p` that remembers which levels were missing),
+/// so that a run that fails can take them away again, and nothing else.
+class CreatedFolders {
+ public:
+  /// @brief Makes @p folder and its missing parents, remembering each level this call made (a
+  /// level another process made meanwhile is not remembered).
+  /// @throw OutputError naming the level that cannot be made.
+  void create(const std::filesystem::path& folder);
+
+  /// @brief Whether this object made @p folder (as spelled to create(), or one of its parents).
+  [[nodiscard]] bool made(const std::filesystem::path& folder) const;
+
+  /// @brief Removes the folders it made, deepest first, each only if it is empty (rmdir(2): a
+  /// folder holding anything stays, with everything in it). Never throws.
+  void removeEmpty() noexcept;
+
+ private:
+  std::vector<std::filesystem::path> made_;  ///< in the order made: parents first
+};
+
+}  // namespace glint
