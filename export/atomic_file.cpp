@@ -19,9 +19,14 @@
 namespace glint {
 namespace {
 
-// The temporaries not yet committed, for the interrupt handler: fixed storage it can read
-// without allocating. A slot is 0 free, 1 being filled, 2 live (its path may be unlinked).
+// The temporaries not yet committed, and what else an interrupted run must take away, for the
+// interrupt handler: fixed storage it can read without allocating. A slot is 0 free, 1 being
+// filled, or live: 2 a temporary (unlinked and counted), 3 another file (a lock file:
+// unlinked), 4 a folder the run made (removed if it is empty once the files are gone).
 constexpr int kSlots = 1024;
+constexpr int kTemporary = 2;
+constexpr int kOtherFile = 3;
+constexpr int kMadeFolder = 4;
 constexpr std::size_t kPathBytes = 4096;
 struct Slot {
   std::atomic<int> state{0};
@@ -29,14 +34,14 @@ struct Slot {
 };
 std::array<Slot, kSlots> g_slots;
 
-int registerTemporary(const std::string& path) {
+int registerTemporary(const std::string& path, int kind = kTemporary) {
   if (path.size() >= kPathBytes) return -1;
   for (int i = 0; i < kSlots; ++i) {
     int expected = 0;
     Slot& s = g_slots[static_cast<std::size_t>(i)];
     if (!s.state.compare_exchange_strong(expected, 1, std::memory_order_acq_rel)) continue;
     std::memcpy(s.path, path.c_str(), path.size() + 1);
-    s.state.store(2, std::memory_order_release);
+    s.state.store(kind, std::memory_order_release);
     return i;
   }
   return -1;  // more than kSlots at once: left to removeStaleTemporaries()
@@ -113,8 +118,23 @@ extern "C" void onInterrupt(int sig) {
     // A creation in flight: one open(2) on another thread, soon registered.
   }
   int removed = 0;
+  int folders = 0;
   for (Slot& s : g_slots) {
-    if (s.state.load(std::memory_order_acquire) == 2 && ::unlink(s.path) == 0) ++removed;
+    const int state = s.state.load(std::memory_order_acquire);
+    if (state == kTemporary && ::unlink(s.path) == 0) ++removed;
+    if (state == kOtherFile) ::unlink(s.path);
+    if (state == kMadeFolder) ++folders;
+  }
+  // Folders inside one another empty from the deepest: one pass per level at most.
+  for (int pass = 0; pass < folders; ++pass) {
+    bool progress = false;
+    for (Slot& s : g_slots) {
+      if (s.state.load(std::memory_order_acquire) == kMadeFolder && ::rmdir(s.path) == 0) {
+        s.state.store(0, std::memory_order_release);
+        progress = true;
+      }
+    }
+    if (!progress) break;
   }
   say("\nglint: interrupted by ");
   say(sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP");
@@ -304,6 +324,13 @@ void installInterruptCleanup() {
   }
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &action, nullptr);
 }
+
+int removeOnInterrupt(const std::filesystem::path& path, InterruptCleanup what) {
+  return registerTemporary(path.string(),
+                           what == InterruptCleanup::RemoveFile ? kOtherFile : kMadeFolder);
+}
+
+void forgetOnInterrupt(int slot) { unregisterTemporary(slot); }
 
 int removeStaleTemporaries(const std::filesystem::path& folder) {
   int removed = 0;

@@ -75,6 +75,19 @@ std::optional<std::string> nonRegularKind(const std::filesystem::path& path);
 /// (130, 143, 129). For the program's main(); idempotent.
 void installInterruptCleanup();
 
+/// @brief What else the interrupt handler takes away besides the temporaries.
+enum class InterruptCleanup {
+  RemoveFile,        ///< a file of the run's own (a folder's lock file)
+  RemoveEmptyFolder  ///< a folder the run made, if it is empty once the files are gone
+};
+
+/// @brief Has the interrupt handler remove @p path as @p what says, until forgetOnInterrupt()
+/// with the returned slot (-1 when the registry is full: then nothing is removed).
+int removeOnInterrupt(const std::filesystem::path& path, InterruptCleanup what);
+
+/// @brief Undoes removeOnInterrupt(); -1 is ignored.
+void forgetOnInterrupt(int slot);
+
 /// @brief Removes the temporaries of processes that no longer exist from @p folder (links and
 /// files alike are unlinked, never followed; a staging folder of theirs goes whole). Returns
 /// how many were removed.

@@ -7,7 +7,6 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
-#include <functional>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -24,6 +23,7 @@
 #include "pipeline/cluster.h"
 #include "pipeline/folder_lock.h"
 #include "pipeline/input_error.h"
+#include "pipeline/input_files.h"
 #include "pipeline/json_reader.h"
 #include "pipeline/memory_budget.h"
 #include "pipeline/output_names.h"
@@ -372,18 +372,17 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   CreatedFolders created;
   std::optional<FolderLock> lock;
   const std::vector<std::string> own_files = scenarioFileNames(lattices);
-  struct OnFailure {
-    std::function<void()> cleanup;
-    ~OnFailure() {
-      if (cleanup) cleanup();
-    }
-  } on_failure;
+  const OnFailure on_failure([&] {
+    if (!root) return;
+    removeFailedRun(out_dir, created, own_files);
+    lock.reset();  // before the folder holding the lock file can go
+    created.removeEmpty();
+  });
   if (root) {
-    on_failure.cleanup = [&] {
-      removeFailedRun(out_dir, created, own_files);
-      lock.reset();  // before the folder holding the lock file can go
-      created.removeEmpty();
-    };
+    InputFiles inputs;
+    inputs.add(args.study_path, "study file");
+    inputs.addScene(study.scene_path, study.base);
+    inputs.requireNotHeldBy(out_dir);  // --fresh and the scenarios write there
     created.create(out_dir);
     lock.emplace(out_dir, "glint batch");
     const fs::path scenarios = out_dir / output_names::kScenariosFolder;
@@ -465,7 +464,6 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   AtomicFile summary_file(out_dir / output_names::kSummary);
   summary_file.stream() << summary.dump(2) << "\n";
   summary_file.commit();
-  on_failure.cleanup = nullptr;
   if (talk) printBatchSummary(err, summary, lattices, out_dir, wall_s);
 }
 

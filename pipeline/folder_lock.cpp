@@ -116,6 +116,7 @@ FolderLock::FolderLock(const fs::path& folder, std::string_view command)
     }
   }
   if (fd_ < 0) throw OutputError(folder_.string() + ": cannot take the lock " + file_.string());
+  interrupt_slot_ = removeOnInterrupt(file_, InterruptCleanup::RemoveFile);
   std::ostringstream who;
   who << "pid=" << ::getpid() << "\nhost=" << hostName() << "\nsince=" << utcNow()
       << "\ncommand=" << command << "\n";
@@ -131,6 +132,7 @@ FolderLock::FolderLock(const fs::path& folder, std::string_view command)
 FolderLock::~FolderLock() {
   // Removed while still locked: whoever opens the name next makes a new file, and whoever opened
   // this one meanwhile sees it gone once it gets the lock.
+  forgetOnInterrupt(interrupt_slot_);
   ::unlink(file_.c_str());
   ::close(fd_);
 }
@@ -148,6 +150,7 @@ void CreatedFolders::create(const fs::path& folder) {
   for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
     if (::mkdir(it->c_str(), 0777) == 0) {
       made_.push_back(*it);
+      interrupt_slots_.push_back(removeOnInterrupt(*it, InterruptCleanup::RemoveEmptyFolder));
       continue;
     }
     const int error = errno;
@@ -167,7 +170,13 @@ bool CreatedFolders::made(const fs::path& folder) const {
   return std::find(made_.begin(), made_.end(), target) != made_.end();
 }
 
+CreatedFolders::~CreatedFolders() {
+  for (int slot : interrupt_slots_) forgetOnInterrupt(slot);
+}
+
 void CreatedFolders::removeEmpty() noexcept {
+  for (int slot : interrupt_slots_) forgetOnInterrupt(slot);
+  interrupt_slots_.clear();
   for (auto it = made_.rbegin(); it != made_.rend(); ++it) ::rmdir(it->c_str());
   made_.clear();
 }

@@ -3,7 +3,9 @@
 /// @brief One glint process at a time in an output folder, and a failed run that takes away
 /// the folders it made (README "Reliability": one study per folder).
 
+#include <exception>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -46,12 +48,19 @@ class FolderLock {
   std::filesystem::path folder_;
   std::filesystem::path file_;
   int fd_ = -1;
+  int interrupt_slot_ = -1;  ///< the lock file goes with an interrupted run's temporaries
 };
 
 /// @brief The folders a run made itself (`mkdir -p` that remembers which levels were missing),
 /// so that a run that fails can take them away again, and nothing else.
 class CreatedFolders {
  public:
+  CreatedFolders() = default;
+  /// @brief Keeps the folders (a run that succeeded).
+  ~CreatedFolders();
+  CreatedFolders(const CreatedFolders&) = delete;
+  CreatedFolders& operator=(const CreatedFolders&) = delete;
+
   /// @brief Makes @p folder and its missing parents, remembering each level this call made (a
   /// level another process made meanwhile is not remembered).
   /// @throw OutputError naming the level that cannot be made.
@@ -61,11 +70,32 @@ class CreatedFolders {
   [[nodiscard]] bool made(const std::filesystem::path& folder) const;
 
   /// @brief Removes the folders it made, deepest first, each only if it is empty (rmdir(2): a
-  /// folder holding anything stays, with everything in it). Never throws.
+  /// folder holding anything stays, with everything in it). Never throws. So does an interrupt
+  /// (SIGINT, SIGTERM, SIGHUP) while this object lives.
   void removeEmpty() noexcept;
 
  private:
   std::vector<std::filesystem::path> made_;  ///< in the order made: parents first
+  /// An interrupted run's handler removes them too, if empty (export/atomic_file.h).
+  std::vector<int> interrupt_slots_;
+};
+
+/// @brief Runs a cleanup when the scope it guards is left by an exception, and not when it ends
+/// normally (std::uncaught_exceptions() at construction and destruction tell which). The
+/// cleanup must not throw.
+class OnFailure {
+ public:
+  explicit OnFailure(std::function<void()> cleanup)
+      : cleanup_(std::move(cleanup)), exceptions_(std::uncaught_exceptions()) {}
+  ~OnFailure() {
+    if (cleanup_ && std::uncaught_exceptions() > exceptions_) cleanup_();
+  }
+  OnFailure(const OnFailure&) = delete;
+  OnFailure& operator=(const OnFailure&) = delete;
+
+ private:
+  std::function<void()> cleanup_;
+  int exceptions_;
 };
 
 }  // namespace glint

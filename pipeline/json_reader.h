@@ -137,11 +137,13 @@ class ObjectReader {
   // A direction: any non-zero length, returned normalised.
   Vec3 direction(const std::string& key) {
     const Vec3 v = vec3(key);
-    // Scaled by its largest component first: [1e300, 1e300, 0] is a direction, whose length
-    // alone would overflow, and [1e-310, 0, 0] one whose square would underflow.
+    // [1e300, 1e300, 0] is a direction whose squared length overflows, and [1e-310, 0, 0] one
+    // whose square underflows: such are scaled by their largest component first. Others are
+    // not, so that a unit vector read back from a file written by glint is the same bits.
     const double largest = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
     if (!(largest > 0.0)) fail(key, "must not be zero-length (all three components are 0)");
-    const auto unit = tryNormalize(v / largest);
+    const bool squares_fit = largest > 1e-150 && largest < 1e150;
+    const auto unit = tryNormalize(squares_fit ? v : v / largest);
     if (!unit) fail(key, "must be a direction of finite, non-zero length");
     return *unit;
   }

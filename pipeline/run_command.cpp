@@ -15,6 +15,7 @@
 #include "export/field_files.h"
 #include "export/vtk_files.h"
 #include "glint/version.h"
+#include "pipeline/folder_lock.h"
 #include "pipeline/input_error.h"
 #include "pipeline/input_files.h"
 #include "pipeline/json_reader.h"
@@ -206,14 +207,19 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   }
   InputFiles inputs;
   inputs.addScene(args.scene_path, scene);
+  // Rank 0 holds the folder while it runs: another run's files and this one's never mix. A run
+  // that fails takes away the folders it made, once its temporaries and the lock file are gone
+  // (the objects below are destroyed in the reverse order).
+  CreatedFolders created;
+  const OnFailure on_failure([&] { created.removeEmpty(); });
+  std::optional<FolderLock> lock;
   EarlierRun earlier;
   if (writer) {
     inputs.requireNotHeldBy(dir);
+    created.create(dir);
+    lock.emplace(dir, "glint run");
     earlier = earlierRun(dir);
     requireSameScene(dir, earlier, args.scene_path);
-    std::error_code ec;
-    std::filesystem::create_directories(dir, ec);
-    if (ec) throw OutputError(dir.string() + ": cannot create the output folder: " + ec.message());
   }
   // Opened before the work, so an unwritable folder stops the run at once (rank 0 only; the
   // other ranks' pointers stay null and they write nothing).

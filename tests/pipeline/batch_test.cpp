@@ -169,7 +169,8 @@ TEST_F(Batch, ResumeRedoesOnlyTheScenariosWithoutAResult) {
 
 TEST_F(Batch, RefusesAFolderOfAnotherStudyUnlessFresh) {
   const fs::path dir = copyOfRun();
-  const fs::path other = dir / "other_study.json";
+  // Beside the folder, not in it: an output folder holding its own study is refused first.
+  const fs::path other = dir.string() + "_other_study.json";
   std::ofstream(other) << R"({"scene": ")" << GLINT_TEST_DATA_DIR << R"(/study_scene.json"})";
   const Outcome refused = glint({"batch", other.string(), "-o", dir.string()});
   EXPECT_EQ(refused.status, 2);
@@ -183,6 +184,7 @@ TEST_F(Batch, RefusesAFolderOfAnotherStudyUnlessFresh) {
   ASSERT_EQ(fresh.status, 0) << fresh.err;
   EXPECT_FALSE(fs::exists(fresh_dir / "scenarios" / "s000007")) << "--fresh clears old scenarios";
   EXPECT_TRUE(fs::exists(fresh_dir / "scenarios" / "s000000" / "result.json"));
+  fs::remove(other);
   fs::remove_all(dir);
 }
 

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # An interrupted glint leaves no unfinished file: SIGINT and SIGTERM to `glint run`, SIGHUP to
 # `glint points --out`, each while the outputs' temporaries exist, must remove them, say so and
-# exit with 128 + the signal's number. A SIGKILL cannot be caught: its temporaries are removed
-# by the next glint that writes into the same folder.
+# exit with 128 + the signal's number, and take away the folders the run made and its lock
+# file. A SIGKILL cannot be caught: its temporaries are removed by the next glint that writes
+# into the same folder, and its lock (a flock) went with the process.
 #
 # GLINT_TEST_PAUSE_AFTER=temporaries (pipeline/test_pause.h) makes each glint stop once its
 # temporaries exist and say so: the signal lands there however fast or loaded the machine is.
@@ -52,6 +53,17 @@ interrupt INT 130 "$work/int" "$glint" run "$scene" -o "$work/int" --quiet
 interrupt TERM 143 "$work/term" "$glint" run "$scene" -o "$work/term" --quiet
 interrupt HUP 129 "$work/hup" "$glint" points "$scene" --points "$examples/cylinder_186.csv" \
   --out "$work/hup/out.csv" --quiet
+
+# An interrupted run into folders it made takes them away too, and its folder's lock file.
+made=$work/made/deeper
+GLINT_TEST_PAUSE_AFTER=temporaries "$glint" run "$scene" -o "$made" --quiet 2> "$work/made.err" &
+pid=$!
+await_pause "$work/made.err" "$pid" "$made"
+[ -f "$made/.glint-lock" ] || fail "the run holds no lock on $made"
+kill -s INT "$pid"
+wait "$pid"
+[ -e "$work/made" ] && fail "an interrupted run left the folders it made: $(find "$work/made" | head -5)"
+echo "INT into new folders: $work/made removed"
 
 # SIGKILL: the temporaries stay until the next glint writes into the folder.
 mkdir -p "$work/kill"

@@ -12,6 +12,7 @@
 #include <sstream>
 #include <string>
 
+#include "pipeline/folder_lock.h"
 #include "support/cli.h"
 
 namespace glint {
@@ -119,7 +120,7 @@ TEST_F(Outputs, AnOutputThatIsAnInputIsRefusedWhateverItsName) {
   EXPECT_EQ(readFile(dir_ / "capsule.glb"), mesh_bytes) << "the mesh is intact";
 }
 
-TEST_F(Outputs, RunRefusesAnOutputFolderThatHoldsItsSceneAtAnyDepth) {
+TEST_F(Outputs, AnOutputFolderThatHoldsAnInputIsRefusedAtAnyDepth) {
   const std::size_t before = entries(dir_);
   for (const fs::path& out : {dir_, dir_.parent_path()}) {
     const Outcome r = glint({"run", scene_.string(), "-o", out.string(), "--quiet"});
@@ -128,7 +129,17 @@ TEST_F(Outputs, RunRefusesAnOutputFolderThatHoldsItsSceneAtAnyDepth) {
               std::string::npos)
         << r.err;
   }
-  EXPECT_EQ(entries(dir_), before) << "nothing was written beside the scene";
+  // A study and its base scene: batch writes scenario folders and --fresh removes them there.
+  const fs::path data = GLINT_TEST_DATA_DIR;
+  fs::create_directories(dir_ / "study");
+  fs::copy_file(data / "study.json", dir_ / "study" / "study.json");
+  fs::copy_file(data / "study_scene.json", dir_ / "study" / "study_scene.json");
+  const Outcome batch =
+      glint({"batch", (dir_ / "study" / "study.json").string(), "-o", dir_.string(), "--fresh"});
+  EXPECT_EQ(batch.status, 2) << batch.err;
+  EXPECT_NE(batch.err.find(dir_.string() + " holds the study file"), std::string::npos)
+      << batch.err;
+  EXPECT_EQ(entries(dir_), before + 1) << "nothing was written beside the inputs";
 }
 
 TEST_F(Outputs, RunRefusesAFolderOfAnotherScenesOutputsAndNamesItsOwnStaleOnes) {
@@ -172,6 +183,36 @@ TEST_F(Outputs, RunRefusesAFolderOfAnotherScenesOutputsAndNamesItsOwnStaleOnes) 
       << refused.err;
   EXPECT_EQ(readFile(out / "summary.json"), before);
   EXPECT_EQ(entries(out), 3u) << "summary.json, first.exr, second.exr and nothing else";
+}
+
+TEST_F(Outputs, RunHoldsItsFolderAndAFailedRunTakesAwayOnlyTheFoldersItMade) {
+  // Another glint holds the folder (this process, through the same lock): refused, naming it.
+  const fs::path held = dir_ / "held";
+  fs::create_directories(held);
+  {
+    const FolderLock lock(held, "glint run");
+    const Outcome r = glint({"run", scene_.string(), "-o", held.string(), "--quiet"});
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(
+        r.err.find(held.string() + " is in use by glint process " + std::to_string(::getpid())),
+        std::string::npos)
+        << r.err;
+    EXPECT_EQ(entries(held), 1u) << "nothing but the holder's lock file";
+  }
+  EXPECT_EQ(entries(held), 0u) << "the holder removed its lock file";
+
+  // A run that fails (here: far beyond a 1 MB budget) after making out/deeper: both go, and
+  // a folder that was there before stays.
+  const fs::path made = dir_ / "new" / "deeper";
+  const Outcome failed =
+      glint({"run", scene_.string(), "-o", made.string(), "--memory", "1M", "--quiet"});
+  EXPECT_EQ(failed.status, 2) << failed.err;
+  EXPECT_FALSE(fs::exists(dir_ / "new")) << "the folders the failed run made were left";
+  const Outcome failed_in_held =
+      glint({"run", scene_.string(), "-o", held.string(), "--memory", "1M", "--quiet"});
+  EXPECT_EQ(failed_in_held.status, 2) << failed_in_held.err;
+  EXPECT_TRUE(fs::is_directory(held)) << "a folder the run did not make stays";
+  EXPECT_EQ(entries(held), 0u) << "and holds no temporary or lock file";
 }
 
 }  // namespace
