@@ -21,11 +21,11 @@
 #include "glint/version.h"
 #include "pipeline/batch_report.h"
 #include "pipeline/cluster.h"
-#include "pipeline/folder_lock.h"
 #include "pipeline/input_error.h"
 #include "pipeline/input_files.h"
 #include "pipeline/json_reader.h"
 #include "pipeline/memory_budget.h"
+#include "pipeline/output_folder.h"
 #include "pipeline/output_names.h"
 #include "pipeline/progress.h"
 #include "pipeline/run_command.h"
@@ -141,11 +141,10 @@ std::string listed(const std::vector<fs::path>& paths) {
 // After a failed run: the folders it made go again, unless a scenario in them is finished (the
 // next run resumes from it). Scenario folders only inside a scenarios/ this run made: every
 // glint file in them is this run's (rank 0 holds the folder's lock).
-void removeFailedRun(const fs::path& out_dir, CreatedFolders& created,
-                     const std::vector<std::string>& names) noexcept {
+void removeFailedRun(const OutputFolder& out, const std::vector<std::string>& names) noexcept {
   try {
-    const fs::path scenarios = out_dir / output_names::kScenariosFolder;
-    if (created.made(scenarios)) {
+    const fs::path scenarios = out.path() / output_names::kScenariosFolder;
+    if (out.made(scenarios)) {
       std::error_code ec;
       for (fs::directory_iterator it(scenarios, ec), end; !ec && it != end; it.increment(ec)) {
         if (isScenarioDirName(it->path().filename().string()) &&
@@ -369,22 +368,14 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   // Rank 0 holds the folder for the whole run (the other ranks write only the scenarios it hands
   // them), and on failure takes away the folders the run made, if nothing in them is worth
   // resuming from.
-  CreatedFolders created;
-  std::optional<FolderLock> lock;
   const std::vector<std::string> own_files = scenarioFileNames(lattices);
-  const OnFailure on_failure([&] {
-    if (!root) return;
-    removeFailedRun(out_dir, created, own_files);
-    lock.reset();  // before the folder holding the lock file can go
-    created.removeEmpty();
-  });
+  std::optional<OutputFolder> out;
   if (root) {
     InputFiles inputs;
     inputs.add(args.study_path, "study file");
     inputs.addScene(study.scene_path, study.base);
-    inputs.requireNotHeldBy(out_dir);  // --fresh and the scenarios write there
-    created.create(out_dir);
-    lock.emplace(out_dir, "glint batch");
+    out.emplace(out_dir, inputs, "glint batch",
+                [&](const OutputFolder& f) { removeFailedRun(f, own_files); });
     const fs::path scenarios = out_dir / output_names::kScenariosFolder;
     if (args.fresh) {
       const std::vector<fs::path> kept = removeScenarioFolders(scenarios, own_files);
@@ -393,7 +384,7 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
             << "not write (and the scenario folders holding them): " << listed(kept) << "\n";
       }
     }
-    created.create(scenarios);
+    out->create(scenarios);
     for (const Scenario& s : study.scenarios) {
       if (auto rec = resumeScenario(study, s, lattices, out_dir, args.fresh, err, args.quiet)) {
         records[s.index] = std::move(*rec);

@@ -15,11 +15,11 @@
 #include "export/field_files.h"
 #include "export/vtk_files.h"
 #include "glint/version.h"
-#include "pipeline/folder_lock.h"
 #include "pipeline/input_error.h"
 #include "pipeline/input_files.h"
 #include "pipeline/json_reader.h"
 #include "pipeline/memory_budget.h"
+#include "pipeline/output_folder.h"
 #include "pipeline/output_names.h"
 #include "pipeline/progress.h"
 #include "pipeline/run_folder.h"
@@ -207,17 +207,12 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   }
   InputFiles inputs;
   inputs.addScene(args.scene_path, scene);
-  // Rank 0 holds the folder while it runs: another run's files and this one's never mix. A run
-  // that fails takes away the folders it made, once its temporaries and the lock file are gone
-  // (the objects below are destroyed in the reverse order).
-  CreatedFolders created;
-  const OnFailure on_failure([&] { created.removeEmpty(); });
-  std::optional<FolderLock> lock;
+  // Rank 0 holds the folder while it runs, so that another run's files and this one's never
+  // mix; declared before the outputs, whose temporaries go first when the run fails.
+  std::optional<OutputFolder> folder;
   EarlierRun earlier;
   if (writer) {
-    inputs.requireNotHeldBy(dir);
-    created.create(dir);
-    lock.emplace(dir, "glint run");
+    folder.emplace(dir, inputs, "glint run");
     earlier = earlierRun(dir);
     requireSameScene(dir, earlier, args.scene_path);
   }

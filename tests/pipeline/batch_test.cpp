@@ -17,7 +17,7 @@
 
 #include "export/exr_map.h"
 #include "export/lattice_vdb.h"
-#include "pipeline/folder_lock.h"
+#include "pipeline/output_folder.h"
 #include "pipeline/progress.h"
 #include "pipeline/scene.h"
 #include "pipeline/study.h"

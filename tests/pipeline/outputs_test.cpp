@@ -12,7 +12,7 @@
 #include <sstream>
 #include <string>
 
-#include "pipeline/folder_lock.h"
+#include "pipeline/output_folder.h"
 #include "support/cli.h"
 
 namespace glint {

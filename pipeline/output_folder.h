@@ -1,11 +1,13 @@
 #pragma once
 /// @file
-/// @brief One glint process at a time in an output folder, and a failed run that takes away
-/// the folders it made (README "Reliability": one study per folder).
+/// @brief A command's output folder for the length of a run: never one that holds an input, one
+/// glint process at a time, and a failed run takes away the folders it made (README
+/// "Reliability": what an output may replace, one run per folder).
 
 #include <exception>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -96,6 +98,40 @@ class OnFailure {
  private:
   std::function<void()> cleanup_;
   int exceptions_;
+};
+
+class InputFiles;
+
+/// @brief The output folder of `glint run` or `glint batch` while the run lasts: refused when it
+/// holds one of @p inputs, made (remembering which levels), and locked (FolderLock). When the
+/// run fails (an exception leaves the scope that owns this object), the lock is released and
+/// the folders it made are removed if empty; @p before_release runs first, with the lock still
+/// held, for a command's own files (a batch's unfinished scenarios).
+///
+/// Declare it before the command's AtomicFile outputs: they are destroyed first, their
+/// temporaries gone before the folders are emptied.
+class OutputFolder {
+ public:
+  /// @throw OutputError naming the input held, the folder that cannot be made, or the
+  /// process that holds it.
+  OutputFolder(const std::filesystem::path& folder, const InputFiles& inputs,
+               std::string_view command,
+               std::function<void(const OutputFolder&)> before_release = {});
+
+  [[nodiscard]] const std::filesystem::path& path() const { return folder_; }
+  /// @brief Makes a folder inside (and remembers it, as the folder itself).
+  void create(const std::filesystem::path& sub) { created_.create(sub); }
+  /// @brief Whether this run made @p folder.
+  [[nodiscard]] bool made(const std::filesystem::path& folder) const {
+    return created_.made(folder);
+  }
+
+ private:
+  std::filesystem::path folder_;
+  CreatedFolders created_;
+  std::optional<FolderLock> lock_;
+  std::function<void(const OutputFolder&)> before_release_;
+  OnFailure on_failure_;  // last: destroyed first, while the lock is still held
 };
 
 }  // namespace glint

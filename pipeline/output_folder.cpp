@@ -1,4 +1,4 @@
-#include "pipeline/folder_lock.h"
+#include "pipeline/output_folder.h"
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -15,6 +15,7 @@
 
 #include "export/atomic_file.h"
 #include "pipeline/input_error.h"
+#include "pipeline/input_files.h"
 
 namespace glint {
 namespace {
@@ -179,6 +180,19 @@ void CreatedFolders::removeEmpty() noexcept {
   interrupt_slots_.clear();
   for (auto it = made_.rbegin(); it != made_.rend(); ++it) ::rmdir(it->c_str());
   made_.clear();
+}
+
+OutputFolder::OutputFolder(const fs::path& folder, const InputFiles& inputs,
+                           std::string_view command,
+                           std::function<void(const OutputFolder&)> before_release)
+    : folder_(folder), before_release_(std::move(before_release)), on_failure_([this] {
+        if (before_release_) before_release_(*this);
+        lock_.reset();  // the lock file goes before the folder holding it can
+        created_.removeEmpty();
+      }) {
+  inputs.requireNotHeldBy(folder_);
+  created_.create(folder_);
+  lock_.emplace(folder_, command);
 }
 
 }  // namespace glint
