@@ -14,7 +14,7 @@
 
 #include "observers/far_field.h"
 #include "observers/field.h"
-#include "pipeline/hazard.h"
+#include "pipeline/hazard_report.h"
 #include "pipeline/study.h"
 #include "pipeline/study_maps.h"
 

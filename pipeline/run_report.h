@@ -12,7 +12,7 @@
 #include "facets/integrator.h"
 #include "observers/far_field.h"
 #include "observers/field.h"
-#include "pipeline/hazard.h"
+#include "pipeline/hazard_report.h"
 #include "pipeline/scene.h"
 #include "pipeline/surface_check.h"
 

@@ -152,10 +152,12 @@ AtmosphereSpec readAtmosphere(ObjectReader r, double wavelength_nm) {
 }
 
 // An optical aid (`optical_aid`): its aperture, magnification and transmission, or its gain.
-OpticalAidSpec readOpticalAid(ObjectReader r, double wavelength_nm) {
+OpticalAidSpec readOpticalAid(ObjectReader r, double wavelength_nm, SafetyStandard standard) {
   if (!(wavelength_nm >= 302.5 && wavelength_nm <= 4000.0)) {
-    r.failHere("optical aids transmit 302.5 nm to 4000 nm (ANSI Z136.1-2014 8.3); at " +
-               formatNumber("%g", wavelength_nm) + " nm the standards apply none");
+    const StandardClauses& c = clauses(standard);
+    r.failHere(std::string("optical aids transmit 302.5 nm to 4000 nm (") + c.name + " " +
+               c.optical_aids + "); at " + formatNumber("%g", wavelength_nm) +
+               " nm the standards apply none");
   }
   OpticalAidSpec aid;
   if (r.has("gain")) {
@@ -476,7 +478,8 @@ Scene parseScene(std::string_view text, const std::string& source,
     scene.hazard.atmosphere = readAtmosphere(r.object("atmosphere"), scene.laser.wavelength_nm);
   }
   if (r.has("optical_aid")) {
-    scene.hazard.aid = readOpticalAid(r.object("optical_aid"), scene.laser.wavelength_nm);
+    scene.hazard.aid =
+        readOpticalAid(r.object("optical_aid"), scene.laser.wavelength_nm, scene.hazard.standard);
   }
   completeHazard(scene.hazard, scene.laser.wavelength_nm);
 

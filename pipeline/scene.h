@@ -18,7 +18,7 @@
 #include "facets/tessellate.h"
 #include "facets/vec3.h"
 #include "pipeline/gltf_loader.h"
-#include "pipeline/hazard.h"
+#include "hazard/hazard.h"
 
 namespace glint {
 

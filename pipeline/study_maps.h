@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "observers/field.h"
-#include "pipeline/hazard.h"
+#include "pipeline/hazard_report.h"
 #include "pipeline/scene.h"
 
 namespace glint {

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "observers/field_compare.h"
-#include "pipeline/hazard.h"
+#include "hazard/hazard.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
 

@@ -1,6 +1,6 @@
 // The hazard module: pulse trains' MPE by the worked examples of the standards, the air's
 // extinction, optical aids, and what each does to a scene's irradiance and hazard.
-#include "pipeline/hazard.h"
+#include "pipeline/hazard_report.h"
 
 #include <gtest/gtest.h>
 

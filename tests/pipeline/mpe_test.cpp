@@ -1,7 +1,7 @@
 // The ocular MPE against worked values of ANSI Z136.1-2014 Table 5a (IEC 60825-1:2014 Table
 // A.1). Each expected value is worked by hand in its comment from the table row; the
 // tolerance is rounding of the factors only (1e-9 relative) unless the row itself rounds.
-#include "pipeline/mpe.h"
+#include "hazard/mpe.h"
 
 #include <gtest/gtest.h>
 

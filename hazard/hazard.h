@@ -2,7 +2,8 @@
 /// @file
 /// @brief The hazard a scene is judged for, in one place: the exposure and its MPE (continuous,
 /// single pulse or pulse train), the air's extinction, an optical aid, and the ratios and zones
-/// the outputs report (README "Hazard").
+/// the outputs report (README "Hazard"). Physics only: what the outputs make of it (JSON, maps,
+/// volume arrays) is built in pipeline/hazard_report.h.
 ///
 /// Everything glint integrates is the mean irradiance over the exposure, E (W/m²), from the
 /// laser's mean power. The limits reduce to one number it is compared with, `mpe_w_m2`: the MPE
@@ -11,17 +12,14 @@
 /// its duration τ, the MPE for τ divided by τ.
 
 #include <algorithm>
-#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
-#include <vector>
 
-#include "export/exr_map.h"      // PlaneMap
-#include "export/field_files.h"  // ScaledArray
 #include "facets/vec3.h"
+#include "hazard/mpe.h"
+#include "hazard/standard.h"
 #include "observers/far_field.h"
 #include "observers/field.h"
-#include "pipeline/mpe.h"
 
 namespace glint {
 
@@ -52,7 +50,8 @@ struct PulseTrainMpe {
 /// @brief The MPE per pulse of @p pulse repeated over @p exposure_s at @p wavelength_nm.
 /// @pre the pulse has a repetition rate, duration × rate ≤ 1 and rate × exposure ≥ 1; the MPE
 /// table's ranges hold (ocularMpe throws std::out_of_range otherwise).
-PulseTrainMpe pulseTrainMpe(double wavelength_nm, const PulseSpec& pulse, double exposure_s);
+PulseTrainMpe pulseTrainMpe(double wavelength_nm, const PulseSpec& pulse, double exposure_s,
+                            SafetyStandard standard = SafetyStandard::AnsiZ136_1_2014);
 
 /// @brief How meteorological visibility gives extinction (both: μ = 3.912/V (λ/550 nm)^-q).
 enum class VisibilityModel {
@@ -93,6 +92,8 @@ double opticalGain(double aperture_m, double magnification, double transmission,
 /// @brief The exposure the hazard is judged for, its limit, the air and the aid: what every
 /// hazard ratio, zone and distance of the outputs is computed from.
 struct HazardSpec {
+  /// The standard whose limits apply (its tables and rules; cited in every output).
+  SafetyStandard standard = SafetyStandard::AnsiZ136_1_2014;
   /// `laser.exposure_s`, by default 0.25 s (the aversion response) for 400–700 nm and 10 s
   /// beyond 700 nm, where nothing makes the eye turn away; a single pulse's duration.
   double exposure_s = 0.25;
@@ -147,14 +148,6 @@ void completeHazard(HazardSpec& h, double wavelength_nm);
 /// @brief The lines of the standards the limit came from, as outputs record them.
 std::string hazardCitation(const HazardSpec& h);
 
-/// @brief The limits in one line for the terminal, e.g. "MPE 50 W/m² for 10 s (default,
-/// thermal)", with the pulse's MPE, the air and the aid where the scene has them.
-std::string hazardLine(const HazardSpec& h);
-
-/// @brief The limits as `summary.json` and `result.json` record them (README "Hazard"):
-/// exposure, MPE and its rule, the pulse train's rules, the air, the aid.
-nlohmann::json hazardLimitsJson(const HazardSpec& h);
-
 /// @brief The nominal hazard zone of an observer box or plane: where E ≥ MPE, and where an
 /// optical aid lifts E × gain to the MPE (the aided zone).
 struct HazardZone {
@@ -192,23 +185,7 @@ struct FarHazard {
 };
 FarHazard farHazard(const FarField& field, const HazardSpec& h);
 
-/// @brief The far-field hazard's entries of `far_field` in the summaries: `max_nohd_m` and its
-/// direction, the aided ones with an aid.
-nlohmann::json farHazardJson(const FarHazard& hazard);
-
-/// @brief The hazard arrays the volumes carry beside irradiance: `hazard_ratio` (per W/m²:
-/// 1/MPE) and, with an optical aid, `aided_hazard_ratio` (gain/MPE).
-std::vector<ScaledArray> hazardArrays(const HazardSpec& h);
-
-/// @brief A plane's field as the map its EXR holds: lattice row j along v, column i along u;
-/// `hazard_ratio` and (with an aid) `aided_hazard_ratio` as @p h forms them.
-PlaneMap planeMap(const ObserverField& field, const HazardSpec& h);
-
 /// @brief The area (m²) of a plane's lattice points in @p zone: pixel_m² each.
 double hazardousArea(const ObserverField& field, const ObserverField::Exceedance& zone);
-
-/// @brief hazardLimitsJson() with, where there is a @p zone, its peak ratios and the nominal
-/// hazard zone (`nominal_hazard_zone`, and `aided_nominal_hazard_zone` with an aid).
-nlohmann::json hazardJson(const HazardSpec& h, const HazardZone* zone);
 
 }  // namespace glint

@@ -1,121 +1,12 @@
-#include "pipeline/hazard.h"
+#include "pipeline/hazard_report.h"
 
 #include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
-#include <stdexcept>
 
 #include "pipeline/progress.h"
 
 namespace glint {
-namespace {
-
-// t_min of ANSI Z136.1-2014 (IEC 60825-1:2014: T_i): the break point of the single-pulse rows
-// of Table 5a, below which the retina integrates a pulse's energy as if it were one instant.
-double tMinS(double wavelength_nm) { return wavelength_nm < 1050.0 ? 5e-6 : 13e-6; }
-
-// The retinal hazard region, where rule 3 and the grouping of close pulses apply.
-bool retinal(double wavelength_nm) { return wavelength_nm < 1400.0; }
-
-}  // namespace
-
-double defaultExposureS(double wavelength_nm) { return wavelength_nm <= 700.0 ? 0.25 : 10.0; }
-
-PulseTrainMpe pulseTrainMpe(double wavelength_nm, const PulseSpec& pulse, double exposure_s) {
-  const double f = *pulse.repetition_rate_hz;
-  PulseTrainMpe r;
-  double duration_s = pulse.duration_s;
-  double rate_hz = f;
-  if (retinal(wavelength_nm) && 1.0 / f < tMinS(wavelength_nm)) {
-    r.grouped = true;
-    duration_s = tMinS(wavelength_nm);
-    rate_hz = 1.0 / duration_s;
-  }
-  r.pulses = rate_hz * exposure_s;
-  const Mpe single = ocularMpe(wavelength_nm, duration_s);
-  const Mpe whole = ocularMpe(wavelength_nm, exposure_s);
-  r.single_pulse_j_m2 = single.radiant_exposure_j_m2;
-  r.average_j_m2 = whole.radiant_exposure_j_m2 / r.pulses;
-  double limit = r.single_pulse_j_m2;
-  r.rule = 1;
-  if (r.average_j_m2 < limit) {
-    limit = r.average_j_m2;
-    r.rule = 2;
-  }
-  // Rule 3 guards against the additive heating of many pulses: a thermal limit only.
-  if (retinal(wavelength_nm) && single.limit == MpeLimit::Thermal) {
-    r.c_p = std::pow(r.pulses, -0.25);
-    r.reduced_j_m2 = r.single_pulse_j_m2 * r.c_p;
-    if (r.reduced_j_m2 < limit) {
-      limit = r.reduced_j_m2;
-      r.rule = 3;
-    }
-  }
-  // A group of f / rate pulses shares the group's limit.
-  r.per_pulse_j_m2 = limit * rate_hz / f;
-  return r;
-}
-
-double extinctionFromVisibility(double visibility_m, double wavelength_nm, VisibilityModel model) {
-  const double v_km = visibility_m / 1000.0;
-  double q;
-  if (v_km > 50.0) {
-    q = 1.6;
-  } else if (v_km > 6.0) {
-    q = 1.3;
-  } else if (model == VisibilityModel::Kruse) {
-    q = 0.585 * std::cbrt(v_km);
-  } else if (v_km > 1.0) {
-    q = 0.16 * v_km + 0.34;
-  } else if (v_km > 0.5) {
-    q = v_km - 0.5;
-  } else {
-    q = 0.0;
-  }
-  // 3.912 = ln(1/0.02): visibility is where a black object's contrast falls to 2 % at 550 nm.
-  const double per_km = 3.912 / v_km * std::pow(wavelength_nm / 550.0, -q);
-  return per_km / 1000.0;
-}
-
-double opticalGain(double aperture_m, double magnification, double transmission,
-                   double wavelength_nm) {
-  const double eye_aperture_m = retinal(wavelength_nm) ? 7e-3 : 1e-3;
-  const double collected = std::min(magnification, aperture_m / eye_aperture_m);
-  return transmission * collected * collected;
-}
-
-void completeHazard(HazardSpec& h, double wavelength_nm) {
-  h.train.reset();
-  if (!h.pulse) {
-    h.mpe = ocularMpe(wavelength_nm, h.exposure_s);
-    h.mpe_w_m2 = h.mpe.irradiance_w_m2;
-    h.pulse_exposure_s = 0.0;
-    return;
-  }
-  const PulseSpec& p = *h.pulse;
-  h.mpe = ocularMpe(wavelength_nm, p.duration_s);
-  if (!p.repetition_rate_hz) {
-    h.exposure_s = p.duration_s;
-    h.mpe_w_m2 = h.mpe.irradiance_w_m2;
-    h.pulse_exposure_s = p.duration_s;
-    return;
-  }
-  h.train = pulseTrainMpe(wavelength_nm, p, h.exposure_s);
-  h.mpe_w_m2 = h.train->per_pulse_j_m2 * *p.repetition_rate_hz;
-  h.pulse_exposure_s = 1.0 / *p.repetition_rate_hz;
-}
-
-std::string hazardCitation(const HazardSpec& h) {
-  std::string s = mpeCitation(h.mpe);
-  if (h.train) {
-    s += "; repetitive pulses, ANSI Z136.1-2014 8.2.3 rule " + std::to_string(h.train->rule);
-    if (h.train->rule == 3) s += " (C_P = n^-0.25)";
-    if (h.train->grouped) s += ", pulses within t_min counted as one";
-  } else if (h.pulse) {
-    s += "; a single pulse";
-  }
-  return s;
-}
 
 std::string hazardLine(const HazardSpec& h) {
   std::string s = "MPE " + formatNumber("%.4g", h.mpe_w_m2) + " W/m² for " +
@@ -179,31 +70,6 @@ nlohmann::json hazardLimitsJson(const HazardSpec& h) {
     j["optical_aid"] = aid;
   }
   return j;
-}
-
-HazardZone hazardZone(const ObserverField& field, const HazardSpec& h,
-                      const Vec3& target_centre_m) {
-  const FieldStats& s = field.stats();
-  HazardZone z;
-  z.peak_ratio = h.ratio(s.peak_w_m2);
-  z.aided_peak_ratio = h.aidedRatio(s.peak_w_m2);
-  z.peak_pulse_j_m2 = h.pulseRadiantExposureJ_m2(s.peak_w_m2);
-  z.above_mpe = field.exceedance(h.mpe_w_m2, target_centre_m);
-  if (h.aid) z.aided_above_mpe = field.exceedance(h.aidedMpeW_m2(), target_centre_m);
-  z.target_centre_m = target_centre_m;
-  z.unconverged_ratio_upper =
-      std::max(h.ratio(s.unconverged_max_upper_w_m2), h.aidedRatio(s.unconverged_max_upper_w_m2));
-  z.narrow_glint_ratio_bound =
-      std::max(h.ratio(s.unresolved_max_bound_w_m2), h.aidedRatio(s.unresolved_max_bound_w_m2));
-  z.narrow_glint_may_be_hazardous = s.unresolved_points > 0;
-  return z;
-}
-
-FarHazard farHazard(const FarField& field, const HazardSpec& h) {
-  const double mu = h.atmosphere.extinction_per_m;
-  FarHazard f{farReach(field, h.mpe_w_m2, mu), std::nullopt};
-  if (h.aid) f.aided = farReach(field, h.aidedMpeW_m2(), mu);
-  return f;
 }
 
 namespace {
@@ -288,10 +154,6 @@ PlaneMap planeMap(const ObserverField& field, const HazardSpec& h) {
       m.status.push_back(static_cast<float>(static_cast<int>(field.status(i, j, 0))));
     }
   return m;
-}
-
-double hazardousArea(const ObserverField& field, const ObserverField::Exceedance& zone) {
-  return static_cast<double>(zone.points) * field.spec().voxel_m * field.spec().voxel_m;
 }
 
 }  // namespace glint

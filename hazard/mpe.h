@@ -5,6 +5,8 @@
 
 #include <string>
 
+#include "hazard/standard.h"
+
 namespace glint {
 
 /// @brief Which biological limit set the MPE.
@@ -20,6 +22,7 @@ struct Mpe {
   MpeLimit limit = MpeLimit::Thermal;
   std::string
       rule;  ///< the table row that applied, e.g. "400-700 nm, 5e-6-10 s: 18 C_A t^0.75 J/m²"
+  SafetyStandard standard = SafetyStandard::AnsiZ136_1_2014;  ///< whose table the row is
 };
 
 /// @brief The ocular MPE for intrabeam (point-source) viewing of a single exposure of
@@ -30,9 +33,11 @@ struct Mpe {
 /// Repetitive pulses and extended-source relaxations are not modelled.
 /// Valid for 400 nm ≤ wavelength ≤ 1 mm and 1 ns ≤ exposure ≤ 30 000 s; anything else throws
 /// std::out_of_range naming the range: the table is never extrapolated.
-Mpe ocularMpe(double wavelength_nm, double exposure_s);
+Mpe ocularMpe(double wavelength_nm, double exposure_s,
+              SafetyStandard standard = SafetyStandard::AnsiZ136_1_2014);
 
-/// @brief The table row of @p mpe with the table's name, as outputs record it.
+/// @brief The table row of @p mpe with the standard's and the table's name, as outputs record
+/// it.
 std::string mpeCitation(const Mpe& mpe);
 
 /// @brief "thermal" or "photochemical".

@@ -1,4 +1,4 @@
-#include "pipeline/mpe.h"
+#include "hazard/mpe.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -138,9 +138,8 @@ const Band kBands[] = {
     {2600.0, kMaxWavelengthNm, [](double, double t) { return infrared(kIr2600, t); }},
 };
 
-}  // namespace
-
-Mpe ocularMpe(double wavelength_nm, double exposure_s) {
+// ANSI Z136.1-2014 Table 5a: the lowest of the bands' rows at the wavelength.
+Mpe ansi2014PointSourceMpe(double wavelength_nm, double exposure_s) {
   if (!(wavelength_nm >= kMinWavelengthNm && wavelength_nm <= kMaxWavelengthNm)) {
     throw std::out_of_range("the MPE table covers wavelengths from 400 nm to 1 mm; got " +
                             std::to_string(wavelength_nm) + " nm");
@@ -157,13 +156,27 @@ Mpe ocularMpe(double wavelength_nm, double exposure_s) {
     if (!found || m.irradiance_w_m2 < lowest.irradiance_w_m2) lowest = std::move(m);
     found = true;
   }
+  lowest.standard = SafetyStandard::AnsiZ136_1_2014;
   return lowest;
+}
+
+}  // namespace
+
+Mpe ocularMpe(double wavelength_nm, double exposure_s, SafetyStandard standard) {
+  switch (standard) {
+    case SafetyStandard::AnsiZ136_1_2014:
+      break;
+  }
+  return ansi2014PointSourceMpe(wavelength_nm, exposure_s);
 }
 
 const char* toString(MpeLimit limit) {
   return limit == MpeLimit::Photochemical ? "photochemical" : "thermal";
 }
 
-std::string mpeCitation(const Mpe& mpe) { return "ANSI Z136.1-2014 Table 5a: " + mpe.rule; }
+std::string mpeCitation(const Mpe& mpe) {
+  const StandardClauses& c = clauses(mpe.standard);
+  return std::string(c.name) + " " + c.point_source_mpe + ": " + mpe.rule;
+}
 
 }  // namespace glint

@@ -1,0 +1,41 @@
+#pragma once
+/// @file
+/// @brief What the outputs make of the hazard (hazard/hazard.h): the terminal's line, the
+/// entries of `summary.json` and `result.json`, the hazard arrays of the volumes and the plane
+/// maps of the EXR files. The hazard layer itself knows no file format.
+
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+#include <vector>
+
+#include "export/exr_map.h"      // PlaneMap
+#include "export/field_files.h"  // ScaledArray
+#include "hazard/hazard.h"
+
+namespace glint {
+
+/// @brief The limits in one line for the terminal, e.g. "MPE 50 W/m² for 10 s (default,
+/// thermal)", with the pulse's MPE, the air and the aid where the scene has them.
+std::string hazardLine(const HazardSpec& h);
+
+/// @brief The limits as `summary.json` and `result.json` record them (README "Hazard"):
+/// exposure, MPE and its rule, the pulse train's rules, the air, the aid.
+nlohmann::json hazardLimitsJson(const HazardSpec& h);
+
+/// @brief The far-field hazard's entries of `far_field` in the summaries: `max_nohd_m` and its
+/// direction, the aided ones with an aid.
+nlohmann::json farHazardJson(const FarHazard& hazard);
+
+/// @brief The hazard arrays the volumes carry beside irradiance: `hazard_ratio` (per W/m²:
+/// 1/MPE) and, with an optical aid, `aided_hazard_ratio` (gain/MPE).
+std::vector<ScaledArray> hazardArrays(const HazardSpec& h);
+
+/// @brief A plane's field as the map its EXR holds: lattice row j along v, column i along u;
+/// `hazard_ratio` and (with an aid) `aided_hazard_ratio` as @p h forms them.
+PlaneMap planeMap(const ObserverField& field, const HazardSpec& h);
+
+/// @brief hazardLimitsJson() with, where there is a @p zone, its peak ratios and the nominal
+/// hazard zone (`nominal_hazard_zone`, and `aided_nominal_hazard_zone` with an aid).
+nlohmann::json hazardJson(const HazardSpec& h, const HazardZone* zone);
+
+}  // namespace glint
