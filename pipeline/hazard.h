@@ -2,7 +2,7 @@
 /// @file
 /// @brief The hazard a scene is judged for, in one place: the exposure and its MPE (continuous,
 /// single pulse or pulse train), the air's extinction, an optical aid, and the ratios and zones
-/// the outputs report (README "Hazard").
+/// the outputs report (docs/hazard.md).
 ///
 /// Everything glint integrates is the mean irradiance over the exposure, E (W/m²), from the
 /// laser's mean power. The limits reduce to one number it is compared with, `mpe_w_m2`: the MPE
@@ -151,7 +151,7 @@ std::string hazardCitation(const HazardSpec& h);
 /// thermal)", with the pulse's MPE, the air and the aid where the scene has them.
 std::string hazardLine(const HazardSpec& h);
 
-/// @brief The limits as `summary.json` and `result.json` record them (README "Hazard"):
+/// @brief The limits as `summary.json` and `result.json` record them (docs/hazard.md):
 /// exposure, MPE and its rule, the pulse train's rules, the air, the aid.
 nlohmann::json hazardLimitsJson(const HazardSpec& h);
 
