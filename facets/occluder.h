@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// @brief The target as an occluder: whether a light path from a facet to the laser or to an
-/// observer is blocked by the target itself, traced by Embree (README "Occlusion").
+/// observer is blocked by the target itself, traced by Embree (docs/meshes.md, "Occlusion").
 
 #include <cstdint>
 #include <memory>

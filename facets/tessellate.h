@@ -53,7 +53,7 @@ std::uint32_t addSphere(Target& target, const SphereShape& shape, std::uint32_t 
 std::uint32_t addDisk(Target& target, const DiskShape& shape, std::uint32_t material, int segments,
                       const Vec3& reference);
 
-/// @brief The surface a mesh's facets are given (README, "Meshes": measured against the shapes
+/// @brief The surface a mesh's facets are given (docs/meshes.md: measured against the shapes
 /// glint knows exactly, bench/RESULTS.md).
 enum class MeshSurface {
   Flat,        ///< the chord triangles

@@ -2,8 +2,8 @@
 /// @file
 /// @brief The adaptive observer field: irradiance over a box of observers, refined octree-
 /// fashion only where it varies and left empty only where a bound proves it negligible
-/// (README.md, "How it works": the observer field). OpenVDB holds the result; this header does not
-/// include it (see observers/field_grids.h for the grids themselves).
+/// (docs/architecture.md, "How it works": the observer field). OpenVDB holds the result;
+/// this header does not include it (see observers/field_grids.h for the grids themselves).
 
 #include <array>
 #include <cmath>

@@ -2,7 +2,7 @@
 /// @file
 /// @brief `glint batch`: a study's scenarios run one after another (each with TBB inside), or
 /// shared among the ranks of an MPI job, and aggregated into maximum-irradiance and coverage
-/// maps (README "Batch studies").
+/// maps (docs/batch.md).
 
 #include <cstdint>
 #include <ostream>

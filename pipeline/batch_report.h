@@ -2,7 +2,7 @@
 /// @file
 /// @brief What `glint batch` reports: each scenario's record (result.json), the study's
 /// scenarios.csv, its aggregated maps (`box.vdb`, `<plane>.exr`), summary.json and the lines
-/// on the terminal (README "Batch studies").
+/// on the terminal (docs/batch.md).
 
 #include <cstddef>
 #include <filesystem>
@@ -31,7 +31,8 @@ nlohmann::json scenarioRegionJson(const StudyLattice& r, const FieldStats& stats
 /// @brief The far field's entry of a scenario's result.json (with farHazardJson()).
 nlohmann::json scenarioFarFieldJson(const FarField& far, const HazardSpec& h);
 
-/// @brief scenarios.csv: one row per scenario record, in index order (README's columns).
+/// @brief scenarios.csv: one row per scenario record, in index order (docs/batch.md lists the
+/// columns).
 std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
                          const std::map<std::size_t, nlohmann::json>& records, bool far_field,
                          bool aided);

@@ -6,7 +6,7 @@
 
 namespace glint {
 
-/// @brief glint's exit statuses (README "Using it").
+/// @brief glint's exit statuses (docs/usage.md, "Exit status").
 enum ExitStatus : int {
   kExitSuccess = 0,
   kExitInternalError = 1,  ///< a bug or a resource failure: never a clean "no hazard"

@@ -2,7 +2,8 @@
 /// @file
 /// @brief Reads the triangles of a glTF 2.0 model (.glb or .gltf) through tinygltf, as a file
 /// from a stranger: nothing outside the model's folder is read, nothing is decoded that glint
-/// does not use, and every number is checked before it is used (README "Meshes").
+/// does not use, and every number is checked before it is used (docs/meshes.md, "A file from a
+/// stranger").
 
 #include <cstddef>
 #include <cstdint>

@@ -18,7 +18,7 @@ namespace glint {
 /// thermal)", with the pulse's MPE, the air and the aid where the scene has them.
 std::string hazardLine(const HazardSpec& h);
 
-/// @brief The limits as `summary.json` and `result.json` record them (README "Hazard"):
+/// @brief The limits as `summary.json` and `result.json` record them (docs/hazard.md):
 /// exposure, MPE and its rule, the pulse train's rules, the air, the aid.
 nlohmann::json hazardLimitsJson(const HazardSpec& h);
 

@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// @brief The range of every physical input, chosen so that double arithmetic carries the
-/// whole chain from beam to summed irradiance without overflow (README, "Reliability").
+/// whole chain from beam to summed irradiance without overflow (docs/reliability.md, "Overflow").
 ///
 /// The largest numbers the chain forms are, with these limits:
 /// - beam irradiance E_beam ≤ P / (π r²) ≤ 1e15 / (π · 1e-12) ≈ 3.2e26 W/m²;

@@ -1,8 +1,8 @@
 #pragma once
 /// @file
 /// @brief A command's output folder for the length of a run: never one that holds an input, one
-/// glint process at a time, and a failed run takes away the folders it made (README
-/// "Reliability": what an output may replace, one run per folder).
+/// glint process at a time, and a failed run takes away the folders it made (docs/reliability.md:
+/// what an output may replace, one run per folder).
 
 #include <exception>
 #include <filesystem>

@@ -1,7 +1,7 @@
 #pragma once
 /// @file
-/// @brief The names of the files glint writes, each spelled once here (README "glint run",
-/// "Far field", "Batch studies" describe their contents).
+/// @brief The names of the files glint writes, each spelled once here (docs/usage.md,
+/// "glint run" and "Far field", and docs/batch.md describe their contents).
 
 #include <string>
 

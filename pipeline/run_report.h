@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// @brief What `glint run` reports: summary.json's entries for the box, each plane and the far
-/// field, and the lines on the terminal (README "Outputs").
+/// field, and the lines on the terminal (docs/usage.md, "glint run").
 
 #include <nlohmann/json_fwd.hpp>
 #include <ostream>

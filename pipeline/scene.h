@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// @brief The scene file: laser, materials, objects and accuracy settings, loaded and
-/// validated at the boundary (docs/physics.md, "The minimal scene file"; README, "Scene file").
+/// validated at the boundary (docs/physics.md, "The minimal scene file"; docs/scene.md).
 
 #include <cstdint>
 #include <filesystem>

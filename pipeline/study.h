@@ -2,7 +2,7 @@
 /// @file
 /// @brief A batch study: a base scene and the scenarios made from it by sweeps of the target's
 /// orientation and material, seeded laser pointing jitter and a trajectory of target poses
-/// (README "Batch studies").
+/// (docs/batch.md).
 
 #include <cstdint>
 #include <filesystem>

@@ -2,7 +2,7 @@
 /// @file
 /// @brief A study's hazard over its observer lattices: each region's maximum irradiance and,
 /// per lattice point, how many scenarios reach the MPE there (and the aided MPE, with an
-/// optical aid), from which the coverage maps are made (README "Batch studies").
+/// optical aid), from which the coverage maps are made (docs/batch.md).
 
 #include <cstddef>
 #include <cstdint>

@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// @brief How far the meshes' surface model moves a run's answer: an estimate of the
-/// tessellation's own error (README, "Meshes"), so an analyst knows when to ask for a finer mesh.
+/// tessellation's own error (docs/meshes.md), so an analyst knows when to ask for a finer mesh.
 ///
 /// A mesh fixes only its vertices and their normals; between them each surface model guesses
 /// the surface its own way, and a glint's irradiance follows the curvature of that guess. Where

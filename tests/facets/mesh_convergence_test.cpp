@@ -1,6 +1,6 @@
 // Meshes converge to the surface they sample: a glTF-like mesh of a shape glint knows exactly
 // (sphere, cylinder, disk, ellipsoid), tessellated finer and finer, gives the irradiance of the
-// exact shape at the order its surface model claims (README, "Meshes"; bench/RESULTS.md has the
+// exact shape at the order its surface model claims (docs/meshes.md; bench/RESULTS.md has the
 // full table, every model side by side).
 //
 // What the default surface (PN triangles, Bernstein normal field) claims, in the mean edge

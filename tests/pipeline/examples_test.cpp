@@ -1,4 +1,4 @@
-// The shipped examples run, converge, and hold the accuracy the README promises.
+// The shipped examples run, converge, and hold the accuracy the README and docs/ promise.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -204,8 +204,8 @@ TEST(Examples, TheCarBodyWithoutNormalsGlintsOnEverySurface) {
   // triangles: the surface check says 0.4 %; 25 % leaves room for the glint's curvature, which
   // computed normals fix only to first order). The quadric fit used to refine every observer
   // to the depth limit and report 0 here (fits whose gradient may vanish within the facet: now
-  // refused, QuadricFitStatus::Unbounded). Nagata patches still bulge on this body (README,
-  // "Meshes"), so they are not asked to.
+  // refused, QuadricFitStatus::Unbounded). Nagata patches still bulge on this body
+  // (docs/meshes.md), so they are not asked to.
   const nlohmann::json scene = {
       {"laser",
        {{"position", {-40, -30, 8}},

@@ -1,5 +1,6 @@
 // The glTF loader: node transforms, and the hostile files it must refuse with a clear message
-// (README "Meshes": traversal, a folder as uri, deep nesting, bad accessors, NaN vertices).
+// (docs/meshes.md, "A file from a stranger": traversal, a folder as uri, deep nesting, bad
+// accessors, NaN vertices).
 #include "pipeline/gltf_loader.h"
 
 #include <gtest/gtest.h>
