@@ -672,6 +672,19 @@ std::vector<FarField::Peak> locateLobeTops(const FarField& map, const FacetInteg
   return tops;
 }
 
+std::uint64_t farFieldMemoryFloorBytes(const FarFieldSpec& spec, int lat_long_height) {
+  const double directions = (spec.face_pixels + 1.0) * (spec.face_pixels + 1.0);
+  // The faces are computed one at a time; their planes differ only in where they lie.
+  const double face =
+      static_cast<double>(fieldMemoryFloorBytes(cubeFaceSpec(0, Vec3(0.0), 1.0, spec), false));
+  // Upper intensities along both edges of every cell and the cells' own (latLongMap()), made
+  // once the last face's field is gone.
+  const double map = 3.0 * sizeof(double) * 2.0 * lat_long_height * lat_long_height;
+  const double bytes = FarField::kFaces * directions * sizeof(float) + std::max(face, map);
+  return bytes >= 1.8e19 ? std::numeric_limits<std::uint64_t>::max()
+                         : static_cast<std::uint64_t>(bytes);
+}
+
 FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& spec,
                          WorkCounter* counter, PointExchange* exchange) {
   validate(spec);

@@ -252,6 +252,16 @@ std::vector<FarField::Peak> locateLobeTops(const FarField& map, const FacetInteg
 /// as an observer plane: axes u, v, u × v = the face's outward normal.
 FieldSpec cubeFaceSpec(int face, const Vec3& centre_m, double distance_m, const FarFieldSpec& spec);
 
+/// @brief A floor under the memory computeFarField() takes for @p spec (bytes), known before
+/// anything is allocated: the six faces' lattices of intensity, 4 bytes a direction, all kept,
+/// and the field of the face being computed (fieldMemoryFloorBytes() of its plane: the grids'
+/// leaves, 64 bytes a direction), or with @p lat_long_height > 0 the latLongMap() of that
+/// height made after the last face, three doubles a pixel, where that is more. Measured (glint
+/// run, a dark far field, peak resident memory less the run without it; MB = 2²⁰ bytes):
+/// 1 549 MB at face_pixels 4096 (this: 1 412 MB), 487 MB at 2048 (354 MB); one face's grids
+/// at 4096, 1 174 MB (1 028 MB); the lat-long map at height 2048, 192 to 224 MB (192 MB).
+std::uint64_t farFieldMemoryFloorBytes(const FarFieldSpec& spec, int lat_long_height = 0);
+
 /// @brief Computes the map: each cube face as an adaptive observer plane at a thousand far
 /// radii (where the map's own parallax is a thousandth of its tolerance), with @p integrator
 /// at that plane's accuracy. @p counter and @p exchange as for computeField().

@@ -213,8 +213,9 @@ class ObserverField {
 /// @brief A floor under the memory computeField (@p dense: computeDenseField) takes for
 /// @p spec, in bytes, known before anything is allocated: per coarse block (adaptive) or per
 /// lattice point (dense), as measured on fields with nothing to evaluate, with the grids and
-/// the output writers. Evaluated points cost more (the run's summary reports bytes per
-/// active voxel), which the run's memory watch covers.
+/// the output writers; a plane's grids besides, a leaf per 8 × 8 points. Evaluated points
+/// cost more (the run's summary reports bytes per active voxel), which the run's memory watch
+/// covers.
 std::uint64_t fieldMemoryFloorBytes(const FieldSpec& spec, bool dense);
 
 /// @brief The adaptive field: top-down over blocks, each pruning its candidate facets by

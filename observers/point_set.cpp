@@ -16,8 +16,10 @@ std::vector<ObserverResult> evaluatePoints(const FacetIntegrator& integrator,
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       IntegratorWorkspace& ws = workspaces.local();
                       std::int64_t evaluations = 0;
-                      if (counter != nullptr && counter->stopRequested()) return;
                       for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                        // Before each point: one observer of a large target can take seconds
+                        // and grow its workspace by hundreds of MB.
+                        if (counter != nullptr && counter->stopRequested()) return;
                         results[i] = scheme.uniform
                                          ? integrator.uniform(points_m[i], scheme.uniform_level, ws)
                                          : integrator.adaptive(points_m[i], ws);

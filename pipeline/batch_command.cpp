@@ -360,6 +360,13 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
                       budget,
                       "coarsen the base scene's voxel_m or pixel_m, shrink its regions, or "
                       "raise --memory");
+  // A scenario moves the base scene's objects and never adds facets: its target and far field
+  // are the base scene's, besides the maps.
+  const std::uint64_t far_bytes =
+      study.base.far_field.enabled ? farFieldMemoryFloorBytes(farFieldLattice(study.base)) : 0;
+  requireTargetWithinBudget(
+      targetMemory(study.base, fieldIntegratorOptions(study.base, lattices.front().spec)),
+      {budget, floor_bytes + far_bytes, "the study's regions and far field"});
   for (StudyLattice& r : lattices) r.allocate();
   const MemoryWatch watch(budget);
   std::map<std::size_t, nlohmann::json> records;  // rank 0: every scenario's result

@@ -163,6 +163,15 @@ class Reader {
         if (!child[i]) roots.push_back(static_cast<int>(i));
     }
     on_path_.assign(model_.nodes.size(), false);
+    // Counted first, from the accessors' counts, so that a caller may refuse the model before
+    // anything is decoded; the node tree's limits hold by then.
+    if (limits_.before_decoding) {
+      counting_ = true;
+      for (int root : roots) visit(root, glm::dmat4(1.0), 0);
+      counting_ = false;
+      instances_ = 0;
+      limits_.before_decoding(counts_);
+    }
     for (int root : roots) visit(root, glm::dmat4(1.0), 0);
     if (out_.mesh.triangles.empty()) fail("no triangles in the model's scene");
     return std::move(out_);
@@ -225,7 +234,13 @@ class Reader {
            " node instances (nodes shared as children over and over)");
     const tinygltf::Node& node = model_.nodes[index];
     const glm::dmat4 m = parent * localTransform(node, index);
-    if (node.mesh >= 0) addMesh(node.mesh, m, index);
+    if (node.mesh >= 0) {
+      if (counting_) {
+        countMesh(node.mesh);
+      } else {
+        addMesh(node.mesh, m, index);
+      }
+    }
     on_path_[index] = true;
     for (int child : node.children) visit(child, m, depth + 1);
     on_path_[index] = false;
@@ -308,6 +323,44 @@ class Reader {
       }
     }
     return out;
+  }
+
+  // What addMesh() will make of an instance of mesh @p mesh_index, from its accessors' counts
+  // (checked as addMesh() checks them, not decoded), refused at the same limits.
+  void countMesh(int mesh_index) {
+    if (mesh_index >= static_cast<int>(model_.meshes.size())) return;  // addMesh() says so
+    const auto& primitives = model_.meshes[mesh_index].primitives;
+    for (std::size_t k = 0; k < primitives.size(); ++k) {
+      const tinygltf::Primitive& prim = primitives[k];
+      const int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
+      if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+          mode != TINYGLTF_MODE_TRIANGLE_FAN)
+        continue;
+      const std::string at =
+          "/meshes/" + std::to_string(mesh_index) + "/primitives/" + std::to_string(k);
+      const auto pos = prim.attributes.find("POSITION");
+      if (pos == prim.attributes.end()) fail(at + ": no POSITION");
+      const std::size_t vertices = accessor(pos->second, TINYGLTF_TYPE_VEC3,
+                                            {TINYGLTF_COMPONENT_TYPE_FLOAT}, at + " POSITION")
+                                       .count;
+      const std::size_t corners = prim.indices < 0
+                                      ? vertices
+                                      : accessor(prim.indices, TINYGLTF_TYPE_SCALAR,
+                                                 {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                                                  TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                                                  TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT},
+                                                 at + " indices")
+                                            .count;
+      const std::size_t triangles = mode == TINYGLTF_MODE_TRIANGLES ? corners / 3
+                                    : corners >= 3                  ? corners - 2
+                                                                    : 0;
+      if (vertices > 3 * limits_.max_triangles - counts_.vertices)
+        fail("more than " + std::to_string(3 * limits_.max_triangles) + " vertices");
+      if (triangles > limits_.max_triangles - counts_.triangles)
+        fail("more than " + std::to_string(limits_.max_triangles) + " triangles");
+      counts_.vertices += vertices;
+      counts_.triangles += triangles;
+    }
   }
 
   void addMesh(int mesh_index, const glm::dmat4& m, int node) {
@@ -399,6 +452,8 @@ class Reader {
   const GltfLimits& limits_;
   std::vector<bool> on_path_;
   std::size_t instances_ = 0;
+  bool counting_ = false;  // the first pass: countMesh(), nothing decoded
+  GltfCounts counts_;
   GltfModel out_;
 };
 

@@ -8,12 +8,19 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <span>
 #include <string>
 
 #include "facets/tessellate.h"
 
 namespace glint {
+
+/// @brief What a model's scene makes, counted from its accessors before any is decoded.
+struct GltfCounts {
+  std::size_t triangles = 0;  ///< after node instancing
+  std::size_t vertices = 0;   ///< copied once per instance of their primitive
+};
 
 /// @brief What a model file may make glint read.
 struct GltfLimits {
@@ -23,6 +30,9 @@ struct GltfLimits {
   /// already far beyond what a run over observers can afford.
   std::size_t max_triangles = 2'000'000;
   std::size_t max_node_instances = 1'000'000;  ///< nodes visited, each time it is a child
+  /// Called with the model's counts once its JSON and buffers are read and the limits above
+  /// hold, before any accessor is decoded: may throw (a memory budget refuses a model here).
+  std::function<void(const GltfCounts&)> before_decoding;
 };
 
 /// @brief A model's triangles with the node transforms of its scene applied, in the model's

@@ -128,13 +128,12 @@ MemoryWatch::~MemoryWatch() {
   thread_.join();
 }
 
-void MemoryWatch::check(const std::string& what) const {
+void MemoryWatch::check(const std::string& what, std::string_view advice) const {
   if (!exceeded()) return;
   throw InputError(what + ": stopped when the resident memory reached " +
                    formatBytes(static_cast<double>(peakBytes())) + ", beyond the budget of " +
                    formatBytes(static_cast<double>(budget_bytes_)) +
-                   " (--memory); nothing was written. Raise --memory, or coarsen voxel_m or "
-                   "pixel_m, or shrink the box");
+                   " (--memory); nothing was written. " + std::string(advice));
 }
 
 }  // namespace glint

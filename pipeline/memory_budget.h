@@ -53,8 +53,11 @@ class MemoryWatch {
   [[nodiscard]] std::uint64_t peakBytes() const { return peak_bytes_.load(); }
   /// @brief How many samples have been taken (the constructor's first among them).
   [[nodiscard]] std::uint64_t samples() const { return samples_.load(); }
-  /// @throw InputError if the budget was passed, naming @p what was being computed.
-  void check(const std::string& what) const;
+  /// @throw InputError if the budget was passed, naming @p what was being computed and ending
+  /// with @p advice.
+  void check(const std::string& what, std::string_view advice =
+                                          "Raise --memory, or coarsen voxel_m or pixel_m, or "
+                                          "shrink the box") const;
 
  private:
   void sample();

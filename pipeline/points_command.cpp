@@ -117,15 +117,16 @@ std::vector<CsvColumn> hazardColumns(const HazardSpec& h, std::span<const Observ
 }  // namespace
 
 void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
-  Scene scene = loadScene(args.scene_path);
+  const std::uint64_t budget =
+      args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
+  // A mesh is refused before it is decoded, the target before it is built.
+  Scene scene = loadScene(args.scene_path, budget);
   overrideAccuracy(scene.accuracy, args.normals, args.scheme, scene.source);
   // The text, its points (24 bytes each) and their results (about 40) take about three times
   // the file's size at ~30 bytes a row: a quarter of the budget for the file keeps them in it.
-  const std::uint64_t budget =
-      args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
   const std::vector<Vec3> points = loadPoints(args.points_path, budget / 4);
-  requireWithinBudget(std::to_string(points.size()) + " observer points",
-                      points.size() * (sizeof(Vec3) + sizeof(ObserverResult)), budget,
+  const std::uint64_t points_bytes = points.size() * (sizeof(Vec3) + sizeof(ObserverResult));
+  requireWithinBudget(std::to_string(points.size()) + " observer points", points_bytes, budget,
                       "split the points file or raise --memory");
   IntegratorOptions options = integratorOptions(scene);
   if (args.tolerance) options.tolerance = *args.tolerance;
@@ -154,7 +155,14 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   }
   const int threads = args.threads > 0 ? args.threads : tbb::info::default_concurrency();
 
-  const FacetIntegrator integrator(buildTarget(scene), beamOf(scene), options);
+  // The workspaces grow with what each observer sees, not with the scene: the watch covers
+  // them (and whatever the estimate leaves out), stopping the points before their next one.
+  const MemoryWatch watch(budget);
+  constexpr std::string_view kAdvice =
+      "Raise --memory, or lower the objects' segments, or decimate the meshes";
+  const FacetIntegrator integrator = buildIntegrator(
+      scene, options, {budget, points_bytes, std::to_string(points.size()) + " observer points"});
+  watch.check("building the target", kAdvice);
   PointScheme scheme;
   if (args.uniform_level) {
     scheme.uniform = true;
@@ -162,6 +170,7 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   }
 
   WorkCounter counter;
+  counter.stop = &watch.stopFlag();
   const auto start = std::chrono::steady_clock::now();
   std::vector<ObserverResult> results;
   {
@@ -170,8 +179,15 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
       progress = std::make_unique<ProgressReporter>(err, args.terminal, "observers", points.size(),
                                                     counter);
     }
-    results = evaluatePoints(integrator, points, scheme, &counter);
+    try {
+      results = evaluatePoints(integrator, points, scheme, &counter);
+    } catch (const WorkStopped&) {
+      if (progress) progress->stop();
+      watch.check("the observer points", kAdvice);
+      throw;
+    }
   }
+  watch.check("the observer points", kAdvice);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 

@@ -89,9 +89,9 @@ FieldResult computeObserverField(const SceneTarget& target, const Scene& scene,
 }
 
 // Refuses a region whose memory floor exceeds the budget before any of it is allocated, and
-// tells the user at once what the run is about to do.
-void checkRegionMemory(const FieldSpec& spec, const std::string& what, const RunArgs& args,
-                       std::uint64_t budget_bytes, std::ostream& err) {
+// tells the user at once what the run is about to do. Returns the floor.
+std::uint64_t checkRegionMemory(const FieldSpec& spec, const std::string& what, const RunArgs& args,
+                                std::uint64_t budget_bytes, std::ostream& err) {
   const std::array<int, 3> n = spec.nodes();
   const std::string lattice = std::to_string(n[0]) + "×" + std::to_string(n[1]) +
                               (spec.plane ? "" : "×" + std::to_string(n[2]));
@@ -108,6 +108,15 @@ void checkRegionMemory(const FieldSpec& spec, const std::string& what, const Run
         << formatBytes(static_cast<double>(floor_bytes)) << " of the "
         << formatBytes(static_cast<double>(budget_bytes)) << " budget\n";
   }
+  return floor_bytes;
+}
+
+// The lat-long map glint run writes of the far field: about as fine as the faces' centres.
+int latLongHeight(const FarFieldSpec& spec) { return std::min(spec.face_pixels, 2048); }
+
+// The far field's faces (farFieldMemoryFloorBytes()), refused before any is computed.
+std::string farFieldWhat(const FarFieldSpec& spec) {
+  return "the far field (6 × " + std::to_string(spec.face_pixels + 1) + "² directions)";
 }
 
 }  // namespace
@@ -116,13 +125,8 @@ FarField sceneFarField(const SceneTarget& target, const Scene& scene, const Memo
                        const std::string& what, std::ostream* progress_to, bool terminal,
                        PointExchange* exchange) {
   const FarFieldSpec spec = farFieldSpec(scene, target.integrator);
-  std::uint64_t floor_bytes = 0;
-  for (int f = 0; f < FarField::kFaces; ++f) {
-    floor_bytes += fieldMemoryFloorBytes(cubeFaceSpec(f, Vec3(0.0), 1.0, spec), false);
-  }
-  requireWithinBudget(
-      "the far field (6 × " + std::to_string(spec.face_pixels + 1) + "² directions)", floor_bytes,
-      watch.budgetBytes(), "lower far_field.face_pixels, or raise --memory");
+  requireWithinBudget(farFieldWhat(spec), farFieldMemoryFloorBytes(spec), watch.budgetBytes(),
+                      "lower far_field.face_pixels, or raise --memory");
 
   WorkCounter counter;
   counter.stop = &watch.stopFlag();
@@ -194,7 +198,10 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   const bool writer = exchange == nullptr || exchange->rank() == 0;
   RunArgs args = requested;
   if (!writer) args.quiet = true;
-  Scene scene = loadScene(args.scene_path);
+  const std::uint64_t budget =
+      args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
+  // A mesh is refused before it is decoded, the target before it is built.
+  Scene scene = loadScene(args.scene_path, budget);
   overrideAccuracy(scene.accuracy, std::nullopt, args.scheme, scene.source);
   if (!scene.observers && scene.planes.empty()) {
     throw InputError(scene.source +
@@ -271,17 +278,47 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   const RunInfo info = runInfo(scene, args.scene_path, readUserFile(args.scene_path, "scene file"),
                                args.uniform ? "uniform" : "adaptive");
 
-  const std::uint64_t budget =
-      args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
-  if (scene.observers) checkRegionMemory(fieldSpec(scene), "observer box", args, budget, err);
+  // Every large allocation reckoned before the first is made: one region's field at a time
+  // (the box's is gone before the planes'), the far field kept throughout, and the target.
+  std::uint64_t region_bytes = 0;
+  if (scene.observers) {
+    region_bytes = checkRegionMemory(fieldSpec(scene), "observer box", args, budget, err);
+  }
   for (const PlaneSpec& plane : scene.planes) {
-    checkRegionMemory(planeFieldSpec(scene, plane), "plane " + plane.name, args, budget, err);
+    region_bytes = std::max(
+        region_bytes,
+        checkRegionMemory(planeFieldSpec(scene, plane), "plane " + plane.name, args, budget, err));
+  }
+  std::uint64_t far_bytes = 0;
+  if (scene.far_field.enabled) {
+    const FarFieldSpec lattice = farFieldLattice(scene);
+    far_bytes = farFieldMemoryFloorBytes(lattice, writer ? latLongHeight(lattice) : 0);
+    requireWithinBudget(farFieldWhat(lattice), far_bytes, budget,
+                        "lower far_field.face_pixels, or raise --memory");
+    if (!args.quiet) {
+      err << "glint run: " << farFieldWhat(lattice) << "; memory: at least "
+          << formatBytes(static_cast<double>(far_bytes)) << " of the "
+          << formatBytes(static_cast<double>(budget)) << " budget\n";
+    }
+  }
+  const FieldSpec first =
+      scene.observers ? fieldSpec(scene) : planeFieldSpec(scene, scene.planes.front());
+  const TargetMemory target_memory = targetMemory(scene, fieldIntegratorOptions(scene, first));
+  const TargetBudget target_budget{
+      budget, far_bytes + region_bytes,
+      far_bytes > 0 ? "the far field and the largest region" : "the largest region"};
+  requireTargetWithinBudget(target_memory, target_budget);
+  if (!args.quiet) {
+    err << "glint run: target, " << target_memory.facets << " coarse facets; memory: at least "
+        << formatBytes(static_cast<double>(target_memory.floor_bytes)) << " of the "
+        << formatBytes(static_cast<double>(budget)) << " budget\n";
   }
   const MemoryWatch watch(budget);
 
   // Built and culled once, shared by the box and the planes.
-  const SceneTarget target = sceneTarget(
-      scene, scene.observers ? fieldSpec(scene) : planeFieldSpec(scene, scene.planes.front()));
+  const SceneTarget target = sceneTarget(scene, first, target_budget);
+  watch.check("building the target",
+              "Raise --memory, or lower the objects' segments, or decimate the meshes");
   std::optional<FarField> far;
   FarHazard far_hazard;
   if (scene.far_field.enabled) {

@@ -14,7 +14,9 @@
 #include "pipeline/gltf_loader.h"
 #include "pipeline/input_error.h"
 #include "pipeline/json_reader.h"
+#include "pipeline/memory_budget.h"
 #include "pipeline/progress.h"
+#include "pipeline/target_builder.h"
 
 namespace glint {
 namespace {
@@ -228,7 +230,15 @@ MeshTransform readTransform(ObjectReader r) {
   return t;
 }
 
-MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder, const GltfLimits& limits) {
+// The memory a mesh may take as a target: the run's budget (0: none) and whether its facets
+// join an occluder (the scene's accuracy.occlusion; any mesh can shadow itself).
+struct MeshBudget {
+  std::uint64_t budget_bytes = 0;
+  bool occlusion = true;
+};
+
+MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder, const GltfLimits& limits,
+                  const MeshBudget& budget) {
   MeshSpec m;
   const std::string file = r.string("file");
   m.file = folder / file;
@@ -245,7 +255,16 @@ MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder, const Gl
 
   GltfModel model;
   try {
-    model = loadGltf(m.file, limits);
+    GltfLimits budgeted = limits;
+    if (budget.budget_bytes > 0) {
+      budgeted.before_decoding = [&](const GltfCounts& c) {
+        requireWithinBudget(
+            file + " (" + std::to_string(c.triangles) + " triangles, as a target)",
+            meshMemoryFloorBytes(c.triangles, c.vertices, m.surface, budget.occlusion),
+            budget.budget_bytes, "decimate the mesh, or raise --memory");
+      };
+    }
+    model = loadGltf(m.file, budgeted);
   } catch (const InputError& e) {
     r.fail("file", e.what());
   }
@@ -287,7 +306,8 @@ MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder, const Gl
 }
 
 ObjectSpec readObject(ObjectReader r, const std::vector<MaterialSpec>& materials,
-                      const std::filesystem::path& folder, const GltfLimits& mesh_limits) {
+                      const std::filesystem::path& folder, const GltfLimits& mesh_limits,
+                      const MeshBudget& mesh_budget) {
   ObjectSpec o;
   const std::vector<std::string> shapes = {"cylinder", "sphere", "disk", "mesh"};
   const std::size_t shape = r.choice("shape", shapes);
@@ -296,7 +316,7 @@ ObjectSpec readObject(ObjectReader r, const std::vector<MaterialSpec>& materials
             : shape == 2 ? ShapeKind::Disk
                          : ShapeKind::Mesh;
   if (o.shape == ShapeKind::Mesh) {
-    o.mesh = readMesh(r, folder, mesh_limits);
+    o.mesh = readMesh(r, folder, mesh_limits, mesh_budget);
     o.center_m = o.mesh->transform.translation_m;
   } else {
     o.center_m = position(r, "center");
@@ -465,8 +485,8 @@ FarFieldSettings readFarField(ObjectReader r) {
 }  // namespace
 
 Scene parseScene(std::string_view text, const std::string& source,
-                 const std::optional<std::filesystem::path>& folder,
-                 const GltfLimits& mesh_limits) {
+                 const std::optional<std::filesystem::path>& folder, const GltfLimits& mesh_limits,
+                 std::uint64_t memory_budget_bytes) {
   const std::filesystem::path base = folder ? *folder : std::filesystem::path(source).parent_path();
   const json root = parseJson(text, source);
   Scene scene;
@@ -495,13 +515,14 @@ Scene parseScene(std::string_view text, const std::string& source,
   if (!objects.is_array() || objects.empty()) {
     r.fail("objects", "must be a non-empty array of objects");
   }
+  // Before the objects: whether a mesh joins an occluder decides what it costs in memory.
+  if (r.has("accuracy")) scene.accuracy = readAccuracy(r.object("accuracy"));
   for (std::size_t i = 0; i < objects.size(); ++i) {
-    scene.objects.push_back(
-        readObject(ObjectReader(objects[i], "/objects/" + std::to_string(i), source),
-                   scene.materials, base, mesh_limits));
+    scene.objects.push_back(readObject(
+        ObjectReader(objects[i], "/objects/" + std::to_string(i), source), scene.materials, base,
+        mesh_limits, {memory_budget_bytes, scene.accuracy.occlusion}));
   }
 
-  if (r.has("accuracy")) scene.accuracy = readAccuracy(r.object("accuracy"));
   if (r.has("observers")) scene.observers = readObservers(r.object("observers"));
   if (r.has("planes")) {
     const json& planes = r.require("planes");
@@ -568,8 +589,9 @@ void recheckScene(const Scene& scene) {
   }
 }
 
-Scene loadScene(const std::filesystem::path& path) {
-  return parseScene(readUserFile(path, "scene file"), path.string(), path.parent_path());
+Scene loadScene(const std::filesystem::path& path, std::uint64_t memory_budget_bytes) {
+  return parseScene(readUserFile(path, "scene file"), path.string(), path.parent_path(), {},
+                    memory_budget_bytes);
 }
 
 void overrideAccuracy(AccuracySpec& accuracy, std::optional<NormalModel> normals,

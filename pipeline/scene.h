@@ -152,17 +152,20 @@ struct Scene {
   }
 };
 
-/// @brief Reads and validates a scene file, and the mesh files it names.
+/// @brief Reads and validates a scene file, and the mesh files it names. With
+/// @p memory_budget_bytes > 0 (`--memory`), a mesh whose target would need more
+/// (meshMemoryFloorBytes()) is refused before it is decoded.
 /// @throw InputError naming the file and the JSON pointer of the first problem, e.g.
 /// `scene.json: /materials/polished/sigma: must be > 0`.
-Scene loadScene(const std::filesystem::path& path);
+Scene loadScene(const std::filesystem::path& path, std::uint64_t memory_budget_bytes = 0);
 
 /// @brief Validates scene JSON text; @p source names it in messages, and mesh `file`s are
-/// relative to @p folder (default: the folder of @p source) and loaded within @p mesh_limits.
+/// relative to @p folder (default: the folder of @p source) and loaded within @p mesh_limits
+/// and @p memory_budget_bytes (as loadScene()).
 /// @throw InputError as loadScene.
 Scene parseScene(std::string_view json_text, const std::string& source,
                  const std::optional<std::filesystem::path>& folder = std::nullopt,
-                 const GltfLimits& mesh_limits = {});
+                 const GltfLimits& mesh_limits = {}, std::uint64_t memory_budget_bytes = 0);
 
 /// @brief Checks the values of @p scene that code may change after parsing (a study's scenario
 /// moves and turns objects, turns the laser, changes materials) by the scene file's own rules.

@@ -1,12 +1,20 @@
 #include "pipeline/target_builder.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 
+#include "facets/reflection.h"
+#include "facets/surface_map.h"
 #include "facets/tessellate.h"
 #include "pipeline/input_error.h"
 #include "pipeline/limits.h"
+#include "pipeline/memory_budget.h"
 
 namespace glint {
 
@@ -53,6 +61,167 @@ Target buildTarget(const Scene& scene, std::vector<MeshStats>* mesh_stats) {
   return target;
 }
 
+namespace {
+
+// What each coarse facet holds, whatever its shape (Target's per-facet arrays): corners, object,
+// surface model and its index, rim bits. Measured: 84 to 93 bytes a facet resident after
+// buildTarget() on disks of 1 024 to 4 096 segments (glint_memory_bench).
+constexpr double kTargetBytesPerFacet = sizeof(std::array<Vec3, 3>) + 2 * sizeof(std::uint32_t) +
+                                        sizeof(SurfaceModel) + sizeof(std::uint8_t);
+// The occluder's Embree scene (each coarse facet split to level 2: 16 triangles) and its
+// lift per facet. Measured: 1 672 bytes a facet resident (a 250 000-triangle sphere mesh) and
+// 1 791 (two disks, 665 600 facets), 2 100 to 2 830 at the peak of its build.
+constexpr double kOccluderBytesPerFacet = 1500.0;
+// A lit facet's candidate, and in the lobe scheme its share of the bounds over runs of 8 lit
+// facets (LitClusters: a PatchGeometry a node at the lowest level, as many again above).
+// Measured: 457 bytes a lit facet (disks of 2 048 segments, all lit against 2 % lit); counted
+// here, the candidate and the lowest level, 428.
+constexpr double kLitBytesPerFacet = sizeof(Candidate);
+constexpr double kLitClusterBytesPerFacet = sizeof(PatchGeometry) / 8.0;
+// A decoded mesh as the scene keeps it (TriangleMesh): a position and a normal a vertex, three
+// indices a triangle.
+constexpr double kMeshBytesPerVertex = 2 * sizeof(Vec3);
+constexpr double kMeshBytesPerTriangle = sizeof(std::array<std::uint32_t, 3>);
+
+// What a facet's surface model adds to the target: a mesh's PN (or Nagata) patch, a fitted
+// quadric where the fit holds (a PN patch where it does not: the smaller counts). An analytic
+// object's facets share its one quadric.
+double surfaceBytesPerFacet(MeshSurface surface) {
+  switch (surface) {
+    case MeshSurface::Flat:
+      return 0.0;
+    case MeshSurface::QuadricFit:
+      return static_cast<double>(std::min(sizeof(Quadric), sizeof(PNTriangle)));
+    case MeshSurface::PN:
+    case MeshSurface::Nagata:
+    case MeshSurface::PNVlachos:
+      break;
+  }
+  return sizeof(PNTriangle);
+}
+
+std::uint64_t saturated(double bytes) {
+  return bytes >= 1.8e19 ? std::numeric_limits<std::uint64_t>::max()
+                         : static_cast<std::uint64_t>(bytes);
+}
+
+// The facets the integrator keeps as lit where no shadow ray decides (no occluder): its own
+// culling, the facets stored nowhere.
+std::uint64_t litFacetCount(const Target& target, const Beam& beam, NormalModel normals) {
+  std::vector<Beam> beams;
+  beams.reserve(target.objects.size());
+  for (const TargetObject& o : target.objects) beams.push_back(beam.relativeTo(o.origin_m));
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::uint32_t>(0, static_cast<std::uint32_t>(target.facetCount())),
+      std::uint64_t{0},
+      [&](const tbb::blocked_range<std::uint32_t>& range, std::uint64_t lit) {
+        for (std::uint32_t i = range.begin(); i != range.end(); ++i) {
+          const PatchGeometry g = patchGeometry(target, coarseSubFacet(target, i), normals);
+          if (g.area_m2 > 0.0 && lightVerdict(g, beams[target.object[i]]) == LightVerdict::MayBeLit)
+            ++lit;
+        }
+        return lit;
+      },
+      std::plus<>());
+}
+
+}  // namespace
+
+std::uint64_t coarseFacetCount(const ObjectSpec& o) {
+  const double n = o.segments;
+  double facets = 0.0;
+  switch (o.shape) {
+    case ShapeKind::Cylinder: {
+      // As addCylinder(): rings along the axis about as long as the facets are wide.
+      const double arc = o.radius_m * 2.0 * kPi / n;
+      facets = 2.0 * n * std::max(1.0, std::round(o.length_m / arc));
+      break;
+    }
+    case ShapeKind::Sphere:
+      facets = 2.0 * n * (std::max(2.0, std::floor(n / 2.0)) - 1.0);
+      break;
+    case ShapeKind::Disk:
+      facets = n * (2.0 * std::max(1.0, std::round(n / (2.0 * kPi))) - 1.0);
+      break;
+    case ShapeKind::Mesh:
+      break;
+  }
+  return saturated(facets);
+}
+
+std::uint64_t meshMemoryFloorBytes(std::uint64_t triangles, std::uint64_t vertices,
+                                   MeshSurface surface, bool occlusion) {
+  const auto t = static_cast<double>(triangles);
+  return saturated(kMeshBytesPerVertex * static_cast<double>(vertices) +
+                   t * (kMeshBytesPerTriangle + kTargetBytesPerFacet +
+                        surfaceBytesPerFacet(surface) +
+                        (occlusion ? kOccluderBytesPerFacet : 0.0)));
+}
+
+TargetMemory targetMemory(const Scene& scene, const IntegratorOptions& options) {
+  TargetMemory m;
+  double facets = 0.0, bytes = 0.0;
+  // As needsOcclusion(): more than one object, or one that is not convex (a mesh).
+  m.occlusion = options.occlusion && (scene.objects.size() > 1 || scene.hasMeshes());
+  for (const ObjectSpec& o : scene.objects) {
+    if (!o.mesh) {
+      facets += static_cast<double>(coarseFacetCount(o));
+      continue;
+    }
+    // Every triangle a facet: addMesh() drops only degenerate ones, which no real model is
+    // made of.
+    const TriangleMesh& mesh = *o.mesh->mesh;
+    const auto t = static_cast<double>(mesh.triangles.size());
+    facets += t;
+    bytes += kMeshBytesPerVertex * static_cast<double>(mesh.positions_m.size()) +
+             t * (kMeshBytesPerTriangle + surfaceBytesPerFacet(o.mesh->surface));
+  }
+  // Per facet: its arrays, its surface map (the cubature and lobe schemes), its share of the
+  // occluder.
+  bytes += facets * (kTargetBytesPerFacet +
+                     (options.scheme != IntegrationScheme::Paper ? sizeof(SurfaceMap) : 0.0) +
+                     (m.occlusion ? kOccluderBytesPerFacet : 0.0));
+  m.facets = saturated(facets);
+  m.floor_bytes = saturated(bytes);
+  m.lit_facet_bytes =
+      saturated(kLitBytesPerFacet +
+                (options.scheme == IntegrationScheme::Lobe ? kLitClusterBytesPerFacet : 0.0));
+  return m;
+}
+
+void requireTargetWithinBudget(const TargetMemory& memory, const TargetBudget& budget,
+                               std::uint64_t lit_facets) {
+  if (budget.budget_bytes == 0) return;
+  const double bytes =
+      static_cast<double>(memory.floor_bytes) +
+      static_cast<double>(lit_facets) * static_cast<double>(memory.lit_facet_bytes) +
+      static_cast<double>(budget.besides_bytes);
+  std::string what = "the target (" + std::to_string(memory.facets) + " coarse facets";
+  if (lit_facets > 0) what += ", " + std::to_string(lit_facets) + " of them lit";
+  if (!budget.besides.empty()) what += ", with " + budget.besides;
+  requireWithinBudget(what + ")", saturated(bytes), budget.budget_bytes,
+                      "lower the objects' segments, decimate the meshes, or raise --memory");
+}
+
+FacetIntegrator buildIntegrator(const Scene& scene, const IntegratorOptions& options,
+                                const TargetBudget& budget, std::vector<MeshStats>* mesh_stats) {
+  const TargetMemory memory = targetMemory(scene, options);
+  requireTargetWithinBudget(memory, budget);
+  Target target = buildTarget(scene, mesh_stats);
+  const Beam beam = beamOf(scene);
+  // The lit facets are counted only where storing them all might not fit, and only where no
+  // shadow ray can take any of them away (then the count is the integrator's own).
+  const double all_lit =
+      static_cast<double>(memory.floor_bytes) +
+      static_cast<double>(memory.facets) * static_cast<double>(memory.lit_facet_bytes) +
+      static_cast<double>(budget.besides_bytes);
+  if (budget.budget_bytes > 0 && !memory.occlusion &&
+      all_lit > static_cast<double>(budget.budget_bytes)) {
+    requireTargetWithinBudget(memory, budget, litFacetCount(target, beam, options.normals));
+  }
+  return FacetIntegrator(std::move(target), beam, options);
+}
+
 IntegratorOptions integratorOptions(const Scene& scene) {
   const AccuracySpec& a = scene.accuracy;
   IntegratorOptions o;
@@ -96,28 +265,45 @@ FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane) {
   return f;
 }
 
-FarFieldSpec farFieldSpec(const Scene& scene, const FacetIntegrator& integrator) {
-  const FarFieldSettings& settings = scene.far_field;
+namespace {
+
+// The narrowest specular lobe of the scene's materials (∞ when none has a specular part).
+double narrowestSigma(const Scene& scene) {
   double sigma = std::numeric_limits<double>::infinity();
   for (const MaterialSpec& m : scene.materials) {
     if (m.specular_reflectance > 0.0) sigma = std::min(sigma, m.sigma);
   }
+  return sigma;
+}
+
+}  // namespace
+
+FarFieldSpec farFieldLattice(const Scene& scene) {
+  const FarFieldSettings& settings = scene.far_field;
   FarFieldSpec f;
   f.tolerance = settings.tolerance;
+  if (settings.face_pixels) {
+    f.face_pixels = *settings.face_pixels;
+  } else {
+    // At a face's centre directions are 2/N rad apart: at most σ.
+    const double sigma = narrowestSigma(scene);
+    f.face_pixels = 64;
+    while (f.face_pixels < 4096 && 2.0 / f.face_pixels > sigma) f.face_pixels *= 2;
+  }
+  f.block_pixels = std::max(1, f.face_pixels / 16);
+  return f;
+}
+
+FarFieldSpec farFieldSpec(const Scene& scene, const FacetIntegrator& integrator) {
+  const FarFieldSettings& settings = scene.far_field;
+  const double sigma = narrowestSigma(scene);
+  FarFieldSpec f = farFieldLattice(scene);
   // Nothing lit: any radius will do, the map is dark.
   const double lit_radius_m = std::max(litBall(integrator).radius_m, limits::kMinLengthM);
   f.far_radius_m = farRadius(lit_radius_m, sigma, f.tolerance);
   f.lit_radius_m = lit_radius_m;
   f.narrowest_sigma = sigma;
   f.beam_direction = beamOf(scene).direction;
-  if (settings.face_pixels) {
-    f.face_pixels = *settings.face_pixels;
-  } else {
-    // At a face's centre directions are 2/N rad apart: at most σ.
-    f.face_pixels = 64;
-    while (f.face_pixels < 4096 && 2.0 / f.face_pixels > sigma) f.face_pixels *= 2;
-  }
-  f.block_pixels = std::max(1, f.face_pixels / 16);
   f.floor_w_sr =
       settings.floor_w_sr.value_or(scene.hazard.negligibleW_m2() * f.far_radius_m * f.far_radius_m);
   return f;
@@ -130,10 +316,10 @@ IntegratorOptions fieldIntegratorOptions(const Scene& scene, const FieldSpec& fi
   return o;
 }
 
-SceneTarget sceneTarget(const Scene& scene, const FieldSpec& first) {
+SceneTarget sceneTarget(const Scene& scene, const FieldSpec& first, const TargetBudget& budget) {
   std::vector<MeshStats> mesh_stats;
-  FacetIntegrator integrator(buildTarget(scene, &mesh_stats), beamOf(scene),
-                             fieldIntegratorOptions(scene, first));
+  FacetIntegrator integrator =
+      buildIntegrator(scene, fieldIntegratorOptions(scene, first), budget, &mesh_stats);
   return {std::move(integrator), std::move(mesh_stats)};
 }
 

@@ -2,6 +2,10 @@
 /// @file
 /// @brief From a validated Scene to what the facet integrator works on.
 
+#include <cstdint>
+#include <string>
+#include <vector>
+
 #include "facets/integrator.h"
 #include "facets/tessellate.h"
 #include "observers/far_field.h"
@@ -17,6 +21,51 @@ Beam beamOf(const Scene& scene);
 /// direction toward the laser, so rotating a whole scene rotates its facets with it. What
 /// became of each mesh's triangles is appended to @p mesh_stats, in object order.
 Target buildTarget(const Scene& scene, std::vector<MeshStats>* mesh_stats = nullptr);
+
+/// @brief What the scene's target takes in memory, reckoned from the scene alone before any of
+/// it is built: a floor, each term an allocation buildTarget() and FacetIntegrator make
+/// whatever the beam and the observers (README "Reliability", Memory).
+struct TargetMemory {
+  std::uint64_t facets = 0;           ///< coarse facets the objects make (a mesh: one a triangle)
+  std::uint64_t floor_bytes = 0;      ///< held once built and culled, the lit facets aside
+  std::uint64_t lit_facet_bytes = 0;  ///< held besides for each lit facet (candidate, bounds)
+  bool occlusion = false;             ///< shadow rays decide which facets are lit (Occluder)
+};
+
+/// @brief The memory of the target of @p scene under @p options (its scheme and occlusion).
+TargetMemory targetMemory(const Scene& scene, const IntegratorOptions& options);
+
+/// @brief The coarse facets an analytic object makes (addCylinder(), addSphere(), addDisk());
+/// 0 for a mesh.
+std::uint64_t coarseFacetCount(const ObjectSpec& object);
+
+/// @brief A floor under the memory a mesh of @p triangles and @p vertices takes as part of a
+/// target (decoded, its facets with their @p surface, and with @p occlusion its share of the
+/// occluder), known before it is decoded: what the scene reader refuses a model by.
+std::uint64_t meshMemoryFloorBytes(std::uint64_t triangles, std::uint64_t vertices,
+                                   MeshSurface surface, bool occlusion);
+
+/// @brief The memory budget buildIntegrator() holds a target to.
+struct TargetBudget {
+  std::uint64_t budget_bytes = 0;   ///< 0: not checked
+  std::uint64_t besides_bytes = 0;  ///< held at the same time by the rest of the command
+  std::string besides;              ///< what that is, for the message (e.g. "the far field")
+};
+
+/// @brief Refuses a target whose floor, @p lit_facets lit facets and the budget's besides_bytes
+/// exceed the budget, before it is built.
+/// @throw InputError "the target (N coarse facets[, with …]) needs at least … of memory, more than
+/// the budget of … (--memory); lower the objects' segments, decimate the meshes, or raise
+/// --memory".
+void requireTargetWithinBudget(const TargetMemory& memory, const TargetBudget& budget,
+                               std::uint64_t lit_facets = 0);
+
+/// @brief The scene's target, built and culled (buildTarget(), FacetIntegrator), refused by
+/// requireTargetWithinBudget() before its facets are made, and where the target cannot shadow
+/// itself once more, its lit facets counted, before they are stored.
+FacetIntegrator buildIntegrator(const Scene& scene, const IntegratorOptions& options,
+                                const TargetBudget& budget = {},
+                                std::vector<MeshStats>* mesh_stats = nullptr);
 
 /// @brief The scene's accuracy settings; the floor defaults to 1e-9 × the beam's peak
 /// irradiance, far below any exposure limit yet scaled to the scene.
@@ -37,6 +86,10 @@ FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane);
 /// unless the scene says otherwise; the floor defaults to the intensity that gives
 /// HazardSpec::negligibleW_m2() at the far radius.
 FarFieldSpec farFieldSpec(const Scene& scene, const FacetIntegrator& integrator);
+
+/// @brief What farFieldSpec() says of the faces' lattices (face_pixels, block_pixels) and the
+/// tolerance, from the scene alone: known before the target is built.
+FarFieldSpec farFieldLattice(const Scene& scene);
 
 /// @brief Integrator settings for the points of an observer field: the scene's accuracy
 /// settings, with the tolerance and floor a quarter of the field's, so that the integration
@@ -60,12 +113,13 @@ FieldProblem fieldProblem(const Scene& scene, const FieldSpec& field);
 
 /// @brief The scene's target built and culled once, its integrator at the accuracy of the
 /// lattice @p first (fieldIntegratorOptions()): the observer box and every plane derive their
-/// FieldProblem from it.
+/// FieldProblem from it. Held to @p budget as buildIntegrator() does.
 struct SceneTarget {
   FacetIntegrator integrator;
   std::vector<MeshStats> mesh_stats;  ///< what buildTarget() made of each mesh
 };
-SceneTarget sceneTarget(const Scene& scene, const FieldSpec& first);
+SceneTarget sceneTarget(const Scene& scene, const FieldSpec& first,
+                        const TargetBudget& budget = {});
 
 /// @brief As fieldProblem(scene, field), the target, its culling and occluder taken from
 /// @p shared instead of built again (FacetIntegrator::withAccuracy()).

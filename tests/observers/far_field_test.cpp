@@ -457,3 +457,39 @@ TEST(FarField, FarRadiusGrowsAsTheLobeNarrowsAndTheToleranceTightens) {
 
 }  // namespace
 }  // namespace glint
+
+namespace glint {
+namespace {
+
+// Issue 35 (3): `run --memory 2G` with far_field.face_pixels 8192 passed a floor of 2.3 MB (1 500
+// bytes per coarse block of the six faces) and stopped only at 4.8 GB, in its first face. A face
+// is a plane of one voxel layer, so its status and level grids keep a leaf per 8 × 8
+// directions whatever the light: that is the floor now, and a dark face measures it.
+TEST(FarField, AFacesFloorIsTheGridsEvenADarkFaceKeeps) {
+  const Scene s = scene("0.5", 0.01, R"({"shape": "disk", "center": [0, 0, 0],
+      "normal": [-1, 1, 0], "radius": 0.5, "material": "m", "segments": 8})");
+  FieldSpec any;
+  any.tolerance = 1e-2;
+  const SceneTarget target = sceneTarget(s, any);
+  FarFieldSpec spec = farFieldSpec(s, target.integrator);
+  spec.face_pixels = 512;
+  spec.block_pixels = 32;
+  spec.floor_w_sr = 1e30;  // nothing is above it: every block is skipped, the face is dark
+  const FieldSpec face = cubeFaceSpec(0, Vec3(0.0), 1e6, spec);
+  const ObserverField field = computeField(target.integrator, face, ExcludedFn());
+  ASSERT_EQ(field.stats().evaluated_points, 0) << "premise: a dark face";
+  const auto floor_bytes = static_cast<double>(fieldMemoryFloorBytes(face, false));
+  const auto grid_bytes = static_cast<double>(field.stats().grid_bytes);
+  EXPECT_LE(floor_bytes, grid_bytes) << "the floor is above the grids a dark face keeps";
+  EXPECT_GE(floor_bytes, 0.8 * grid_bytes) << "the floor misses most of the grids";
+
+  // The issue's map: six lattices of 8193² floats kept (1.5 GB) and a face's grids (4 GB).
+  spec.face_pixels = 8192;
+  spec.block_pixels = 512;
+  const double floor_8192 = static_cast<double>(farFieldMemoryFloorBytes(spec, 2048));
+  EXPECT_GE(floor_8192, 6.0 * 8193.0 * 8193.0 * 4.0 + 1025.0 * 1025.0 * 2 * 2048.0);
+  EXPECT_GT(floor_8192, 2.0 * 1073741824.0) << "more than the issue's 2 GB budget";
+}
+
+}  // namespace
+}  // namespace glint

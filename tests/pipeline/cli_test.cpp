@@ -9,10 +9,13 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <vector>
 
 #include "support/cli.h"
 
@@ -319,9 +322,11 @@ TEST_F(CliTest, MemoryIsBudgetedFromTheFirstByte) {
 
   // 125 000 coarse blocks with nothing to evaluate: a floor of 179 MB starts; the run itself
   // needs about 450 MB, so at 250 MB it is stopped by the watch, in the built program (this
-  // test process's own memory must not count).
+  // test process's own memory must not count). Without the far field, whose floor alone (its
+  // 2049² directions a face) is over 250 MB.
   scene["observers"] = {
       {"min", {-50, -110, -50}}, {"max", {50, -10, 50}}, {"voxel_m", 0.125}, {"block_m", 2.0}};
+  scene["far_field"] = {{"enabled", false}};
   const std::string big = write("big.json", scene.dump());
   const std::string cmd = std::string(GLINT_EXE) + " run " + big + " -o " + path("big") +
                           " --memory 250M 2> " + path("err.txt");
@@ -334,6 +339,123 @@ TEST_F(CliTest, MemoryIsBudgetedFromTheFirstByte) {
   EXPECT_NE(err.find("nothing was written"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(path("big")))
       << "the failed run left the folder it made (or an output or a temporary in it)";
+}
+
+// issue 35 (3): the target was built whatever it took. A disk of 4096 segments makes 5 337 088
+// facets: `points --memory 1G` ran 227 s to 8.9 GB and exited 0; `run --memory 1G` grew for
+// 157 s to 13 GB before the watch stopped it. Both are refused now before a facet is made.
+TEST_F(CliTest, ATargetBeyondTheBudgetIsRefusedBeforeItIsBuilt) {
+  nlohmann::json disk = nlohmann::json::parse(readFile(example("disk.json")));
+  disk["objects"][0]["segments"] = 4096;
+  const std::string disk_file = write("disk.json", disk.dump());
+  const Outcome points = glint({"points", disk_file, "--points", example("disk_points.csv"), "-o",
+                                path("e.csv"), "--memory", "1G", "--quiet"});
+  EXPECT_EQ(points.status, 2) << points.err;
+  EXPECT_NE(points.err.find("the target (5337088 coarse facets, with 42 observer points) needs "
+                            "at least 2."),
+            std::string::npos)
+      << points.err;
+  EXPECT_NE(points.err.find(" GB of memory, more than the budget of 1 GB (--memory); lower the "
+                            "objects' segments, decimate the meshes, or raise --memory"),
+            std::string::npos)
+      << points.err;
+  EXPECT_EQ(filesInDir(), 1u) << "an output or a temporary was left beside the scene";
+
+  nlohmann::json run = nlohmann::json::parse(readFile(example("disk_glint.json")));
+  run["objects"][0]["segments"] = 4096;
+  const Outcome refused = glint(
+      {"run", write("glint.json", run.dump()), "-o", path("run"), "--memory", "1G", "--quiet"});
+  EXPECT_EQ(refused.status, 2) << refused.err;
+  EXPECT_NE(refused.err.find("the target (5337088 coarse facets, with the far field and the "
+                             "largest region) needs at least 2."),
+            std::string::npos)
+      << refused.err;
+  EXPECT_TRUE(fs::is_empty(path("run"))) << "an output or a temporary was left";
+}
+
+// issue 35 (3): a mesh was decoded and built whatever its size (2 M triangles, `points --memory
+// 2G`: exit 0 at 7.8 GB). Its triangles are counted from the file's accessors and refused before
+// any is decoded. Here a primitive of 1000 triangles over three vertices, instanced by 1000
+// nodes: a million triangles from a 6 KB buffer, whose vertices are NaN, which decoding would
+// refuse: the memory's refusal shows that nothing was decoded.
+TEST_F(CliTest, AMeshBeyondTheBudgetIsRefusedBeforeItIsDecoded) {
+  std::vector<float> positions(9, std::numeric_limits<float>::quiet_NaN());
+  std::vector<std::uint16_t> indices(3000);
+  for (std::size_t i = 0; i < indices.size(); ++i) indices[i] = static_cast<std::uint16_t>(i % 3);
+  std::string bin(positions.size() * 4 + indices.size() * 2, '\0');
+  std::memcpy(bin.data(), positions.data(), positions.size() * 4);
+  std::memcpy(bin.data() + positions.size() * 4, indices.data(), indices.size() * 2);
+  write("model.bin", bin);
+  const nlohmann::json model = {
+      {"asset", {{"version", "2.0"}}},
+      {"scene", 0},
+      {"scenes", {{{"nodes", {0}}}}},
+      {"nodes", {{{"children", std::vector<int>(1000, 1)}}, {{"mesh", 0}}}},
+      {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}}},
+      {"buffers", {{{"uri", "model.bin"}, {"byteLength", bin.size()}}}},
+      {"bufferViews",
+       {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 36}},
+        {{"buffer", 0}, {"byteOffset", 36}, {"byteLength", 6000}}}},
+      {"accessors",
+       {{{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}},
+        {{"bufferView", 1}, {"componentType", 5123}, {"count", 3000}, {"type", "SCALAR"}}}}};
+  write("model.gltf", model.dump());
+  nlohmann::json scene = nlohmann::json::parse(readFile(example("disk.json")));
+  scene["objects"] = {{{"shape", "mesh"}, {"file", "model.gltf"}, {"material", "glass"}}};
+  const Outcome refused = glint({"points", write("mesh.json", scene.dump()), "--points",
+                                 example("disk_points.csv"), "--memory", "1G", "--quiet"});
+  EXPECT_EQ(refused.status, 2) << refused.err;
+  // Each triangle a PN facet in the occluder: about 2 KB.
+  EXPECT_NE(refused.err.find("/objects/0/file: model.gltf (1000000 triangles, as a target) needs "
+                             "at least 1.8"),
+            std::string::npos)
+      << refused.err;
+  EXPECT_NE(refused.err.find("more than the budget of 1 GB (--memory); decimate the mesh"),
+            std::string::npos)
+      << refused.err;
+  EXPECT_EQ(refused.err.find("not finite"), std::string::npos) << "it was decoded: " << refused.err;
+}
+
+// issue 35 (3): `run --memory 2G` with far_field.face_pixels 8192 passed a floor of 2.3 MB and
+// grew for 18 s to 4.6 GB, in its first face. Its six lattices and a face's grids are counted
+// now: refused before the target is built.
+TEST_F(CliTest, AFarFieldBeyondTheBudgetIsRefusedBeforeItsFirstFace) {
+  nlohmann::json scene = nlohmann::json::parse(readFile(example("disk_glint.json")));
+  scene["far_field"] = {{"face_pixels", 8192}};
+  const Outcome refused = glint(
+      {"run", write("far.json", scene.dump()), "-o", path("far"), "--memory", "2G", "--quiet"});
+  EXPECT_EQ(refused.status, 2) << refused.err;
+  EXPECT_NE(refused.err.find("the far field (6 × 8193² directions) needs at least 5.51 GB of "
+                             "memory, more than the budget of 2 GB (--memory); lower "
+                             "far_field.face_pixels, or raise --memory"),
+            std::string::npos)
+      << refused.err;
+  EXPECT_TRUE(fs::is_empty(path("far"))) << "an output or a temporary was left";
+}
+
+// What passes the estimate and still outgrows the budget stops, as glint run does: a disk of
+// 256 segments, lit whole, has a floor of 19 MB, and each observer's workspace then takes about
+// 70 MB (it bounds every facet), so at 100 MB the points stop, in the built program (this test
+// process's own memory must not count). Before, glint points had no watch: it ran 114 s.
+TEST_F(CliTest, PointsThatOutgrowTheBudgetStopAndWriteNothing) {
+  nlohmann::json scene = nlohmann::json::parse(readFile(example("disk.json")));
+  scene["objects"][0]["segments"] = 256;
+  scene["laser"]["beam"] = {{"profile", "flat_top"}, {"radius_m", 1.0}};
+  const std::string cmd = std::string(GLINT_EXE) + " points " + write("disk.json", scene.dump()) +
+                          " --points " + example("disk_points.csv") + " -o " + path("e.csv") +
+                          " --memory 100M --threads 1 2> " + path("err.txt");
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  const std::string err = readFile(path("err.txt"));
+  EXPECT_EQ(WEXITSTATUS(status), 2) << err;
+  EXPECT_NE(err.find("the observer points: stopped when the resident memory reached"),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("beyond the budget of 100 MB (--memory); nothing was written"),
+            std::string::npos)
+      << err;
+  EXPECT_FALSE(fs::exists(path("e.csv")));
+  EXPECT_EQ(filesInDir(), 2u) << "the scene and err.txt; no output, no temporary";
 }
 
 TEST_F(CliTest, TheBuiltCommandExitsTwoOnBadInput) {
