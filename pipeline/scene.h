@@ -17,8 +17,8 @@
 #include "facets/patch.h"
 #include "facets/tessellate.h"
 #include "facets/vec3.h"
-#include "pipeline/gltf_loader.h"
 #include "hazard/hazard.h"
+#include "pipeline/gltf_loader.h"
 
 namespace glint {
 

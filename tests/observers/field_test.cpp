@@ -10,8 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include "observers/field_compare.h"
 #include "hazard/hazard.h"
+#include "observers/field_compare.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
 

@@ -1,13 +1,12 @@
 // The hazard module: pulse trains' MPE by the worked examples of the standards, the air's
 // extinction, optical aids, and what each does to a scene's irradiance and hazard.
-#include "pipeline/hazard_report.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "observers/far_field.h"
+#include "pipeline/hazard_report.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
 #include "support/refusal.h"
