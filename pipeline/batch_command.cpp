@@ -29,6 +29,7 @@
 #include "pipeline/output_names.h"
 #include "pipeline/progress.h"
 #include "pipeline/run_command.h"
+#include "pipeline/run_outputs.h"
 #include "pipeline/study.h"
 #include "pipeline/study_maps.h"
 #include "pipeline/target_builder.h"
@@ -167,7 +168,6 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
   // The scene from the base scene in memory; its file is the scenario's record.
   const Scene scene = scenarioScene(study, s);
   const std::string scene_json = scenarioSceneJson(study, s);
-  const double mpe = scene.hazard.mpe_w_m2;
   const fs::path dir = out_dir / output_names::kScenariosFolder / scenarioDirName(s.index);
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -207,9 +207,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
     AtomicFile map(dir / r.scenarioFile());
     std::vector<float> e;
     if (r.plane) {
-      PlaneMap m = planeMap(field, scene.hazard);
-      writeExr(map.stream(), m, {info.program_version, info.wavelength_nm, mpe});
-      e = std::move(m.irradiance_w_m2);
+      e = writePlaneExr(map.stream(), field, scene.hazard, info).irradiance_w_m2;
     } else {
       e = field.irradianceLattice();
       writeVdb(map.stream(), std::move(field), info);

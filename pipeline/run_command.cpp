@@ -10,19 +10,16 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
-#include "export/atomic_file.h"
-#include "export/exr_map.h"
 #include "export/field_files.h"
-#include "export/vtk_files.h"
 #include "glint/version.h"
 #include "pipeline/input_error.h"
 #include "pipeline/input_files.h"
 #include "pipeline/json_reader.h"
 #include "pipeline/memory_budget.h"
 #include "pipeline/output_folder.h"
-#include "pipeline/output_names.h"
 #include "pipeline/progress.h"
 #include "pipeline/run_folder.h"
+#include "pipeline/run_outputs.h"
 #include "pipeline/run_report.h"
 #include "pipeline/scene.h"
 #include "pipeline/surface_check.h"
@@ -31,19 +28,6 @@
 
 namespace glint {
 namespace {
-
-// The largest power-of-two stride that keeps the .vti resample under 16.7 M points.
-int vtiStride(const FieldSpec& spec) {
-  const auto n = spec.nodes();
-  int stride = 1;
-  auto points = [&](int s) {
-    double p = 1.0;
-    for (int a = 0; a < 3; ++a) p *= (n[a] - 1) / s + 1;
-    return p;
-  };
-  while (points(stride) > 16.7e6 && stride < spec.block_voxels) stride *= 2;
-  return stride;
-}
 
 // The centre of the target's bounding box: the nominal hazard zone's reach is measured from it.
 Vec3 targetCentre(const Target& target) {
@@ -111,12 +95,85 @@ std::uint64_t checkRegionMemory(const FieldSpec& spec, const std::string& what, 
   return floor_bytes;
 }
 
-// The lat-long map glint run writes of the far field: about as fine as the faces' centres.
-int latLongHeight(const FarFieldSpec& spec) { return std::min(spec.face_pixels, 2048); }
-
 // The far field's faces (farFieldMemoryFloorBytes()), refused before any is computed.
 std::string farFieldWhat(const FarFieldSpec& spec) {
   return "the far field (6 × " + std::to_string(spec.face_pixels + 1) + "² directions)";
+}
+
+// The region whose accuracy the shared target is built for: the box, else the first plane.
+FieldSpec firstRegion(const Scene& scene) {
+  return scene.observers ? fieldSpec(scene) : planeFieldSpec(scene, scene.planes.front());
+}
+
+// Every large allocation of a run reckoned before the first is made: one region's field at a
+// time (the box's is gone before the planes'), the far field kept throughout, and the target.
+// Returns what the target is checked against once its facets are made.
+TargetBudget checkRunMemory(const Scene& scene, const RunArgs& args, std::uint64_t budget,
+                            bool writer, std::ostream& err) {
+  std::uint64_t region_bytes = 0;
+  if (scene.observers) {
+    region_bytes = checkRegionMemory(fieldSpec(scene), "observer box", args, budget, err);
+  }
+  for (const PlaneSpec& plane : scene.planes) {
+    region_bytes = std::max(
+        region_bytes,
+        checkRegionMemory(planeFieldSpec(scene, plane), "plane " + plane.name, args, budget, err));
+  }
+  std::uint64_t far_bytes = 0;
+  if (scene.far_field.enabled) {
+    const FarFieldSpec lattice = farFieldLattice(scene);
+    far_bytes = farFieldMemoryFloorBytes(lattice, writer ? farMapHeight(lattice.face_pixels) : 0);
+    requireWithinBudget(farFieldWhat(lattice), far_bytes, budget,
+                        "lower far_field.face_pixels, or raise --memory");
+    if (!args.quiet) {
+      err << "glint run: " << farFieldWhat(lattice) << "; memory: at least "
+          << formatBytes(static_cast<double>(far_bytes)) << " of the "
+          << formatBytes(static_cast<double>(budget)) << " budget\n";
+    }
+  }
+  const TargetMemory target_memory =
+      targetMemory(scene, fieldIntegratorOptions(scene, firstRegion(scene)));
+  const TargetBudget target_budget{
+      budget, far_bytes + region_bytes,
+      far_bytes > 0 ? "the far field and the largest region" : "the largest region"};
+  requireTargetWithinBudget(target_memory, target_budget);
+  if (!args.quiet) {
+    err << "glint run: target, " << target_memory.facets << " coarse facets; memory: at least "
+        << formatBytes(static_cast<double>(target_memory.floor_bytes)) << " of the "
+        << formatBytes(static_cast<double>(budget)) << " budget\n";
+  }
+  return target_budget;
+}
+
+// What the terminal's box line adds about the far field beyond the box.
+std::string beyondTheBox(const FarField& far, const FarHazard& hazard) {
+  return "; beyond " + formatNumber("%.4g", far.spec().far_radius_m) +
+         " m the far field bounds it: " +
+         (hazard.farthest().nohd_m > 0.0
+              ? "it reaches " + formatNumber("%.4g", hazard.farthest().nohd_m) + " m"
+              : std::string("no direction is hazardous there"));
+}
+
+// The default output folder: out/<scene name>, out/<scene name>_uniform.
+std::filesystem::path outputFolder(const RunArgs& args) {
+  if (!args.out_dir.empty()) return args.out_dir;
+  return std::filesystem::path("out") / (std::filesystem::path(args.scene_path).stem().string() +
+                                         (args.uniform ? "_uniform" : ""));
+}
+
+// An earlier run of this scene may have written files this one will not (a plane since
+// renamed): said, so that no stale map passes for a new one. Returns them.
+std::vector<std::string> noteEarlierFiles(const std::filesystem::path& dir,
+                                          const EarlierRun& earlier, const RunOutputs& outputs,
+                                          bool quiet, std::ostream& err) {
+  std::vector<std::string> stale = staleOutputs(dir, earlier, outputs.names());
+  if (!stale.empty() && !quiet) {
+    std::string list;
+    for (const std::string& name : stale) list += (list.empty() ? "" : ", ") + name;
+    err << "glint run: note: " << dir.string() << " keeps " << list
+        << " from an earlier run of this scene, which this run does not rewrite\n";
+  }
+  return stale;
 }
 
 }  // namespace
@@ -207,11 +264,7 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     throw InputError(scene.source +
                      ": /observers: missing (glint run needs an observer box or `planes`)");
   }
-  std::filesystem::path dir = args.out_dir;
-  if (dir.empty()) {
-    dir = std::filesystem::path("out") / (std::filesystem::path(args.scene_path).stem().string() +
-                                          (args.uniform ? "_uniform" : ""));
-  }
+  const std::filesystem::path dir = outputFolder(args);
   InputFiles inputs;
   inputs.addScene(args.scene_path, scene);
   // Rank 0 holds the folder while it runs, so that another run's files and this one's never
@@ -223,50 +276,8 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     earlier = earlierRun(dir);
     requireSameScene(dir, earlier, args.scene_path);
   }
-  // Opened before the work, so an unwritable folder stops the run at once (rank 0 only; the
-  // other ranks' pointers stay null and they write nothing).
-  std::vector<std::unique_ptr<AtomicFile>> files;
-  std::vector<std::string> written;
-  auto open = [&](const std::string& name) -> AtomicFile* {
-    written.push_back(name);
-    if (!writer) return nullptr;
-    inputs.requireNotAnInput(dir / name);  // a hard link to an input, named otherwise
-    files.push_back(std::make_unique<AtomicFile>(dir / name));
-    return files.back().get();
-  };
-  AtomicFile* summary = open(output_names::kSummary);
-  AtomicFile *vdb = nullptr, *vti = nullptr, *vtu = nullptr, *vtp = nullptr;
-  if (scene.observers) {
-    vdb = open(output_names::kIrradianceVdb);
-    vti = open(output_names::kIrradianceVti);
-    vtu = open(output_names::kBlocksVtu);
-    vtp = open(output_names::kTargetVtp);
-  }
-  std::optional<StagedAmr> amr;  // irradiance.vthb and its folder, committed with the files
-  if (scene.observers) written.push_back(output_names::kIrradianceAmr);
-  AtomicFile *far_exr = nullptr, *far_vtp = nullptr, *far_aided_vtp = nullptr;
-  std::vector<std::string> far_files;  // as summary.json lists them
-  auto openFar = [&](const char* name) {
-    far_files.emplace_back(name);
-    return open(name);
-  };
-  if (scene.far_field.enabled) {
-    far_exr = openFar(output_names::kFarFieldExr);
-    far_vtp = openFar(output_names::kFarFieldVtp);
-    if (scene.hazard.aid) far_aided_vtp = openFar(output_names::kFarFieldAidedVtp);
-  }
-  std::vector<AtomicFile*> exrs;
-  for (const PlaneSpec& plane : scene.planes)
-    exrs.push_back(open(output_names::planeExr(plane.name)));
-  // An earlier run of this scene may have written files this one will not (a plane since
-  // renamed): said, so that no stale map passes for a new one.
-  const std::vector<std::string> stale = staleOutputs(dir, earlier, written);
-  if (!stale.empty() && !args.quiet) {
-    std::string list;
-    for (const std::string& name : stale) list += (list.empty() ? "" : ", ") + name;
-    err << "glint run: note: " << dir.string() << " keeps " << list
-        << " from an earlier run of this scene, which this run does not rewrite\n";
-  }
+  RunOutputs outputs(scene, dir, inputs, writer);
+  const std::vector<std::string> stale = noteEarlierFiles(dir, earlier, outputs, args.quiet, err);
   if (writer) pauseForTestsAfterTemporaries(err);
 
   std::unique_ptr<tbb::global_control> thread_limit;
@@ -274,49 +285,13 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     thread_limit = std::make_unique<tbb::global_control>(
         tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(args.threads));
   }
-
   const RunInfo info = runInfo(scene, args.scene_path, readUserFile(args.scene_path, "scene file"),
                                args.uniform ? "uniform" : "adaptive");
-
-  // Every large allocation reckoned before the first is made: one region's field at a time
-  // (the box's is gone before the planes'), the far field kept throughout, and the target.
-  std::uint64_t region_bytes = 0;
-  if (scene.observers) {
-    region_bytes = checkRegionMemory(fieldSpec(scene), "observer box", args, budget, err);
-  }
-  for (const PlaneSpec& plane : scene.planes) {
-    region_bytes = std::max(
-        region_bytes,
-        checkRegionMemory(planeFieldSpec(scene, plane), "plane " + plane.name, args, budget, err));
-  }
-  std::uint64_t far_bytes = 0;
-  if (scene.far_field.enabled) {
-    const FarFieldSpec lattice = farFieldLattice(scene);
-    far_bytes = farFieldMemoryFloorBytes(lattice, writer ? latLongHeight(lattice) : 0);
-    requireWithinBudget(farFieldWhat(lattice), far_bytes, budget,
-                        "lower far_field.face_pixels, or raise --memory");
-    if (!args.quiet) {
-      err << "glint run: " << farFieldWhat(lattice) << "; memory: at least "
-          << formatBytes(static_cast<double>(far_bytes)) << " of the "
-          << formatBytes(static_cast<double>(budget)) << " budget\n";
-    }
-  }
-  const FieldSpec first =
-      scene.observers ? fieldSpec(scene) : planeFieldSpec(scene, scene.planes.front());
-  const TargetMemory target_memory = targetMemory(scene, fieldIntegratorOptions(scene, first));
-  const TargetBudget target_budget{
-      budget, far_bytes + region_bytes,
-      far_bytes > 0 ? "the far field and the largest region" : "the largest region"};
-  requireTargetWithinBudget(target_memory, target_budget);
-  if (!args.quiet) {
-    err << "glint run: target, " << target_memory.facets << " coarse facets; memory: at least "
-        << formatBytes(static_cast<double>(target_memory.floor_bytes)) << " of the "
-        << formatBytes(static_cast<double>(budget)) << " budget\n";
-  }
+  const TargetBudget target_budget = checkRunMemory(scene, args, budget, writer, err);
   const MemoryWatch watch(budget);
 
   // Built and culled once, shared by the box and the planes.
-  const SceneTarget target = sceneTarget(scene, first, target_budget);
+  const SceneTarget target = sceneTarget(scene, firstRegion(scene), target_budget);
   watch.check("building the target",
               "Raise --memory, or lower the objects' segments, or decimate the meshes");
   std::optional<FarField> far;
@@ -336,18 +311,11 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     if (has_meshes && !j.contains("meshes")) j["meshes"] = meshesJson(scene, problem.mesh_stats);
   };
   if (scene.observers) {
-    const FieldSpec spec = fieldSpec(scene);
     FieldResult box =
-        computeObserverField(target, scene, spec, args, "points", watch, err, exchange);
-    const ObserverField& field = *box.field;
+        computeObserverField(target, scene, fieldSpec(scene), args, "points", watch, err, exchange);
+    ObserverField& field = *box.field;
     requireFinite(field, "the observer box");
     const FacetIntegrator& integrator = box.problem.integrator;
-    if (writer) {
-      writeVti(vti->stream(), field, vtiStride(spec), info.scaled);
-      writeBlocksVtu(vtu->stream(), field, info.scaled);
-      writeTargetVtp(vtp->stream(), integrator, 2);
-      amr.emplace(writeAmr(dir / output_names::kIrradianceAmr, field, info.scaled));
-    }
     const HazardZone zone = hazardZone(field, scene.hazard, targetCentre(integrator.target()));
     if (field.stats().peak_w_m2 > 0.0)
       probes.emplace_back("the box's peak", field.stats().peak_at_m);
@@ -355,19 +323,11 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     describeTarget(box.problem);
     j["hazard"] = hazardJson(scene.hazard, &zone);
     if (!args.quiet) {
-      std::string beyond_box;
-      if (far) {
-        beyond_box =
-            "; beyond " + formatNumber("%.4g", far->spec().far_radius_m) +
-            " m the far field bounds it: " +
-            (far_hazard.farthest().nohd_m > 0.0
-                 ? "it reaches " + formatNumber("%.4g", far_hazard.farthest().nohd_m) + " m"
-                 : std::string("no direction is hazardous there"));
-      }
-      printVolume(err, field, scene, zone, info, args.uniform, beyond_box);
+      printVolume(err, field, scene, zone, info, args.uniform,
+                  far ? beyondTheBox(*far, far_hazard) : std::string());
     }
-    // Last: it consumes the field.
-    if (writer) writeVdb(vdb->stream(), std::move(*box.field), info);
+    BoxResults results{field, integrator, info};
+    outputs.writeBox(results);  // last: the VDB takes the field's grids
   } else {
     j = runJson(info);
     j["hazard"] = hazardJson(scene.hazard, nullptr);
@@ -377,15 +337,11 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     nlohmann::json planes = nlohmann::json::array();
     for (std::size_t p = 0; p < scene.planes.size(); ++p) {
       const PlaneSpec& plane = scene.planes[p];
-      const FieldSpec spec = planeFieldSpec(scene, plane);
-      const FieldResult r =
-          computeObserverField(target, scene, spec, args, plane.name.c_str(), watch, err, exchange);
+      const FieldResult r = computeObserverField(target, scene, planeFieldSpec(scene, plane), args,
+                                                 plane.name.c_str(), watch, err, exchange);
       const ObserverField& field = *r.field;
       requireFinite(field, "plane " + plane.name);
-      if (writer) {
-        writeExr(exrs[p]->stream(), planeMap(field, scene.hazard),
-                 {info.program_version, info.wavelength_nm, info.mpe_w_m2});
-      }
+      outputs.writePlane(p, {field, scene.hazard, info});
       const HazardZone zone =
           hazardZone(field, scene.hazard, targetCentre(r.problem.integrator.target()));
       planes.push_back(planeJson(plane, field, zone));
@@ -398,25 +354,8 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     j["planes"] = planes;
   }
   if (far && writer) {
-    const double mpe = info.mpe_w_m2;
-    const double mu = scene.hazard.atmosphere.extinction_per_m;
-    // 2:1 lat-long, about as fine as the cube faces' centres, at most 4096 × 2048 pixels.
-    const int height = std::min(far->spec().face_pixels, 2048);
-    const LatLongMap map =
-        latLongMap(*far, height, mpe, mu, scene.hazard.aid ? scene.hazard.aidedMpeW_m2() : 0.0);
-    std::vector<ExrChannel> channels = {{"intensity_w_sr", &map.intensity_w_sr},
-                                        {"nohd_m", &map.nohd_m}};
-    if (scene.hazard.aid) channels.push_back({"aided_nohd_m", &map.aided_nohd_m});
-    writeLatLongExr(far_exr->stream(),
-                    {map.width, map.height, far->ball().centre_m, far->spec().far_radius_m},
-                    channels, {info.program_version, info.wavelength_nm, mpe});
-    const int surface_pixels = std::min(far->spec().face_pixels, 128);
-    writeHazardSurfaceVtp(far_vtp->stream(), hazardSurface(*far, surface_pixels, mpe, mu));
-    if (far_aided_vtp != nullptr) {
-      writeHazardSurfaceVtp(far_aided_vtp->stream(),
-                            hazardSurface(*far, surface_pixels, scene.hazard.aidedMpeW_m2(), mu));
-    }
-    j["far_field"] = farFieldJson(*far, far_hazard, far_files);
+    outputs.writeFar({*far, scene.hazard, info});
+    j["far_field"] = farFieldJson(*far, far_hazard, outputs.farNames());
     if (!args.quiet) printFarField(err, *far, far_hazard);
   }
   if (has_meshes && writer) {
@@ -430,15 +369,14 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   }
   if (!writer) return;
   j["scene_path"] = sceneIdentity(args.scene_path);
-  j["files"] = written;
+  j["files"] = outputs.names();
   if (!stale.empty()) j["earlier_files_kept"] = stale;
-  summary->stream() << j.dump(2) << "\n";
+  *outputs.summary() << j.dump(2) << "\n";
   watch.check("writing the outputs");  // a file written short of memory is not committed
-  for (const auto& f : files) f->commit();
-  if (amr) amr->commit();
+  outputs.commit();
   if (args.quiet) return;
   std::string list;
-  for (const std::string& w : written) list += (list.empty() ? "" : ", ") + w;
+  for (const std::string& w : outputs.names()) list += (list.empty() ? "" : ", ") + w;
   err << "  wrote " << dir.string() << "/{" << list << "}\n";
 }
 
