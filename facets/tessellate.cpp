@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <type_traits>
 #include <unordered_map>
 
 #include "facets/quadric_fit.h"
@@ -51,14 +52,61 @@ std::vector<std::uint32_t> weldByPosition(const std::vector<Vec3>& positions) {
 
 }  // namespace
 
+double CylinderShape::rings(int segments) const {
+  return std::max(1.0, std::round(length_m / (radius_m * twoPiOver(segments))));
+}
+
+bool CylinderShape::nearOrInside(const Vec3& x_m, double margin_m) const {
+  const Vec3 v = x_m - center_m;
+  const double along = glm::dot(v, axis);
+  const double across = glm::length(v - along * axis);
+  return std::abs(along) < 0.5 * length_m + margin_m && across < radius_m + margin_m;
+}
+
+bool SphereShape::nearOrInside(const Vec3& x_m, double margin_m) const {
+  return glm::length(x_m - center_m) < radius_m + margin_m;
+}
+
+double DiskShape::rings(int segments) { return std::max(1.0, std::round(segments / (2.0 * kPi))); }
+
+bool DiskShape::nearOrInside(const Vec3& x_m, double margin_m) const {
+  const Vec3 v = x_m - center_m;
+  const double along = glm::dot(v, normal);
+  const double across = glm::length(v - along * normal);
+  return std::abs(along) < margin_m && across < radius_m + margin_m;
+}
+
+std::uint32_t addShape(Target& target, const AnalyticShape& shape, std::uint32_t material,
+                       int segments, const Vec3& reference) {
+  return std::visit(
+      [&](const auto& s) -> std::uint32_t {
+        using S = std::decay_t<decltype(s)>;
+        if constexpr (std::is_same_v<S, CylinderShape>) {
+          return addCylinder(target, s, material, segments, reference);
+        } else if constexpr (std::is_same_v<S, SphereShape>) {
+          return addSphere(target, s, material, segments, reference);
+        } else {
+          return addDisk(target, s, material, segments, reference);
+        }
+      },
+      shape);
+}
+
+double coarseFacets(const AnalyticShape& shape, int segments) {
+  return std::visit([&](const auto& s) { return s.coarseFacets(segments); }, shape);
+}
+
+bool nearOrInside(const AnalyticShape& shape, const Vec3& x_m, double margin_m) {
+  return std::visit([&](const auto& s) { return s.nearOrInside(x_m, margin_m); }, shape);
+}
+
 std::uint32_t addCylinder(Target& target, const CylinderShape& s, std::uint32_t material,
                           int segments, const Vec3& reference) {
   const std::uint32_t obj = target.addObject({s.center_m, material, std::nullopt, true});
   const std::uint32_t q = target.addQuadric(Quadric::cylinder(Vec3(0.0), s.axis, s.radius_m));
   const Vec3 u = perpendicularToward(s.axis, reference);
   const Vec3 v = glm::cross(s.axis, u);
-  const double arc = s.radius_m * twoPiOver(segments);
-  const int rings = std::max(1, static_cast<int>(std::lround(s.length_m / arc)));
+  const int rings = static_cast<int>(s.rings(segments));
   auto point = [&](int k, int j) {
     const double phi = k * twoPiOver(segments);
     const double z = -0.5 * s.length_m + s.length_m * j / rings;
@@ -82,7 +130,7 @@ std::uint32_t addSphere(Target& target, const SphereShape& s, std::uint32_t mate
   const Vec3 pole = reference;
   const Vec3 e1 = anyPerpendicular(pole);
   const Vec3 e2 = glm::cross(pole, e1);
-  const int bands = std::max(2, segments / 2);
+  const int bands = SphereShape::bands(segments);
   auto point = [&](int j, int k) {
     const double theta = kPi * j / bands;
     const double phi = k * twoPiOver(segments);
@@ -110,8 +158,7 @@ std::uint32_t addDisk(Target& target, const DiskShape& s, std::uint32_t material
   const std::uint32_t q = target.addQuadric(Quadric::plane(Vec3(0.0), s.normal));
   const Vec3 u = perpendicularToward(s.normal, reference);
   const Vec3 v = glm::cross(s.normal, u);
-  // Rings about as wide as the outer facets are long.
-  const int rings = std::max(1, static_cast<int>(std::lround(segments / (2.0 * kPi))));
+  const int rings = static_cast<int>(DiskShape::rings(segments));
   auto point = [&](int j, int k) {
     const double r = s.radius_m * j / rings;
     const double phi = k * twoPiOver(segments);

@@ -7,11 +7,17 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <variant>
 #include <vector>
 
 #include "facets/target.h"
 
 namespace glint {
+
+// Each analytic shape knows, in one place, how it is tessellated (addCylinder() and its
+// siblings below), how many coarse facets that makes (what a run's memory is reckoned from
+// before it builds them) and where an observer is inside it or on it (those are not computed).
+// Counts are doubles: a count too large to build is reckoned and refused, not wrapped.
 
 /// @brief The open side surface of a right circular cylinder (no caps), reflecting outward.
 struct CylinderShape {
@@ -19,12 +25,28 @@ struct CylinderShape {
   Vec3 axis{0.0, 0.0, 1.0};  ///< unit
   double radius_m = 1.0;
   double length_m = 1.0;
+
+  /// @brief Rings along the axis, each about as long as a facet is wide.
+  [[nodiscard]] double rings(int segments) const;
+  /// @brief The coarse facets addCylinder() makes: two per segment and ring.
+  [[nodiscard]] double coarseFacets(int segments) const { return 2.0 * segments * rings(segments); }
+  /// @brief Whether @p x_m lies inside the closed cylinder grown by @p margin_m.
+  [[nodiscard]] bool nearOrInside(const Vec3& x_m, double margin_m) const;
 };
 
 /// @brief A sphere, reflecting outward.
 struct SphereShape {
   Vec3 center_m{0.0};
   double radius_m = 1.0;
+
+  /// @brief Latitude bands pole to pole.
+  [[nodiscard]] static int bands(int segments) { return segments / 2 > 2 ? segments / 2 : 2; }
+  /// @brief The coarse facets addSphere() makes: two per segment and band, one at each pole.
+  [[nodiscard]] static double coarseFacets(int segments) {
+    return 2.0 * segments * (bands(segments) - 1);
+  }
+  /// @brief Whether @p x_m lies within radius + @p margin_m of the centre.
+  [[nodiscard]] bool nearOrInside(const Vec3& x_m, double margin_m) const;
 };
 
 /// @brief A one-sided disk: only the side its normal points to reflects.
@@ -32,7 +54,29 @@ struct DiskShape {
   Vec3 center_m{0.0};
   Vec3 normal{0.0, 0.0, 1.0};  ///< unit
   double radius_m = 1.0;
+
+  /// @brief Rings from the centre out, about as wide as the outer facets are long.
+  [[nodiscard]] static double rings(int segments);
+  /// @brief The coarse facets addDisk() makes: a fan at the centre, two per segment beyond.
+  [[nodiscard]] static double coarseFacets(int segments) {
+    return segments * (2.0 * rings(segments) - 1.0);
+  }
+  /// @brief Whether @p x_m lies within @p margin_m of the disk (a slab as thick as the margin).
+  [[nodiscard]] bool nearOrInside(const Vec3& x_m, double margin_m) const;
 };
+
+/// @brief One of the analytic shapes.
+using AnalyticShape = std::variant<CylinderShape, SphereShape, DiskShape>;
+
+/// @brief Adds @p shape as addCylinder(), addSphere() or addDisk() would.
+std::uint32_t addShape(Target& target, const AnalyticShape& shape, std::uint32_t material,
+                       int segments, const Vec3& reference);
+
+/// @brief The coarse facets addShape() makes of @p shape.
+double coarseFacets(const AnalyticShape& shape, int segments);
+
+/// @brief Whether @p x_m lies inside @p shape or within @p margin_m of it.
+bool nearOrInside(const AnalyticShape& shape, const Vec3& x_m, double margin_m);
 
 /// @brief Adds a cylinder as one object: @p segments facets around, rings along the axis so
 /// that facets are about as long as wide. @p reference (unit) fixes the azimuth of the

@@ -305,6 +305,24 @@ MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder, const Gl
   return m;
 }
 
+}  // namespace
+
+std::optional<AnalyticShape> ObjectSpec::analytic() const {
+  switch (shape) {
+    case ShapeKind::Cylinder:
+      return CylinderShape{center_m, axis, radius_m, length_m};
+    case ShapeKind::Sphere:
+      return SphereShape{center_m, radius_m};
+    case ShapeKind::Disk:
+      return DiskShape{center_m, axis, radius_m};
+    case ShapeKind::Mesh:
+      break;
+  }
+  return std::nullopt;
+}
+
+namespace {
+
 ObjectSpec readObject(ObjectReader r, const std::vector<MaterialSpec>& materials,
                       const std::filesystem::path& folder, const GltfLimits& mesh_limits,
                       const MeshBudget& mesh_budget) {

@@ -79,6 +79,10 @@ struct ObjectSpec {
   std::uint32_t material = 0;    ///< index into Scene::materials
   int segments = 16;             ///< coarse facets around the circumference
   std::optional<MeshSpec> mesh;  ///< mesh only; centre_m is its translation
+
+  /// @brief The analytic shape this object is, which knows its tessellation, its count of
+  /// coarse facets and where observers are inside it (facets/tessellate.h); nothing for a mesh.
+  [[nodiscard]] std::optional<AnalyticShape> analytic() const;
 };
 
 /// @brief Accuracy settings (key `accuracy`, all optional).

@@ -39,24 +39,12 @@ Target buildTarget(const Scene& scene, std::vector<MeshStats>* mesh_stats) {
   }
   const Vec3 toward_laser = -scene.laser.direction;
   for (const ObjectSpec& o : scene.objects) {
-    switch (o.shape) {
-      case ShapeKind::Cylinder:
-        addCylinder(target, {o.center_m, o.axis, o.radius_m, o.length_m}, o.material, o.segments,
-                    toward_laser);
-        break;
-      case ShapeKind::Sphere:
-        addSphere(target, {o.center_m, o.radius_m}, o.material, o.segments, toward_laser);
-        break;
-      case ShapeKind::Disk:
-        addDisk(target, {o.center_m, o.axis, o.radius_m}, o.material, o.segments, toward_laser);
-        break;
-      case ShapeKind::Mesh: {
-        const MeshStats stats =
-            addMesh(target, o.center_m, o.material, *o.mesh->mesh, o.mesh->surface);
-        if (mesh_stats) mesh_stats->push_back(stats);
-        break;
-      }
+    if (const auto shape = o.analytic()) {
+      addShape(target, *shape, o.material, o.segments, toward_laser);
+      continue;
     }
+    const MeshStats stats = addMesh(target, o.center_m, o.material, *o.mesh->mesh, o.mesh->surface);
+    if (mesh_stats) mesh_stats->push_back(stats);
   }
   return target;
 }
@@ -128,25 +116,8 @@ std::uint64_t litFacetCount(const Target& target, const Beam& beam, NormalModel 
 }  // namespace
 
 std::uint64_t coarseFacetCount(const ObjectSpec& o) {
-  const double n = o.segments;
-  double facets = 0.0;
-  switch (o.shape) {
-    case ShapeKind::Cylinder: {
-      // As addCylinder(): rings along the axis about as long as the facets are wide.
-      const double arc = o.radius_m * 2.0 * kPi / n;
-      facets = 2.0 * n * std::max(1.0, std::round(o.length_m / arc));
-      break;
-    }
-    case ShapeKind::Sphere:
-      facets = 2.0 * n * (std::max(2.0, std::floor(n / 2.0)) - 1.0);
-      break;
-    case ShapeKind::Disk:
-      facets = n * (2.0 * std::max(1.0, std::round(n / (2.0 * kPi))) - 1.0);
-      break;
-    case ShapeKind::Mesh:
-      break;
-  }
-  return saturated(facets);
+  const auto shape = o.analytic();
+  return shape ? saturated(coarseFacets(*shape, o.segments)) : 0;
 }
 
 std::uint64_t meshMemoryFloorBytes(std::uint64_t triangles, std::uint64_t vertices,
@@ -334,32 +305,14 @@ FieldProblem fieldProblem(const Scene& scene, const FieldSpec& field) {
 }
 
 ExcludedFn excludedRegion(const Scene& scene, double margin_m) {
-  return [objects = scene.objects, margin_m](const Vec3& x) {
-    for (const ObjectSpec& o : objects) {
-      const Vec3 v = x - o.center_m;
-      switch (o.shape) {
-        case ShapeKind::Sphere:
-          if (glm::length(v) < o.radius_m + margin_m) return true;
-          break;
-        case ShapeKind::Cylinder: {
-          const double along = glm::dot(v, o.axis);
-          const double across = glm::length(v - along * o.axis);
-          if (std::abs(along) < 0.5 * o.length_m + margin_m && across < o.radius_m + margin_m)
-            return true;
-          break;
-        }
-        case ShapeKind::Disk: {
-          const double along = glm::dot(v, o.axis);
-          const double across = glm::length(v - along * o.axis);
-          if (std::abs(along) < margin_m && across < o.radius_m + margin_m) return true;
-          break;
-        }
-        case ShapeKind::Mesh:
-          // Observers near a mesh are computed: its inside is not known in closed form.
-          break;
-      }
-    }
-    return false;
+  // Observers near a mesh are computed: its inside is not known in closed form.
+  std::vector<AnalyticShape> shapes;
+  for (const ObjectSpec& o : scene.objects) {
+    if (auto shape = o.analytic()) shapes.push_back(*shape);
+  }
+  return [shapes = std::move(shapes), margin_m](const Vec3& x) {
+    return std::any_of(shapes.begin(), shapes.end(),
+                       [&](const AnalyticShape& s) { return nearOrInside(s, x, margin_m); });
   };
 }
 
