@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "facets/detail/culling.h"
 #include "facets/detail/patch_models.h"
 #include "facets/detail/surface_cache.h"
 #include "facets/lobe_rule.h"
@@ -128,16 +129,6 @@ struct Totals {
   [[nodiscard]] double magnitude() const { return magnitude_sum.value(); }
   [[nodiscard]] double error() const { return std::abs(signedChange()) + magnitude(); }
 };
-
-// How much of an occlusion ray from the centre of @p g toward @p d to ignore. Where some normal
-// of the facet is perpendicular to d, the facet straddles its own terminator or horizon: the
-// kernel already clips it there (cos θ modelled linearly between the corners), and a ray from
-// its centre may run into the facet's own neighbourhood at a grazing angle. Such a ray ignores
-// what lies within two facet radii, about where a convex surface's own re-entry ends.
-double localSkip(const PatchGeometry& g, const Vec3& d) {
-  const bool straddles = g.cone_rad >= 0.5 * kPi || glm::dot(d, g.normal) < std::sin(g.cone_rad);
-  return straddles ? 2.0 * g.radius_m : 0.0;
-}
 
 // The cubature rule: 4 × 4 conical product points, exact to degree 7; its error is estimated
 // by the 3 × 3 rule (degree 5) on the same piece, an overestimate once the piece is resolved.
@@ -333,40 +324,6 @@ void validateAccuracy(const IntegratorOptions& o) {
 
 }  // namespace
 
-// A hierarchy of bounds over the lit facets, in their order: an observer that sees every lit
-// facet (glint points) receives light from few of a mesh's thousands, and a node whose bound is
-// 0 for it rules out all its facets at once, where each would have cost a bound of its own.
-// Nodes never mix objects (each has its frame, beam and material). Level 0 groups kLeaf
-// consecutive facets; each level above pairs the one below. A node's geometry holds its
-// facets' own (the candidates' and their surface maps': ball, normal cone, area bound), so its
-// bound is at least any of theirs, and 0 only where each of theirs is.
-struct LitClusters {
-  static constexpr std::uint32_t kLeaf = 8;
-  struct Node {
-    PatchGeometry geometry;  // centre, normal, radius, cone and area bound only
-    std::uint32_t object = 0;
-    bool mixed = false;  // spans two objects: never bounded, always opened
-  };
-  std::vector<std::vector<Node>> levels;  // levels[0]: runs of kLeaf facets of lit_
-};
-
-namespace {
-
-// The smallest ball and cone (about the mean axis) holding both geometries' own.
-PatchGeometry enclosing(const PatchGeometry& a, const PatchGeometry& b) {
-  PatchGeometry g;
-  g.centre_m = 0.5 * (a.centre_m + b.centre_m);
-  g.radius_m = std::max(glm::length(a.centre_m - g.centre_m) + a.radius_m,
-                        glm::length(b.centre_m - g.centre_m) + b.radius_m);
-  g.normal = tryNormalize(a.normal + b.normal).value_or(a.normal);
-  g.cone_rad = std::min(kPi, std::max(angleBetween(g.normal, a.normal) + a.cone_rad,
-                                      angleBetween(g.normal, b.normal) + b.cone_rad));
-  g.area_bound_m2 = a.area_bound_m2 + b.area_bound_m2;
-  return g;
-}
-
-}  // namespace
-
 FacetIntegrator FacetIntegrator::withAccuracy(double tolerance, double floor_w_m2) const {
   FacetIntegrator copy = *this;  // the target shared; culling, maps and occluder as they are
   copy.options_.tolerance = tolerance;
@@ -391,79 +348,12 @@ FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const Integrat
   for (const TargetObject& obj : target_->objects) {
     object_beams_.push_back(beam_.relativeTo(obj.origin_m));
   }
-  if (options_.occlusion && needsOcclusion(*target_)) {
-    occluder_ = std::make_shared<const Occluder>(*target_);
-    cull_.occlusion = true;
-  }
-  cull_.coarse_facets = target_->facetCount();
-  for (std::uint32_t i = 0; i < target_->facetCount(); ++i) {
-    const std::uint32_t obj = target_->object[i];
-    const PatchGeometry g = patchGeometry(*target_, coarseSubFacet(*target_, i), options_.normals);
-    if (!(g.area_m2 > 0.0)) {
-      ++cull_.degenerate;
-      continue;
-    }
-    switch (lightVerdict(g, object_beams_[obj])) {
-      case LightVerdict::OutsideBeam:
-        ++cull_.outside_beam;
-        break;
-      case LightVerdict::FacesAway:
-        ++cull_.facing_away;
-        break;
-      case LightVerdict::MayBeLit:
-        if (occluder_) {
-          // The shadow ray runs back along the beam to the laser's plane.
-          const Vec3 from = rayOrigin(g, obj, i);
-          if (!occluder_->rayClear(from, -beam_.direction,
-                                   glm::dot(from - beam_.origin_m, beam_.direction),
-                                   localSkip(g, -beam_.direction))) {
-            ++cull_.shadowed;
-            break;
-          }
-        }
-        lit_.push_back({coarseSubFacet(*target_, i), obj, g, g.cone_rad, g.radius_m});
-        break;
-    }
-  }
-  cull_.lit = lit_.size();
+  cull();
   if (options_.scheme != IntegrationScheme::Paper) {
     maps_.reserve(target_->facetCount());
     for (std::uint32_t i = 0; i < target_->facetCount(); ++i) maps_.emplace_back(*target_, i);
   }
   if (options_.scheme == IntegrationScheme::Lobe) buildClusters();
-}
-
-void FacetIntegrator::buildClusters() {
-  auto clusters = std::make_shared<LitClusters>();
-  constexpr std::uint32_t leaf = LitClusters::kLeaf;
-  std::vector<LitClusters::Node>& base = clusters->levels.emplace_back();
-  for (std::size_t first = 0; first < lit_.size(); first += leaf) {
-    const std::size_t end = std::min(lit_.size(), first + leaf);
-    LitClusters::Node node{lit_[first].geometry, lit_[first].object, false};
-    for (std::size_t k = first; k < end; ++k) {
-      const Candidate& c = lit_[k];
-      node.mixed = node.mixed || c.object != node.object;
-      // The lobe scheme bounds a coarse facet by its surface map's geometry.
-      const PatchGeometry own = maps_[c.facet.coarse].geometry(*target_, c.facet);
-      node.geometry = enclosing(enclosing(node.geometry, c.geometry), own);
-    }
-    base.push_back(node);
-  }
-  while (clusters->levels.back().size() > 1) {
-    const std::vector<LitClusters::Node>& below = clusters->levels.back();
-    std::vector<LitClusters::Node> above;
-    for (std::size_t k = 0; k < below.size(); k += 2) {
-      if (k + 1 == below.size()) {
-        above.push_back(below[k]);
-        continue;
-      }
-      const LitClusters::Node &a = below[k], &b = below[k + 1];
-      above.push_back({enclosing(a.geometry, b.geometry), a.object,
-                       a.mixed || b.mixed || a.object != b.object});
-    }
-    clusters->levels.push_back(std::move(above));
-  }
-  clusters_ = std::move(clusters);
 }
 
 void FacetIntegrator::prepareObserver(const Vec3& observer_m, IntegratorWorkspace::Impl& ws) const {
@@ -473,18 +363,6 @@ void FacetIntegrator::prepareObserver(const Vec3& observer_m, IntegratorWorkspac
   for (std::size_t k = 0; k < target_->objects.size(); ++k) {
     ws.observer_local_m[k] = observer_m - target_->objects[k].origin_m;
   }
-}
-
-Vec3 FacetIntegrator::rayOrigin(const PatchGeometry& g, std::uint32_t object,
-                                std::uint32_t coarse) const {
-  return g.centre_m + target_->objects[object].origin_m + occluder_->lift_m(coarse) * g.normal;
-}
-
-bool FacetIntegrator::visible(const Candidate& c, const Vec3& observer_m) const {
-  if (!occluder_) return true;
-  const Vec3 from = rayOrigin(c.geometry, c.object, c.facet.coarse);
-  const auto toward = tryNormalize(observer_m - from);
-  return !toward || occluder_->segmentClear(from, observer_m, localSkip(c.geometry, *toward));
 }
 
 ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
@@ -510,7 +388,9 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
   const ResolutionLimits limits = cubature ? cubatureLimits() : opt.resolution;
   for (const Candidate& lit : candidates) {
     const Vec3& x = ws.observer_local_m[lit.object];
-    if (!mayFaceObserver(lit.geometry, x) || !visible(lit, observer_m)) continue;
+    if (!mayFaceObserver(lit.geometry, x) ||
+        !detail::visible(occluder_.get(), *target_, lit, observer_m))
+      continue;
     const Beam& beam = object_beams_[lit.object];
     const Material& material = target_->materials[target_->objects[lit.object].material];
     Leaf leaf;
@@ -750,7 +630,7 @@ ObserverResult FacetIntegrator::adaptiveLobe(const Vec3& observer_m,
     const LobePiece p = bounded(f, x, beam, material);
     // The occlusion ray last: of a mesh's thousands of lit facets an observer's bound keeps a
     // few, and the ray costs more than the bound.
-    if (p.upper == 0.0 || !visible(lit, observer_m)) return;
+    if (p.upper == 0.0 || !detail::visible(occluder_.get(), *target_, lit, observer_m)) return;
     store(p);
   };
   if (clusters_ && candidates.data() == lit_.data()) {
@@ -937,7 +817,9 @@ ObserverResult FacetIntegrator::uniform(const Vec3& observer_m, int level,
   CompensatedSum total;
   for (const Candidate& lit : lit_) {
     const Vec3& x = ws.observer_local_m[lit.object];
-    if (!mayFaceObserver(lit.geometry, x) || !visible(lit, observer_m)) continue;
+    if (!mayFaceObserver(lit.geometry, x) ||
+        !detail::visible(occluder_.get(), *target_, lit, observer_m))
+      continue;
     const Beam& beam = object_beams_[lit.object];
     const Material& material = target_->materials[target_->objects[lit.object].material];
     detail::withPatchModel(*target_, lit.facet.coarse, [&](const auto& model) {
@@ -957,107 +839,6 @@ ObserverResult FacetIntegrator::uniform(const Vec3& observer_m, int level,
     });
   }
   result.irradiance_w_m2 = total.value();
-  return result;
-}
-
-BallBound FacetIntegrator::boundBall(const Vec3& centre_m, double radius_m,
-                                     std::span<const Candidate> inherited,
-                                     double inherited_dropped_w_m2, const BallBoundOptions& options,
-                                     std::vector<Candidate>& kept) const {
-  BallBound result;
-  kept.clear();
-  // kept doubles as the work list: entries before i are final, with their bound in `bounds`;
-  // a split candidate is replaced by its first child in place and the others at the end.
-  thread_local std::vector<double> bounds;
-  bounds.clear();
-  for (const Candidate& c : inherited) kept.push_back(c);
-  std::size_t i = 0;
-  while (i < kept.size()) {
-    const Candidate c = kept[i];
-    const Vec3 x = centre_m - target_->objects[c.object].origin_m;
-    double upper = 0.0;
-    if (mayFaceObserver(c.geometry, x, radius_m)) {
-      const Material& material = target_->materials[target_->objects[c.object].material];
-      upper = contributionBound(c.geometry, x, object_beams_[c.object], material,
-                                options_.resolution, radius_m)
-                  .upper_w_m2;
-      ++result.bound_evaluations;
-    }
-    if (upper == 0.0) {  // provably nothing: drop for free
-      kept[i] = kept.back();
-      kept.pop_back();
-      continue;
-    }
-    // Splitting tightens the bound only where the cone is wider than the angle under which
-    // the region sees the facet: the half vector cannot be pinned down finer than that.
-    const double d = glm::length(x - c.geometry.centre_m);
-    const double reach = c.geometry.radius_m + radius_m;
-    const double region_angle = d > reach ? std::asin(reach / d) : kPi;
-    if (std::isfinite(upper) && upper > options.drop_allowance_w_m2 &&
-        c.facet.depth < options.max_split_depth && c.geometry.cone_rad > 0.5 * region_angle) {
-      detail::withPatchModel(*target_, c.facet.coarse, [&](const auto& model) {
-        const std::array<SubFacet, 4> children = model.split(c.facet);
-        kept[i] = {children[0], c.object,
-                   model.template geometry<true>(children[0], options_.normals), c.fan_rad,
-                   c.fan_radius_m};
-        for (int k = 1; k < 4; ++k) {
-          kept.push_back({children[k], c.object,
-                          model.template geometry<true>(children[k], options_.normals), c.fan_rad,
-                          c.fan_radius_m});
-        }
-      });
-      continue;  // kept[i] is now the first child
-    }
-    bounds.resize(kept.size());
-    bounds[i] = upper;
-    ++i;
-  }
-  bounds.resize(kept.size());
-
-  // Drop the weakest candidates while the dropped bounds stay within the allowance. Sorting an
-  // index keeps the candidates' order, and so the integration's, independent of the bounds.
-  thread_local std::vector<std::uint32_t> order;
-  order.resize(kept.size());
-  for (std::uint32_t k = 0; k < order.size(); ++k) order[k] = k;
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-    return bounds[a] != bounds[b] ? bounds[a] < bounds[b] : a < b;
-  });
-  CompensatedSum dropped, total;
-  dropped.add(inherited_dropped_w_m2);
-  thread_local std::vector<char> drop;
-  drop.assign(kept.size(), 0);
-  for (std::uint32_t k : order) {
-    // Only a finite bound proven within the allowance is dropped: an unbounded candidate never
-    // is, whatever the allowance (sorted last, it ends the loop).
-    if (!(bounds[k] < kInf) || !(dropped.value() + bounds[k] <= options.drop_allowance_w_m2)) break;
-    dropped.add(bounds[k]);
-    drop[k] = 1;
-  }
-  CompensatedSum narrow;
-  std::size_t out = 0;
-  for (std::size_t k = 0; k < kept.size(); ++k) {
-    if (drop[k] != 0) continue;
-    total.add(bounds[k]);
-    // The light of the whole coarse facet fills at least its own width plus what its cone
-    // and lobe (±2σ in the normal, twice that after reflection) spread over the distance.
-    const Candidate& c = kept[k];
-    const TargetObject& obj = target_->objects[c.object];
-    const double sigma = target_->materials[obj.material].lobe.sigma;
-    const Vec3 x = centre_m - obj.origin_m;
-    const double d_min =
-        std::max(0.0, glm::length(x - c.geometry.centre_m) - c.fan_radius_m - radius_m);
-    const double width = 2.0 * c.fan_radius_m + 4.0 * d_min * (c.fan_rad + 2.0 * sigma);
-    // A width that cannot be computed counts as narrow: the block then looks closer.
-    if (!(width >= std::sqrt(3.0) * options.sample_spacing_m)) {
-      narrow.add(bounds[k]);
-      result.resolving_spacing_m = std::min(result.resolving_spacing_m, width / std::sqrt(3.0));
-    }
-    kept[out++] = c;
-  }
-  kept.resize(out);
-  result.dropped_w_m2 = dropped.value();
-  result.upper_w_m2 = total.value() + result.dropped_w_m2;
-  result.narrow_w_m2 = narrow.value();
   return result;
 }
 

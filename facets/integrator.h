@@ -203,14 +203,11 @@ class FacetIntegrator {
 
  private:
   void prepareObserver(const Vec3& observer_m, IntegratorWorkspace::Impl& ws) const;
+  // The culling (culling.cpp): the occluder, lit_ and cull_, then the lobe scheme's clusters_.
+  void cull();
   void buildClusters();
   ObserverResult adaptiveLobe(const Vec3& observer_m, std::span<const Candidate> candidates,
                               IntegratorWorkspace::Impl& ws) const;
-  // Where the occlusion rays of a facet (geometry g, world frame) start: its centre, lifted
-  // off the surface (Occluder::lift_m). Only with an occluder.
-  Vec3 rayOrigin(const PatchGeometry& g, std::uint32_t object, std::uint32_t coarse) const;
-  // Whether the observer sees the candidate's centre past the rest of the target.
-  bool visible(const Candidate& c, const Vec3& observer_m) const;
 
   // Shared by the copies withAccuracy() makes; the surface maps point into it.
   std::shared_ptr<const Target> target_;
