@@ -3,7 +3,10 @@
 // observer can receive light from, bounds over runs of the lit ones, and the visibility ray
 // between a facet and an observer.
 
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "facets/integrator.h"
@@ -39,6 +42,31 @@ bool visiblePastOccluder(const Occluder& occluder, const Target& target, const C
 inline bool visible(const Occluder* occluder, const Target& target, const Candidate& c,
                     const Vec3& observer_m) {
   return occluder == nullptr || visiblePastOccluder(*occluder, target, c, observer_m);
+}
+
+// Calls visit(c) for each of @p lit (the candidates the clusters were built over) in their
+// order, but not for those under a node that dark(node) rules out (asked only of nodes within
+// one object).
+template <class Dark, class Visit>
+void forEachLitCandidate(const LitClusters& clusters, std::span<const Candidate> lit, Dark&& dark,
+                         Visit&& visit) {
+  const auto& levels = clusters.levels;
+  auto descend = [&](auto&& self, std::size_t level, std::size_t index) -> void {
+    const LitClusters::Node& node = levels[level][index];
+    if (!node.mixed && dark(node)) return;
+    if (level == 0) {
+      const std::size_t first = index * LitClusters::kLeaf;
+      const std::size_t end = std::min(lit.size(), first + LitClusters::kLeaf);
+      for (std::size_t k = first; k < end; ++k) visit(lit[k]);
+      return;
+    }
+    // A level may end with a node carried up alone: its one child.
+    const std::size_t children = levels[level - 1].size();
+    for (std::size_t c = 2 * index; c < std::min(children, 2 * index + 2); ++c) {
+      self(self, level - 1, c);
+    }
+  };
+  if (!levels.empty() && !levels.back().empty()) descend(descend, levels.size() - 1, 0);
 }
 
 }  // namespace detail
