@@ -20,7 +20,9 @@
 
 namespace glint {
 
-/// @brief How each observer's integral over a lit facet is computed.
+/// @brief How each observer's integral over a lit facet is computed: each scheme is a rule (how a
+/// piece is seeded, estimated and split) of the one refinement engine (detail/refine.h,
+/// detail/schemes.h), chosen once per observer.
 enum class IntegrationScheme : std::uint8_t {
   /// The paper's: a one-point rule per sub-facet (the curved patch's area at its centroid), split
   /// 1→4 while the estimate changes. The pieces must resolve the lobe to about one σ each. Kept
@@ -134,6 +136,11 @@ struct BallBound {
   }
 };
 
+namespace detail {
+struct Workspace;
+struct ObserverSetting;
+}  // namespace detail
+
 /// @brief Per-thread scratch space of FacetIntegrator: reused between observers, so the hot
 /// loop does not allocate once it has grown to the largest observer's needs.
 class IntegratorWorkspace {
@@ -145,8 +152,7 @@ class IntegratorWorkspace {
 
  private:
   friend class FacetIntegrator;
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
+  std::unique_ptr<detail::Workspace> impl_;
 };
 
 class Occluder;
@@ -202,15 +208,11 @@ class FacetIntegrator {
   [[nodiscard]] FacetIntegrator withReturnExtinction(double per_m) const;
 
  private:
-  void prepareObserver(const Vec3& observer_m, IntegratorWorkspace::Impl& ws) const;
+  // Readies the workspace for the observer and returns what a scheme sees of both.
+  detail::ObserverSetting prepareObserver(const Vec3& observer_m, detail::Workspace& ws) const;
+  // The culling (culling.cpp): the occluder, lit_ and cull_, then the lobe scheme's clusters_.
+  void cull();
   void buildClusters();
-  ObserverResult adaptiveLobe(const Vec3& observer_m, std::span<const Candidate> candidates,
-                              IntegratorWorkspace::Impl& ws) const;
-  // Where the occlusion rays of a facet (geometry g, world frame) start: its centre, lifted
-  // off the surface (Occluder::lift_m). Only with an occluder.
-  Vec3 rayOrigin(const PatchGeometry& g, std::uint32_t object, std::uint32_t coarse) const;
-  // Whether the observer sees the candidate's centre past the rest of the target.
-  bool visible(const Candidate& c, const Vec3& observer_m) const;
 
   // Shared by the copies withAccuracy() makes; the surface maps point into it.
   std::shared_ptr<const Target> target_;

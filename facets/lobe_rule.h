@@ -7,15 +7,14 @@
 /// exp(−tan²θN / 2σ²), and tan²θN = |q|² for the tangent-plane vector q = H/(H·n) − n, a smooth
 /// function of the surface point. Where q is affine the lobe is a Gaussian in the piece's
 /// coordinates, whose integral over a polygon is a sum of Owen's T functions (exact for any
-/// width and aspect ratio: a point glint, a cylinder's stripe, a lobe wider than the piece). So
-/// the rule interpolates q and the smooth factors quadratically from six nodes, finds where |q|
-/// is least (the specular point, or the piece's point nearest it), linearises q there,
-/// integrates that Gaussian exactly over the piece's lit, visible, in-beam part, and corrects
-/// for the rest (the smooth factor and q's curvature) at the Gaussian's centroid: a
-/// second-order product rule, with no sample ever needing to land on the peak.
+/// width and aspect ratio: a point glint, a cylinder's stripe, a lobe wider than the piece;
+/// bivariate_normal.h). So the rule interpolates q and the smooth factors quadratically from
+/// six nodes, finds where |q| is least (the specular point, or the piece's point nearest it),
+/// linearises q there, integrates that Gaussian exactly over the piece's lit, visible, in-beam
+/// part, and corrects for the rest (the smooth factor and q's curvature) at the Gaussian's
+/// centroid: a second-order product rule, with no sample ever needing to land on the peak.
 
 #include <array>
-#include <glm/vec2.hpp>
 #include <limits>
 #include <span>
 
@@ -25,42 +24,6 @@
 #include "facets/vec3.h"
 
 namespace glint {
-
-using Vec2 = glm::dvec2;
-
-/// @brief ∫ φ₂(y) dy, ∫ y φ₂(y) dy and ∫ y yᵀ φ₂(y) dy over a polygon, φ₂ the standard bivariate
-/// normal density e^{−|y|²/2} / 2π; and the mean and covariance of φ₂ restricted to it, which
-/// a small polygon far from the origin cannot get from the raw moments (its covariance is the
-/// difference of two numbers larger by the squared ratio of its distance to its size).
-struct NormalMoments {
-  double mass = 0.0;
-  Vec2 first{0.0};
-  double second_xx = 0.0, second_xy = 0.0, second_yy = 0.0;
-  Vec2 mean{0.0};                                   ///< first / mass (0 without mass)
-  double cov_xx = 0.0, cov_xy = 0.0, cov_yy = 0.0;  ///< about the mean, per unit mass
-  /// The third moments about the mean, per unit mass: the skew that cutting the density
-  /// gives it (0 for the whole plane; a half-normal's 0.218 across its edge).
-  double skew_xxx = 0.0, skew_xxy = 0.0, skew_xyy = 0.0, skew_yyy = 0.0;
-  /// False where the skew is not resolved in double precision (a polygon far out in the
-  /// density's tail, not small enough for the quadrature): the skew_ fields are then 0.
-  bool skew_known = false;
-};
-
-/// @brief The moments of the standard bivariate normal over the convex polygon with
-/// counter-clockwise vertices @p ccw (at most 16).
-///
-/// - In closed form where that is well conditioned: the mass by Owen's T over its edges (the
-///   winding number less each edge's tail beyond it), the higher moments by the divergence
-///   theorem (∫ y φ₂ = −∮ φ₂ n ds, ∫ yᵢ yⱼ φ₂ = δᵢⱼ mass − ∮ yⱼ φ₂ nᵢ ds,
-///   ∫ yᵢ yⱼ yₖ φ₂ = δᵢⱼ ∫ yₖ φ₂ + δᵢₖ ∫ yⱼ φ₂ − ∮ yⱼ yₖ φ₂ nᵢ ds).
-/// - Otherwise (a polygon small against the density's scale, or far out in its tail, where the
-///   edge terms cancel to below their own rounding), if the density varies by at most e⁸ over
-///   it: by a degree-11 rule on triangles over each of which it varies by at most e², in a
-///   frame at the polygon, so that mass, mean and covariance keep their precision however far
-///   out the polygon is.
-///
-/// Never throws; an empty or degenerate polygon gives zeros.
-NormalMoments standardNormalOverPolygon(std::span<const Vec2> ccw);
 
 /// @brief The integrand's parts at one node of a piece, the lobe kept apart.
 struct LobeNode {

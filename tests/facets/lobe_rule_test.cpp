@@ -1,4 +1,4 @@
-// The lobe rule's parts: the bivariate normal over a polygon in closed form, and the rule on
+// The lobe rule's parts: the bivariate normal over a polygon (bivariate_normal.h), and the rule on
 // integrands whose lobe is exactly or nearly Gaussian, against brute-force quadrature.
 #include "facets/lobe_rule.h"
 
@@ -8,6 +8,8 @@
 #include <functional>
 #include <string>
 #include <vector>
+
+#include "facets/bivariate_normal.h"
 
 namespace glint {
 namespace {
