@@ -76,6 +76,18 @@ class GltfLoader : public ::testing::Test {
 
 const std::vector<float> kTriangle = {0, 0, 0, 1, 0, 0, 0, 1, 0};
 
+// A scene of one object, lit from 10 m above by a 1 W flat-top beam; material "m".
+json sceneOf(const json& object) {
+  return {{"laser",
+           {{"position", {0, 0, 10}},
+            {"direction", {0, 0, -1}},
+            {"power_w", 1.0},
+            {"wavelength_nm", 532},
+            {"beam", {{"profile", "flat_top"}, {"radius_m", 1.0}}}}},
+          {"materials", {{"m", {{"specular_reflectance", 0.5}, {"sigma", 0.1}}}}},
+          {"objects", json::array({object})}};
+}
+
 // The message loadGltf refuses `file` with.
 std::string refusal(const fs::path& file) {
   return test::refusalOf([&] { loadGltf(file); });
@@ -207,15 +219,7 @@ TEST_F(GltfLoader, AMeshWithNoUsableTriangleIsRefusedNamingTheFileAndTheCount) {
   // Two triangles, one with three corners on a line and one with a corner repeated: a model
   // that loads, and leaves no surface to reflect. The run must not read it as a safe target.
   write("flat", {0, 0, 0, 1, 0, 0, 2, 0, 0, 0, 1, 0}, {0, 1, 2, 0, 3, 3});
-  const json scene = {
-      {"laser",
-       {{"position", {0, 0, 10}},
-        {"direction", {0, 0, -1}},
-        {"power_w", 1.0},
-        {"wavelength_nm", 532},
-        {"beam", {{"profile", "flat_top"}, {"radius_m", 1.0}}}}},
-      {"materials", {{"m", {{"specular_reflectance", 0.5}, {"sigma", 0.1}}}}},
-      {"objects", {{{"shape", "mesh"}, {"file", "model/flat.gltf"}, {"material", "m"}}}}};
+  const json scene = sceneOf({{"shape", "mesh"}, {"file", "model/flat.gltf"}, {"material", "m"}});
   const std::string message =
       test::refusalOf([&] { parseScene(scene.dump(), "scene.json", dir_); });
   EXPECT_NE(message.find("scene.json: /objects/0/file: "), std::string::npos) << message;
@@ -237,21 +241,13 @@ TEST(GltfExamples, TheExampleTargetsLoadWhole) {
 
 TEST_F(GltfLoader, MeshObjectsAreReadRelativeToTheSceneAndPlaced) {
   write("t", kTriangle, {0, 1, 2});
-  const json scene = {
-      {"laser",
-       {{"position", {0, 0, 10}},
-        {"direction", {0, 0, -1}},
-        {"power_w", 1.0},
-        {"wavelength_nm", 532},
-        {"beam", {{"profile", "flat_top"}, {"radius_m", 1.0}}}}},
-      {"materials", {{"m", {{"specular_reflectance", 0.5}, {"sigma", 0.1}}}}},
-      {"objects",
-       {{{"shape", "mesh"},
-         {"file", "model/t.gltf"},
-         {"material", "m"},
-         {"surface", "flat"},
-         {"transform",
-          {{"translation", {5, 0, 0}}, {"scale", 2.0}, {"yaw_pitch_roll_deg", {90, 0, 0}}}}}}}};
+  const json scene =
+      sceneOf({{"shape", "mesh"},
+               {"file", "model/t.gltf"},
+               {"material", "m"},
+               {"surface", "flat"},
+               {"transform",
+                {{"translation", {5, 0, 0}}, {"scale", 2.0}, {"yaw_pitch_roll_deg", {90, 0, 0}}}}});
   const Scene s = parseScene(scene.dump(), "scene.json", dir_);
   ASSERT_TRUE(s.objects[0].mesh);
   const MeshSpec& m = *s.objects[0].mesh;
