@@ -23,6 +23,7 @@
 #include "pipeline/study.h"
 #include "pipeline/target_builder.h"
 #include "support/cli.h"
+#include "support/files.h"
 
 namespace glint {
 namespace {
@@ -34,12 +35,7 @@ const std::string kStudy = std::string(GLINT_TEST_DATA_DIR) + "/study.json";
 using test::glint;
 using test::Outcome;
 
-std::string bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::readFile;
 
 std::vector<float> exrChannel(const fs::path& p, const std::string& name) {
   int w = 0, h = 0;
@@ -120,7 +116,7 @@ TEST_F(Batch, AggregatesAreTheMaximumAndTheHazardFractionOfTheScenarioMaps) {
 }
 
 TEST_F(Batch, TableHasOneRowPerScenarioAndTheSummaryItsQuantiles) {
-  std::istringstream csv(bytes(dir_ / "scenarios.csv"));
+  std::istringstream csv(readFile(dir_ / "scenarios.csv"));
   std::string header, line;
   std::getline(csv, header);
   EXPECT_EQ(header.rfind("scenario,time_s,", 0), 0u) << header;
@@ -134,13 +130,13 @@ TEST_F(Batch, TableHasOneRowPerScenarioAndTheSummaryItsQuantiles) {
   while (std::getline(csv, line)) {
     EXPECT_EQ(line.substr(0, line.find(',')), std::to_string(rows)) << "rows in scenario order";
     const auto result = nlohmann::json::parse(
-        bytes(dir_ / "scenarios" / ("s00000" + std::to_string(rows)) / "result.json"));
+        readFile(dir_ / "scenarios" / ("s00000" + std::to_string(rows)) / "result.json"));
     peaks.push_back(result.at("regions")[1].at("peak_hazard_ratio").get<double>());
     ++rows;
   }
   EXPECT_EQ(rows, 4);
   std::sort(peaks.begin(), peaks.end());
-  const auto summary = nlohmann::json::parse(bytes(dir_ / "summary.json"));
+  const auto summary = nlohmann::json::parse(readFile(dir_ / "summary.json"));
   EXPECT_EQ(summary.at("scenarios").at("count"), 4);
   const auto& ground = summary.at("regions")[1];
   EXPECT_EQ(ground.at("name"), "ground");
@@ -154,14 +150,14 @@ TEST_F(Batch, TableHasOneRowPerScenarioAndTheSummaryItsQuantiles) {
 
 TEST_F(Batch, ResumeRedoesOnlyTheScenariosWithoutAResult) {
   const fs::path dir = copyOfRun();
-  const std::string exr = bytes(dir / "ground.exr"), vdb = bytes(dir / "box.vdb");
+  const std::string exr = readFile(dir / "ground.exr"), vdb = readFile(dir / "box.vdb");
   fs::remove(dir / "scenarios" / "s000002" / "result.json");
   const Outcome again = glint({"batch", kStudy, "-o", dir.string()});
   ASSERT_EQ(again.status, 0) << again.err;
   EXPECT_NE(again.err.find("(3 done before, 1 to run)"), std::string::npos) << again.err;
-  EXPECT_EQ(bytes(dir / "ground.exr"), exr) << "a resumed study gives the same map";
-  EXPECT_EQ(bytes(dir / "box.vdb"), vdb) << "and the same volume";
-  const auto summary = nlohmann::json::parse(bytes(dir / "summary.json"));
+  EXPECT_EQ(readFile(dir / "ground.exr"), exr) << "a resumed study gives the same map";
+  EXPECT_EQ(readFile(dir / "box.vdb"), vdb) << "and the same volume";
+  const auto summary = nlohmann::json::parse(readFile(dir / "summary.json"));
   EXPECT_EQ(summary.at("scenarios").at("resumed"), 3);
   EXPECT_EQ(summary.at("scenarios").at("computed"), 1);
   fs::remove_all(dir);
@@ -226,7 +222,7 @@ TEST(BatchFarField, EachScenarioMatchesGlintRunAndTheSummaryNamesTheFarthest) {
   std::vector<double> nohd;
   for (int s = 0; s < 2; ++s) {
     const fs::path scenario = dir / "out" / "scenarios" / ("s00000" + std::to_string(s));
-    const auto far = nlohmann::json::parse(bytes(scenario / "result.json")).at("far_field");
+    const auto far = nlohmann::json::parse(readFile(scenario / "result.json")).at("far_field");
     nohd.push_back(far.at("max_nohd_m").get<double>());
     EXPECT_GT(nohd.back(), far.at("far_radius_m").get<double>())
         << "scenario " << s << ": the mirror's glint is hazardous beyond the far radius";
@@ -234,7 +230,7 @@ TEST(BatchFarField, EachScenarioMatchesGlintRunAndTheSummaryNamesTheFarthest) {
                                (dir / ("run" + std::to_string(s))).string(), "-q"});
     ASSERT_EQ(run.status, 0) << run.err;
     const auto ran =
-        nlohmann::json::parse(bytes(dir / ("run" + std::to_string(s)) / "summary.json"))
+        nlohmann::json::parse(readFile(dir / ("run" + std::to_string(s)) / "summary.json"))
             .at("far_field");
     // The same computation on the same scene: the same numbers, to the last bit.
     EXPECT_EQ(far.at("max_nohd_m"), ran.at("max_nohd_m")) << "scenario " << s;
@@ -242,13 +238,14 @@ TEST(BatchFarField, EachScenarioMatchesGlintRunAndTheSummaryNamesTheFarthest) {
     EXPECT_EQ(far.at("peak_intensity_w_sr"), ran.at("peak_intensity_w_sr")) << "scenario " << s;
     EXPECT_EQ(far.at("far_radius_m"), ran.at("far_radius_m")) << "scenario " << s;
   }
-  const auto summary = nlohmann::json::parse(bytes(dir / "out" / "summary.json")).at("far_field");
+  const auto summary =
+      nlohmann::json::parse(readFile(dir / "out" / "summary.json")).at("far_field");
   const auto farthest = std::max_element(nohd.begin(), nohd.end());
   EXPECT_EQ(summary.at("max_nohd_m").at("max").get<double>(), *farthest);
   EXPECT_EQ(summary.at("farthest").at("scenario").get<int>(), farthest - nohd.begin());
   EXPECT_EQ(summary.at("scenarios_hazardous_beyond_far_radius").get<int>(), 2);
 
-  std::istringstream csv(bytes(dir / "out" / "scenarios.csv"));
+  std::istringstream csv(readFile(dir / "out" / "scenarios.csv"));
   std::string header, row;
   std::getline(csv, header);
   std::getline(csv, row);
@@ -276,7 +273,7 @@ TEST(BatchHazard, PulsesFogAndBinocularsReachEveryScenarioAndTheSummary) {
                 "size_m": [4, 4], "pixel_m": 0.25}],)"));
   for (int s = 0; s < 2; ++s) {
     const auto rec = nlohmann::json::parse(
-        bytes(dir / "out" / "scenarios" / ("s00000" + std::to_string(s)) / "result.json"));
+        readFile(dir / "out" / "scenarios" / ("s00000" + std::to_string(s)) / "result.json"));
     const auto& box = rec.at("regions").at(0);
     const double ratio = box.at("peak_hazard_ratio").get<double>();
     EXPECT_NEAR(box.at("aided_peak_hazard_ratio").get<double>(), 34.3 * ratio, 1e-9 * ratio);
@@ -287,13 +284,13 @@ TEST(BatchHazard, PulsesFogAndBinocularsReachEveryScenarioAndTheSummary) {
     EXPECT_GT(far.at("aided_max_nohd_m").get<double>(), far.at("max_nohd_m").get<double>())
         << far.dump();
   }
-  const auto summary = nlohmann::json::parse(bytes(dir / "out" / "summary.json"));
+  const auto summary = nlohmann::json::parse(readFile(dir / "out" / "summary.json"));
   EXPECT_EQ(summary.at("hazard").at("pulse").at("rule").get<int>(), 3);
   EXPECT_NEAR(summary.at("hazard").at("optical_aid").at("gain").get<double>(), 34.3, 1e-12);
   EXPECT_GT(summary.at("hazard").at("atmosphere").at("extinction_per_m").get<double>(), 0.0);
   EXPECT_TRUE(summary.at("regions").at(0).contains("aided_peak_hazard_ratio"));
   EXPECT_TRUE(summary.at("far_field").contains("aided_max_nohd_m"));
-  std::istringstream csv(bytes(dir / "out" / "scenarios.csv"));
+  std::istringstream csv(readFile(dir / "out" / "scenarios.csv"));
   std::string header;
   std::getline(csv, header);
   EXPECT_NE(header.find(",box_aided_peak_hazard_ratio,box_aided_hazard_volume_m3,"),
@@ -387,7 +384,7 @@ TEST(BatchFolder, AFolderHeldByAnotherProcessIsRefusedWithItsPidAndNothingIsWrit
     // This test holds the folder as another `glint batch` would: flock is per open file, so the
     // command run in this same process is refused like a second process.
     const FolderLock held(dir, "glint batch");
-    const std::string holder = bytes(dir / FolderLock::kFileName);
+    const std::string holder = readFile(dir / FolderLock::kFileName);
     const Outcome refused = glint({"batch", kStudy, "-o", dir.string()});
     EXPECT_EQ(refused.status, 2) << refused.err;
     const std::string expect = dir.string() + " is in use by glint process " +
@@ -396,7 +393,7 @@ TEST(BatchFolder, AFolderHeldByAnotherProcessIsRefusedWithItsPidAndNothingIsWrit
     EXPECT_NE(refused.err.find(expect), std::string::npos) << refused.err;
     EXPECT_EQ(namesIn(dir), std::vector<std::string>{FolderLock::kFileName})
         << "the refused run wrote nothing into the held folder";
-    EXPECT_EQ(bytes(dir / FolderLock::kFileName), holder) << "nor into the holder's lock file";
+    EXPECT_EQ(readFile(dir / FolderLock::kFileName), holder) << "nor into the holder's lock file";
   }
   EXPECT_FALSE(fs::exists(dir / FolderLock::kFileName)) << "the holder removes its lock file";
   fs::remove_all(dir);
@@ -434,7 +431,7 @@ TEST(BatchFolder, ALockFileLeftByAKilledProcessBlocksNothingAndTheRunRemovesIt) 
   int status = -1;
   ASSERT_EQ(::waitpid(child, &status, 0), child);
   ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "the child took the lock";
-  ASSERT_NE(bytes(lock_file).find("pid=" + std::to_string(child)), std::string::npos)
+  ASSERT_NE(readFile(lock_file).find("pid=" + std::to_string(child)), std::string::npos)
       << "premise: the dead process's lock file is there";
 
   const Outcome again =
@@ -453,12 +450,12 @@ TEST(BatchFolder, AnEditedResultOrASwappedMapIsRedoneAndTheStudyIsAsIfUntouched)
   const fs::path s0 = out / "scenarios" / "s000000", s1 = out / "scenarios" / "s000001";
   // Scenario 0's box peak edited to 0, as in the issue: the figure is carried into the table
   // and the summary unless the record is checked.
-  auto result = nlohmann::json::parse(bytes(s0 / "result.json"));
+  auto result = nlohmann::json::parse(readFile(s0 / "result.json"));
   ASSERT_GT(result.at("regions")[0].at("peak_hazard_ratio").get<double>(), 0.0) << "premise";
   result["regions"][0]["peak_hazard_ratio"] = 0;
   std::ofstream(s0 / "result.json") << result.dump(2) << "\n";
   // Scenario 1's plane map replaced by scenario 0's: a whole, readable map, but not its own.
-  ASSERT_TRUE(bytes(s1 / "ground.exr") != bytes(s0 / "ground.exr"))
+  ASSERT_TRUE(readFile(s1 / "ground.exr") != readFile(s0 / "ground.exr"))
       << "premise: the two scenarios' maps differ";
   fs::copy_file(s0 / "ground.exr", s1 / "ground.exr", fs::copy_options::overwrite_existing);
 
@@ -474,13 +471,14 @@ TEST(BatchFolder, AnEditedResultOrASwappedMapIsRedoneAndTheStudyIsAsIfUntouched)
       << again.err;
 
   // Compared as booleans: a difference of binary maps printed in full says nothing.
-  EXPECT_TRUE(bytes(out / "ground.exr") == bytes(untouched / "ground.exr")) << "the coverage map";
-  EXPECT_TRUE(bytes(out / "box.vdb") == bytes(untouched / "box.vdb")) << "the box's maps";
-  EXPECT_EQ(withoutSeconds(bytes(out / "scenarios.csv")),
-            withoutSeconds(bytes(untouched / "scenarios.csv")))
+  EXPECT_TRUE(readFile(out / "ground.exr") == readFile(untouched / "ground.exr"))
+      << "the coverage map";
+  EXPECT_TRUE(readFile(out / "box.vdb") == readFile(untouched / "box.vdb")) << "the box's maps";
+  EXPECT_EQ(withoutSeconds(readFile(out / "scenarios.csv")),
+            withoutSeconds(readFile(untouched / "scenarios.csv")))
       << "the table, scenario 0's peak among it";
-  const auto summary = nlohmann::json::parse(bytes(out / "summary.json"));
-  const auto before = nlohmann::json::parse(bytes(untouched / "summary.json"));
+  const auto summary = nlohmann::json::parse(readFile(out / "summary.json"));
+  const auto before = nlohmann::json::parse(readFile(untouched / "summary.json"));
   EXPECT_EQ(summary.at("regions"), before.at("regions")) << "the peak quantiles and areas";
   EXPECT_EQ(summary.at("far_field"), before.at("far_field"));
   EXPECT_EQ(summary.at("scenarios").at("computed"), 2) << "both scenarios redone";
@@ -504,9 +502,9 @@ TEST(BatchFolder, FreshRemovesOnlyGlintsOwnFilesAndSaysWhatItKept) {
   const Outcome fresh =
       glint({"batch", (dir / "one.json").string(), "-o", (dir / "out").string(), "--fresh"});
   ASSERT_EQ(fresh.status, 0) << fresh.err;
-  EXPECT_EQ(bytes(scenarios / "notes.txt"), "mine");
-  EXPECT_EQ(bytes(scenarios / "mine" / "result.json"), "mine too") << "a folder not glint's";
-  EXPECT_EQ(bytes(scenarios / "s000000" / "notes.txt"), "about scenario 0");
+  EXPECT_EQ(readFile(scenarios / "notes.txt"), "mine");
+  EXPECT_EQ(readFile(scenarios / "mine" / "result.json"), "mine too") << "a folder not glint's";
+  EXPECT_EQ(readFile(scenarios / "s000000" / "notes.txt"), "about scenario 0");
   EXPECT_EQ(namesIn(scenarios / "s000001"), std::vector<std::string>{"notes.txt"})
       << "glint's files go, the user's stay (and the folder holding them)";
   EXPECT_FALSE(fs::exists(scenarios / "s000002")) << "a scenario folder of glint's files alone";

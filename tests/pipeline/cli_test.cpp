@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "support/cli.h"
+#include "support/files.h"
 
 namespace glint {
 namespace {
@@ -55,12 +56,7 @@ class CliTest : public ::testing::Test {
   fs::path dir_;
 };
 
-std::string readFile(const std::string& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::readFile;
 
 TEST_F(CliTest, VersionAndHelpSucceed) {
   const Outcome v = glint({"--version"});

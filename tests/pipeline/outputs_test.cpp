@@ -14,6 +14,7 @@
 
 #include "pipeline/output_folder.h"
 #include "support/cli.h"
+#include "support/files.h"
 
 namespace glint {
 namespace {
@@ -22,12 +23,7 @@ namespace fs = std::filesystem;
 using test::glint;
 using test::Outcome;
 
-std::string readFile(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::readFile;
 
 std::size_t entries(const fs::path& dir) {
   return static_cast<std::size_t>(
