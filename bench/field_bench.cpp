@@ -106,15 +106,17 @@ std::vector<Index3> featurePoints(const Scene& scene, const FieldSpec& spec) {
       for (int k = 0; k < n[2]; ++k) {
         const Vec3 x = spec.position(i, j, k);
         for (const ObjectSpec& o : scene.objects) {
-          if (o.shape != ShapeKind::Cylinder) continue;
-          const Vec3 v = x - o.center_m;
+          const AnalyticShape* shape = o.analytic();
+          const CylinderShape* c = shape ? std::get_if<CylinderShape>(shape) : nullptr;
+          if (!c) continue;
+          const Vec3 v = x - c->center_m;
           const bool rim =
-              std::abs(std::abs(glm::dot(v, o.axis)) - 0.5 * o.length_m) <= spec.voxel_m;
-          const Vec3 across = glm::cross(o.axis, beam);
+              std::abs(std::abs(glm::dot(v, c->axis)) - 0.5 * c->length_m) <= spec.voxel_m;
+          const Vec3 across = glm::cross(c->axis, beam);
           const double across_len = glm::length(across);
           const bool shadow_side =
               across_len > 1e-9 && glm::dot(v, beam) > 0.0 &&
-              std::abs(std::abs(glm::dot(v, across / across_len)) - o.radius_m) <= spec.voxel_m;
+              std::abs(std::abs(glm::dot(v, across / across_len)) - c->radius_m) <= spec.voxel_m;
           if (rim || shadow_side) {
             out.push_back({i, j, k});
             break;

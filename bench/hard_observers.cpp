@@ -46,25 +46,19 @@ struct Row {
 // The reference's view of the scene's only object.
 test::brute::Parametrisation parametrisation(const ObjectSpec& o, const Beam& beam,
                                              const Vec3& observer_m) {
-  switch (o.shape) {
-    case ShapeKind::Cylinder:
-      return test::brute::cylinder({o.center_m, o.axis, o.radius_m, o.length_m});
-    case ShapeKind::Disk:
-      return test::brute::disk({o.center_m, o.axis, o.radius_m});
-    case ShapeKind::Sphere: {
-      // The glint lies in the plane of the beam, the centre and the observer: its normal as
-      // the pole keeps the glint on the equator, far from the parametrisation's poles.
-      const Vec3 to = observer_m - o.center_m;
-      Vec3 pole = glm::cross(beam.direction, to);
-      if (glm::length(pole) < 1e-6 * glm::length(to)) {
-        pole = glm::cross(beam.direction, Vec3(0.3, 0.5, 0.7));
-      }
-      return test::brute::sphere({o.center_m, o.radius_m}, pole);
-    }
-    case ShapeKind::Mesh:
-      break;
+  const AnalyticShape* shape = o.analytic();
+  if (!shape) throw std::runtime_error("the reference needs a cylinder, sphere or disk");
+  if (const auto* c = std::get_if<CylinderShape>(shape)) return test::brute::cylinder(*c);
+  if (const auto* d = std::get_if<DiskShape>(shape)) return test::brute::disk(*d);
+  // The glint lies in the plane of the beam, the centre and the observer: its normal as the
+  // pole keeps the glint on the equator, far from the parametrisation's poles.
+  const auto& sphere = std::get<SphereShape>(*shape);
+  const Vec3 to = observer_m - sphere.center_m;
+  Vec3 pole = glm::cross(beam.direction, to);
+  if (glm::length(pole) < 1e-6 * glm::length(to)) {
+    pole = glm::cross(beam.direction, Vec3(0.3, 0.5, 0.7));
   }
-  throw std::runtime_error("the reference needs a cylinder, sphere or disk");
+  return test::brute::sphere(sphere, pole);
 }
 
 std::int64_t quantile(std::vector<std::int64_t> v, double q) {
@@ -97,9 +91,9 @@ int main(int argc, char** argv) {
     const std::vector<Vec3> points =
         loadPoints(std::filesystem::path(path).replace_extension(".csv"));
     const Target target = buildTarget(scene);
-    const Beam beam = beamOf(scene);
+    const Beam beam = scene.laser;
     const Material material = target.materials.at(scene.objects[0].material);
-    const IntegratorOptions options = integratorOptions(scene);
+    const IntegratorOptions options = scene.accuracy;
 
     std::vector<test::brute::Estimate> ref(points.size());
     tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t i) {

@@ -50,7 +50,7 @@ void reportRate(benchmark::State& state, double reflections, std::size_t threads
 // One reflection calculation (Eq. 1 with clipping at the terminator), one thread.
 void ReflectionKernel(benchmark::State& state) {
   const Scene& scene = paperCylinder();
-  const FacetIntegrator fi(buildTarget(scene), beamOf(scene), integratorOptions(scene));
+  const FacetIntegrator fi(buildTarget(scene), scene.laser, scene.accuracy);
   const std::vector<PatchGeometry> patches = subFacets(fi, 4);
   const Material& material = fi.target().materials.front();
   const Vec3 observer(-10.0 * std::cos(1.0), 10.0 * std::sin(1.0), 0.3);
@@ -66,7 +66,7 @@ BENCHMARK(ReflectionKernel)->Unit(benchmark::kMillisecond);
 // The adaptive integration of one observer (bounds, priority queue, kernel), one thread.
 void AdaptiveObserver(benchmark::State& state) {
   const Scene& scene = paperCylinder();
-  const FacetIntegrator fi(buildTarget(scene), beamOf(scene), integratorOptions(scene));
+  const FacetIntegrator fi(buildTarget(scene), scene.laser, scene.accuracy);
   IntegratorWorkspace ws;
   const Vec3 observer(-10.0 * std::cos(1.0), 10.0 * std::sin(1.0), 0.3);
   std::int64_t evaluations = 0;
@@ -84,9 +84,9 @@ BENCHMARK(AdaptiveObserver)->Unit(benchmark::kMillisecond);
 // facets they hide.
 void FinnedMissileObservers(benchmark::State& state) {
   static const Scene scene = loadScene(GLINT_EXAMPLES_DIR "/finned_missile.json");
-  IntegratorOptions options = integratorOptions(scene);
+  IntegratorOptions options = scene.accuracy;
   options.occlusion = state.range(0) != 0;
-  const FacetIntegrator fi(buildTarget(scene), beamOf(scene), options);
+  const FacetIntegrator fi(buildTarget(scene), scene.laser, options);
   IntegratorWorkspace ws;
   std::int64_t evaluations = 0;
   for (auto _ : state) {
@@ -107,7 +107,7 @@ void ObserversOnThreads(benchmark::State& state) {
   const auto threads = static_cast<std::size_t>(state.range(0));
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
   const Scene& scene = paperCylinder();
-  const FacetIntegrator fi(buildTarget(scene), beamOf(scene), integratorOptions(scene));
+  const FacetIntegrator fi(buildTarget(scene), scene.laser, scene.accuracy);
   const std::vector<Vec3> points = loadPoints(GLINT_EXAMPLES_DIR "/cylinder_186.csv");
   std::int64_t evaluations = 0;
   for (auto _ : state) {

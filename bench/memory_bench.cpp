@@ -83,7 +83,7 @@ int main(int argc, char** argv) {
   if (segments) {
     for (ObjectSpec& o : scene.objects) o.segments = *segments;
   }
-  const TargetMemory memory = targetMemory(scene, integratorOptions(scene));
+  const TargetMemory memory = targetMemory(scene, scene.accuracy);
   std::printf("estimate: %llu coarse facets, floor %.1f MB (+ %llu bytes a lit facet%s)\n",
               static_cast<unsigned long long>(memory.facets),
               static_cast<double>(memory.floor_bytes) / 1048576.0,
@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
   std::printf("%zu coarse facets\n", facets);
   stage.report("target", facets);
   stage.start();
-  const FacetIntegrator integrator(std::move(target), beamOf(scene), integratorOptions(scene));
+  const FacetIntegrator integrator(std::move(target), scene.laser, scene.accuracy);
   stage.report("integrator", facets);
   std::printf("  lit %zu, occlusion %d\n", integrator.cullStats().lit,
               integrator.cullStats().occlusion ? 1 : 0);

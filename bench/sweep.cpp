@@ -134,7 +134,7 @@ int main(int argc, char** argv) {
 
   const Scene scene = loadScene(scene_path);
   const std::vector<Vec3> points = loadPoints(points_path);
-  IntegratorOptions options = integratorOptions(scene);
+  IntegratorOptions options = scene.accuracy;
   options.scheme = IntegrationScheme::Paper;  // the "adaptive" rows and the reference
   options.normals = normals == "flat" ? NormalModel::Flat : NormalModel::Surface;
   std::vector<double> ref;
@@ -142,13 +142,13 @@ int main(int argc, char** argv) {
     IntegratorOptions o = options;
     o.tolerance = reference_tolerance;
     o.max_evaluations = 100'000'000;
-    const FacetIntegrator fi(buildTarget(scene), beamOf(scene), o);
+    const FacetIntegrator fi(buildTarget(scene), scene.laser, o);
     for (const ObserverResult& r : evaluatePoints(fi, points, PointScheme{})) {
       ref.push_back(r.irradiance_w_m2);
     }
     std::fprintf(stderr, "reference: adaptive at tolerance %g\n", reference_tolerance);
   } else {
-    ref = reference(FacetIntegrator(buildTarget(scene), beamOf(scene), options), points,
+    ref = reference(FacetIntegrator(buildTarget(scene), scene.laser, options), points,
                     reference_level, out_path + ".reference.csv");
   }
 
@@ -159,14 +159,14 @@ int main(int argc, char** argv) {
       IntegratorOptions o = options;
       o.tolerance = tol;
       o.scheme = scheme;
-      rows.push_back(measure(FacetIntegrator(buildTarget(scene), beamOf(scene), o), points,
+      rows.push_back(measure(FacetIntegrator(buildTarget(scene), scene.laser, o), points,
                              PointScheme{}, ref, options.floor_w_m2));
       rows.back().parameter = tol;
     }
   };
   adaptive_runs(tolerances, options.scheme);
   adaptive_runs(lobe_tolerances, IntegrationScheme::Lobe);
-  const FacetIntegrator fi(buildTarget(scene), beamOf(scene), options);
+  const FacetIntegrator fi(buildTarget(scene), scene.laser, options);
   for (double level : parseList(levels)) {
     rows.push_back(
         measure(fi, points, PointScheme{true, static_cast<int>(level)}, ref, options.floor_w_m2));

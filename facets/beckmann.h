@@ -18,6 +18,12 @@ namespace glint {
 struct Beckmann {
   double sigma = 0.01;  ///< RMS surface slope per axis (dimensionless), > 0
 
+  /// @brief The lobe's angular width (rad): the tilt of the half vector at which Ξ has fallen to
+  /// e^(−1/2) of its peak, σ for a narrow lobe. Directions this far apart resolve the light it
+  /// reflects (the far field's lattice), and that light changes by about one part per width
+  /// of the half vector's turn (the far radius): what every question about σ is asked through.
+  [[nodiscard]] double widthRad() const { return sigma; }
+
   /// @brief Ξ in 1/sr as a function of s = tan²θN ≥ 0 (+∞ allowed, gives 0).
   [[nodiscard]] double xiFromTan2(double tan2) const {
     const double a = tan2 / (2.0 * sigma * sigma);

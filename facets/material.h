@@ -2,6 +2,9 @@
 /// @file
 /// @brief A reflecting material: Beckmann specular lobe plus a Lambertian part (docs/physics.md).
 
+#include <optional>
+#include <span>
+
 #include "facets/beckmann.h"
 #include "facets/vec3.h"
 
@@ -32,5 +35,17 @@ struct Material {
     return f;
   }
 };
+
+/// @brief The narrowest specular lobe of @p materials (smallest σ among those with a specular
+/// part): what sets how finely their light must be sampled by direction and how far away it
+/// settles into a point source's. Nothing when none reflects specularly.
+inline std::optional<Beckmann> narrowestLobe(std::span<const Material> materials) {
+  std::optional<Beckmann> narrowest;
+  for (const Material& m : materials) {
+    if (m.specular_reflectance > 0.0 && (!narrowest || m.lobe.sigma < narrowest->sigma))
+      narrowest = m.lobe;
+  }
+  return narrowest;
+}
 
 }  // namespace glint

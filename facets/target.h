@@ -49,6 +49,10 @@ struct Target {
   std::vector<std::uint8_t> rim_edges;         ///< bit k: edge (k, k+1) lies on the rim
 
   [[nodiscard]] std::size_t facetCount() const { return corners_m.size(); }
+  /// @brief The narrowest specular lobe of the target's materials (narrowestLobe()).
+  [[nodiscard]] std::optional<Beckmann> narrowestLobe() const {
+    return glint::narrowestLobe(materials);
+  }
 
   std::uint32_t addMaterial(const Material& m);
   std::uint32_t addObject(const TargetObject& o);

@@ -100,6 +100,25 @@ bool nearOrInside(const AnalyticShape& shape, const Vec3& x_m, double margin_m) 
   return std::visit([&](const auto& s) { return s.nearOrInside(x_m, margin_m); }, shape);
 }
 
+Vec3 centreOf(const AnalyticShape& shape) {
+  return std::visit([](const auto& s) { return s.center_m; }, shape);
+}
+
+std::optional<Vec3> axisOf(const AnalyticShape& shape) {
+  if (const auto* c = std::get_if<CylinderShape>(&shape)) return c->axis;
+  if (const auto* d = std::get_if<DiskShape>(&shape)) return d->normal;
+  return std::nullopt;
+}
+
+AnalyticShape placed(const AnalyticShape& shape, const Vec3& centre_m, const glm::dquat& turn) {
+  AnalyticShape out = shape;
+  std::visit([&](auto& s) { s.center_m = centre_m; }, out);
+  // A unit axis turned by a unit quaternion is a unit vector to rounding, never zero.
+  if (auto* c = std::get_if<CylinderShape>(&out)) c->axis = *tryNormalize(turn * c->axis);
+  if (auto* d = std::get_if<DiskShape>(&out)) d->normal = *tryNormalize(turn * d->normal);
+  return out;
+}
+
 std::uint32_t addCylinder(Target& target, const CylinderShape& s, std::uint32_t material,
                           int segments, const Vec3& reference) {
   const std::uint32_t obj = target.addObject({s.center_m, material, std::nullopt, true});

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <glm/gtc/quaternion.hpp>
 #include <optional>
 #include <variant>
 #include <vector>
@@ -77,6 +78,17 @@ double coarseFacets(const AnalyticShape& shape, int segments);
 
 /// @brief Whether @p x_m lies inside @p shape or within @p margin_m of it.
 bool nearOrInside(const AnalyticShape& shape, const Vec3& x_m, double margin_m);
+
+/// @brief The centre of @p shape.
+Vec3 centreOf(const AnalyticShape& shape);
+
+/// @brief The direction @p shape is turned by: a cylinder's axis, a disk's normal; nothing for a
+/// sphere, which any turn leaves as it was.
+std::optional<Vec3> axisOf(const AnalyticShape& shape);
+
+/// @brief @p shape with its centre at @p centre_m and its axis turned by the unit quaternion
+/// @p turn (and normalised again, as a scene file's is read).
+AnalyticShape placed(const AnalyticShape& shape, const Vec3& centre_m, const glm::dquat& turn);
 
 /// @brief Adds a cylinder as one object: @p segments facets around, rings along the axis so
 /// that facets are about as long as wide. @p reference (unit) fixes the azimuth of the

@@ -82,7 +82,8 @@ double opticalGain(double aperture_m, double magnification, double transmission,
   return transmission * collected * collected;
 }
 
-void completeHazard(HazardSpec& h, double wavelength_nm) {
+void completeHazard(HazardSpec& h) {
+  const double wavelength_nm = h.wavelength_nm;
   h.train.reset();
   if (!h.pulse) {
     h.mpe = ocularMpe(wavelength_nm, h.exposure_s, h.standard);

@@ -94,6 +94,7 @@ double opticalGain(double aperture_m, double magnification, double transmission,
 struct HazardSpec {
   /// The standard whose limits apply (its tables and rules; cited in every output).
   SafetyStandard standard = SafetyStandard::AnsiZ136_1_2014;
+  double wavelength_nm = 0.0;  ///< the laser's (`laser.wavelength_nm`): the limits' row
   /// `laser.exposure_s`, by default 0.25 s (the aversion response) for 400–700 nm and 10 s
   /// beyond 700 nm, where nothing makes the eye turn away; a single pulse's duration.
   double exposure_s = 0.25;
@@ -140,10 +141,10 @@ struct HazardSpec {
 /// beyond.
 double defaultExposureS(double wavelength_nm);
 
-/// @brief Fills @p h's limits from its exposure, pulse and aid: the table's MPE, the pulse
-/// train's, `mpe_w_m2` and `pulse_exposure_s`.
+/// @brief Fills @p h's limits from its wavelength, exposure, pulse and aid: the table's MPE, the
+/// pulse train's, `mpe_w_m2` and `pulse_exposure_s`.
 /// @throw std::out_of_range where the MPE table does not reach (ocularMpe).
-void completeHazard(HazardSpec& h, double wavelength_nm);
+void completeHazard(HazardSpec& h);
 
 /// @brief The lines of the standards the limit came from, as outputs record them.
 std::string hazardCitation(const HazardSpec& h);

@@ -132,7 +132,7 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
       channels.push_back({"aided_max_hazard_ratio", &aided_max_ratio});
       channels.push_back({"aided_coverage_probability", &aided_cover});
     }
-    writeExr(file.stream(), g, channels, {program, study.base.laser.wavelength_nm, h.mpe_w_m2});
+    writeExr(file.stream(), g, channels, {program, study.base.hazard.wavelength_nm, h.mpe_w_m2});
   } else {
     LatticeMeta meta;
     meta.strings = {{"program", program},
@@ -141,7 +141,7 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
                     {"length_unit", "m"},
                     {"mpe_rule", hazardCitation(h)}};
     meta.numbers = {{"scenarios", static_cast<double>(scenarios)},
-                    {"wavelength_nm", study.base.laser.wavelength_nm},
+                    {"wavelength_nm", study.base.hazard.wavelength_nm},
                     {"exposure_s", h.exposure_s},
                     {"mpe_w_m2", h.mpe_w_m2},
                     {"voxel_m", r.spec.voxel_m}};

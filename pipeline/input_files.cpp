@@ -29,7 +29,7 @@ void InputFiles::add(const fs::path& path, const std::string& role) {
 void InputFiles::addScene(const fs::path& path, const Scene& scene) {
   add(path, "scene file");
   for (const ObjectSpec& o : scene.objects) {
-    if (o.mesh) add(o.mesh->file, "mesh file");
+    if (o.mesh()) add(o.mesh()->file, "mesh file");
   }
 }
 

@@ -179,36 +179,52 @@ class ObjectReader {
   std::vector<std::string> known_;
 };
 
-// Range checks, each naming the key.
-inline double positive(ObjectReader& r, const std::string& key, double x) {
-  if (!(x > 0.0)) r.fail(key, "must be > 0");
-  return x;
-}
-inline double unitInterval(ObjectReader& r, const std::string& key, double x) {
-  if (!(x >= 0.0 && x <= 1.0)) r.fail(key, "must be in [0, 1]");
-  return x;
+// Range checks. A verdict is what is wrong with a value under one rule, in the words its reader
+// fails with; nothing when the rule holds. A value made in memory (a study's scenario) is checked
+// by the same verdicts, so that each rule is written once (recheckScene()).
+using Verdict = std::optional<std::string>;
+
+inline Verdict positiveVerdict(double x) { return x > 0.0 ? Verdict() : Verdict("must be > 0"); }
+inline Verdict unitIntervalVerdict(double x) {
+  return x >= 0.0 && x <= 1.0 ? Verdict() : Verdict("must be in [0, 1]");
 }
 // x in [lo, hi] (pipeline/limits.h says why these bounds), `unit` for the message.
-inline double inRange(ObjectReader& r, const std::string& key, double x, double lo, double hi,
-                      const char* unit) {
-  if (!(x >= lo && x <= hi)) {
-    char range[96];
-    std::snprintf(range, sizeof range, "must be in [%g, %g]%s%s", lo, hi, *unit ? " " : "", unit);
-    r.fail(key, range);
-  }
-  return x;
+inline Verdict inRangeVerdict(double x, double lo, double hi, const char* unit) {
+  if (x >= lo && x <= hi) return std::nullopt;
+  char range[96];
+  std::snprintf(range, sizeof range, "must be in [%g, %g]%s%s", lo, hi, *unit ? " " : "", unit);
+  return range;
 }
 // A position (m) within the coordinates double arithmetic carries through the chain.
-inline Vec3 position(ObjectReader& r, const std::string& key) {
-  const Vec3 p = r.vec3(key);
+inline Verdict positionVerdict(const Vec3& p) {
   for (int a = 0; a < 3; ++a) {
     if (!(std::abs(p[a]) <= limits::kMaxCoordinateM)) {
       char message[96];
       std::snprintf(message, sizeof message, "must lie within ±%g m on every axis",
                     limits::kMaxCoordinateM);
-      r.fail(key, message);
+      return message;
     }
   }
+  return std::nullopt;
+}
+
+// The reader's side of each verdict: the value, or the failure naming its key.
+inline double positive(ObjectReader& r, const std::string& key, double x) {
+  if (auto v = positiveVerdict(x)) r.fail(key, *v);
+  return x;
+}
+inline double unitInterval(ObjectReader& r, const std::string& key, double x) {
+  if (auto v = unitIntervalVerdict(x)) r.fail(key, *v);
+  return x;
+}
+inline double inRange(ObjectReader& r, const std::string& key, double x, double lo, double hi,
+                      const char* unit) {
+  if (auto v = inRangeVerdict(x, lo, hi, unit)) r.fail(key, *v);
+  return x;
+}
+inline Vec3 position(ObjectReader& r, const std::string& key) {
+  const Vec3 p = r.vec3(key);
+  if (auto v = positionVerdict(p)) r.fail(key, *v);
   return p;
 }
 

@@ -128,7 +128,7 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   const std::uint64_t points_bytes = points.size() * (sizeof(Vec3) + sizeof(ObserverResult));
   requireWithinBudget(std::to_string(points.size()) + " observer points", points_bytes, budget,
                       "split the points file or raise --memory");
-  IntegratorOptions options = integratorOptions(scene);
+  IntegratorOptions options = scene.accuracy;
   if (args.tolerance) options.tolerance = *args.tolerance;
 
   // Open the output first: a missing folder, a device or an input named as the output should

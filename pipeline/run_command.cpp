@@ -239,7 +239,7 @@ RunInfo runInfo(const Scene& scene, const std::string& scene_file, std::string_v
   info.scheme = scheme;
   info.integration_scheme =
       integrationSchemeNames()[static_cast<std::size_t>(scene.accuracy.scheme)];
-  info.wavelength_nm = scene.laser.wavelength_nm;
+  info.wavelength_nm = scene.hazard.wavelength_nm;
   info.power_w = scene.laser.power_w;
   info.exposure_s = scene.hazard.exposure_s;
   info.mpe_w_m2 = scene.hazard.mpe_w_m2;

@@ -102,21 +102,21 @@ nlohmann::json meshesJson(const Scene& scene, const std::vector<MeshStats>& stat
   nlohmann::json meshes = nlohmann::json::array();
   std::size_t k = 0;
   for (const ObjectSpec& o : scene.objects) {
-    if (!o.mesh) continue;
+    if (!o.mesh()) continue;
     const MeshStats& s = stats[k++];
-    meshes.push_back({{"file", o.mesh->file.string()},
-                      {"surface", toString(o.mesh->surface)},
+    meshes.push_back({{"file", o.mesh()->file.string()},
+                      {"surface", toString(o.mesh()->surface)},
                       {"triangles", s.triangles},
                       {"facets", s.facets},
                       {"degenerate_dropped", s.degenerate_dropped},
-                      {"normals_computed", o.mesh->normals_computed},
+                      {"normals_computed", o.mesh()->normals_computed},
                       {"normals_repaired", s.normals_repaired},
                       {"quadric_fits", s.quadric_fits},
                       {"quadric_fit_fallbacks_to_pn", s.fit_fallbacks},
                       {"crease_edges", s.crease_edges},
                       {"open_edges", s.open_edges},
-                      {"primitives_skipped", o.mesh->primitives_skipped},
-                      {"mirrored_instances", o.mesh->mirrored_instances}});
+                      {"primitives_skipped", o.mesh()->primitives_skipped},
+                      {"mirrored_instances", o.mesh()->mirrored_instances}});
   }
   return meshes;
 }
@@ -127,9 +127,9 @@ namespace {
 std::string comparedSurfaces(const Scene& scene) {
   std::vector<std::string> pairs;
   for (const ObjectSpec& o : scene.objects) {
-    if (!o.mesh) continue;
-    std::string pair = std::string(toString(o.mesh->surface)) + " against ";
-    const std::vector<MeshSurface> others = alternativeSurfaces(o.mesh->surface);
+    if (!o.mesh()) continue;
+    std::string pair = std::string(toString(o.mesh()->surface)) + " against ";
+    const std::vector<MeshSurface> others = alternativeSurfaces(o.mesh()->surface);
     for (std::size_t k = 0; k < others.size(); ++k)
       pair += (k ? ", " : "") + std::string(toString(others[k]));
     if (std::find(pairs.begin(), pairs.end(), pair) == pairs.end()) pairs.push_back(pair);

@@ -22,9 +22,9 @@ namespace glint {
 namespace {
 
 // A pulsed laser (`laser.pulse`): the pulse's duration and its energy (or peak power, or
-// from the mean power), and the repetition rate of a train. Fills laser.power_w, the mean power
-// over the exposure, where the file leaves it out, and checks it where it does not.
-PulseSpec readPulse(ObjectReader r, LaserSpec& laser, const std::optional<double>& power_w) {
+// from the mean power), and the repetition rate of a train. Sets @p mean_power_w, the mean power
+// over the exposure, which the file's power_w may leave out, and checks it where it does not.
+PulseSpec readPulse(ObjectReader r, const std::optional<double>& power_w, double& mean_power_w) {
   PulseSpec p;
   p.duration_s = inRange(r, "duration_s", r.number("duration_s"), 1e-9, 3e4, "s");
   if (auto f = r.optionalNumber("repetition_rate_hz")) {
@@ -55,25 +55,27 @@ PulseSpec readPulse(ObjectReader r, LaserSpec& laser, const std::optional<double
                (p.repetition_rate_hz ? "energy × repetition rate = " : "energy / duration = ") +
                formatNumber("%.6g", mean_w) + " W; leave power_w out or make them agree");
   }
-  laser.power_w = mean_w;
+  mean_power_w = mean_w;
   r.finish();
   return p;
 }
 
 // The exposure; its MPE once the pulse and the optical aid are known (completeHazard).
-HazardSpec readExposure(ObjectReader& r, const LaserSpec& laser,
+HazardSpec readExposure(ObjectReader& r, double wavelength_nm,
+                        const std::optional<double>& exposure_s,
                         const std::optional<PulseSpec>& pulse) {
   HazardSpec h;
-  if (!(laser.wavelength_nm >= 400.0 && laser.wavelength_nm <= 1.0e6)) {
+  h.wavelength_nm = wavelength_nm;
+  if (!(wavelength_nm >= 400.0 && wavelength_nm <= 1.0e6)) {
     r.fail("wavelength_nm",
            "must be in 400 nm to 1 mm, the range of the MPE table (ANSI "
            "Z136.1 / IEC 60825-1) that glint's hazard uses");
   }
   h.pulse = pulse;
   // A single pulse's exposure is its duration, which the file gives: never the default.
-  h.exposure_default = !laser.exposure_s.has_value() && !(pulse && !pulse->repetition_rate_hz);
+  h.exposure_default = !exposure_s.has_value() && !(pulse && !pulse->repetition_rate_hz);
   if (pulse && !pulse->repetition_rate_hz) {
-    if (laser.exposure_s) {
+    if (exposure_s) {
       r.fail("exposure_s",
              "a single pulse's exposure is its duration (pulse/duration_s); leave "
              "exposure_s out, or give pulse/repetition_rate_hz for a train");
@@ -81,7 +83,7 @@ HazardSpec readExposure(ObjectReader& r, const LaserSpec& laser,
     h.exposure_s = pulse->duration_s;
     return h;
   }
-  h.exposure_s = laser.exposure_s.value_or(defaultExposureS(laser.wavelength_nm));
+  h.exposure_s = exposure_s.value_or(defaultExposureS(wavelength_nm));
   if (!(h.exposure_s >= 1e-9 && h.exposure_s <= 3e4)) {
     r.fail("exposure_s", "must be in 1e-9 s to 3e4 s, the range of the MPE table");
   }
@@ -96,23 +98,25 @@ HazardSpec readExposure(ObjectReader& r, const LaserSpec& laser,
   return h;
 }
 
-LaserSpec readLaser(ObjectReader r, HazardSpec& hazard) {
-  LaserSpec laser;
-  laser.position_m = position(r, "position");
+// The laser as a beam; its wavelength and exposure go to @p hazard.
+Beam readLaser(ObjectReader r, HazardSpec& hazard) {
+  Beam laser;
+  laser.origin_m = position(r, "position");
   laser.direction = r.direction("direction");
   std::optional<double> power_w = r.optionalNumber("power_w");
   if (power_w)
     inRange(r, "power_w", positive(r, "power_w", *power_w), 0.0, limits::kMaxPowerW, "W");
-  laser.wavelength_nm = positive(r, "wavelength_nm", r.number("wavelength_nm"));
-  if (auto t = r.optionalNumber("exposure_s")) laser.exposure_s = positive(r, "exposure_s", *t);
+  const double wavelength_nm = positive(r, "wavelength_nm", r.number("wavelength_nm"));
+  std::optional<double> exposure_s;
+  if (auto t = r.optionalNumber("exposure_s")) exposure_s = positive(r, "exposure_s", *t);
   std::optional<PulseSpec> pulse;
   if (r.has("pulse")) {
-    pulse = readPulse(r.object("pulse"), laser, power_w);
+    pulse = readPulse(r.object("pulse"), power_w, laser.power_w);
     inRange(r, "power_w", laser.power_w, 0.0, limits::kMaxPowerW, "W (the pulse's mean power)");
   } else {
     laser.power_w = r.number("power_w");  // required: fails with the key's name when missing
   }
-  hazard = readExposure(r, laser, pulse);
+  hazard = readExposure(r, wavelength_nm, exposure_s, pulse);
 
   ObjectReader beam = r.object("beam");
   const std::size_t profile = beam.choice("profile", {"flat_top", "gaussian"});
@@ -180,17 +184,37 @@ OpticalAidSpec readOpticalAid(ObjectReader r, double wavelength_nm, SafetyStanda
   return aid;
 }
 
-MaterialSpec readMaterial(ObjectReader r, const std::string& name) {
-  MaterialSpec m;
-  m.name = name;
-  m.specular_reflectance =
-      unitInterval(r, "specular_reflectance", r.number("specular_reflectance"));
-  m.sigma = positive(r, "sigma", r.number("sigma"));
-  inRange(r, "sigma", m.sigma, limits::kMinSigma, 1e6, "");
-  m.diffuse_reflectance =
-      unitInterval(r, "diffuse_reflectance", r.number("diffuse_reflectance", 0.0));
+// A value of the file that breaks one of its rules: the key named (empty: the object itself)
+// and what is wrong.
+struct Violation {
+  std::string key;
+  std::string message;
+};
+
+// A material's rules, in the order its reader applies them.
+std::optional<Violation> materialViolation(const Material& m) {
+  if (auto v = unitIntervalVerdict(m.specular_reflectance))
+    return Violation{"specular_reflectance", *v};
+  if (auto v = positiveVerdict(m.lobe.sigma)) return Violation{"sigma", *v};
+  if (auto v = inRangeVerdict(m.lobe.sigma, limits::kMinSigma, 1e6, ""))
+    return Violation{"sigma", *v};
+  if (auto v = unitIntervalVerdict(m.diffuse_reflectance))
+    return Violation{"diffuse_reflectance", *v};
   if (m.specular_reflectance + m.diffuse_reflectance > 1.0) {
-    r.failHere("specular_reflectance + diffuse_reflectance must be ≤ 1 (energy conservation)");
+    return Violation{
+        "", "specular_reflectance + diffuse_reflectance must be ≤ 1 (energy conservation)"};
+  }
+  return std::nullopt;
+}
+
+Material readMaterial(ObjectReader r) {
+  Material m;
+  m.specular_reflectance = r.number("specular_reflectance");
+  m.lobe.sigma = r.number("sigma");
+  m.diffuse_reflectance = r.number("diffuse_reflectance", 0.0);
+  if (auto v = materialViolation(m)) {
+    if (v->key.empty()) r.failHere(v->message);
+    r.fail(v->key, v->message);
   }
   r.finish();
   return m;
@@ -305,59 +329,40 @@ MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder, const Gl
   return m;
 }
 
-}  // namespace
-
-std::optional<AnalyticShape> ObjectSpec::analytic() const {
-  switch (shape) {
-    case ShapeKind::Cylinder:
-      return CylinderShape{center_m, axis, radius_m, length_m};
-    case ShapeKind::Sphere:
-      return SphereShape{center_m, radius_m};
-    case ShapeKind::Disk:
-      return DiskShape{center_m, axis, radius_m};
-    case ShapeKind::Mesh:
-      break;
+// The analytic shape of `objects/<i>`, by its `shape` key (0: cylinder, 1: sphere, 2: disk).
+AnalyticShape readAnalytic(ObjectReader& r, std::size_t shape) {
+  const Vec3 centre_m = position(r, "center");
+  const double radius_m =
+      inRange(r, "radius", r.number("radius"), limits::kMinLengthM, limits::kMaxLengthM, "m");
+  if (shape == 0) {
+    const Vec3 axis = r.direction("axis");
+    const double length_m =
+        inRange(r, "length", r.number("length"), limits::kMinLengthM, limits::kMaxLengthM, "m");
+    return CylinderShape{centre_m, axis, radius_m, length_m};
   }
-  return std::nullopt;
+  if (shape == 1) return SphereShape{centre_m, radius_m};
+  return DiskShape{centre_m, r.direction("normal"), radius_m};
 }
 
-namespace {
-
-ObjectSpec readObject(ObjectReader r, const std::vector<MaterialSpec>& materials,
+ObjectSpec readObject(ObjectReader r, const std::vector<std::string>& material_names,
                       const std::filesystem::path& folder, const GltfLimits& mesh_limits,
                       const MeshBudget& mesh_budget) {
   ObjectSpec o;
-  const std::vector<std::string> shapes = {"cylinder", "sphere", "disk", "mesh"};
-  const std::size_t shape = r.choice("shape", shapes);
-  o.shape = shape == 0   ? ShapeKind::Cylinder
-            : shape == 1 ? ShapeKind::Sphere
-            : shape == 2 ? ShapeKind::Disk
-                         : ShapeKind::Mesh;
-  if (o.shape == ShapeKind::Mesh) {
-    o.mesh = readMesh(r, folder, mesh_limits, mesh_budget);
-    o.center_m = o.mesh->transform.translation_m;
+  const std::size_t shape = r.choice("shape", {"cylinder", "sphere", "disk", "mesh"});
+  if (shape == 3) {
+    o.shape = readMesh(r, folder, mesh_limits, mesh_budget);
   } else {
-    o.center_m = position(r, "center");
-    o.radius_m =
-        inRange(r, "radius", r.number("radius"), limits::kMinLengthM, limits::kMaxLengthM, "m");
-  }
-  if (o.shape == ShapeKind::Cylinder) {
-    o.axis = r.direction("axis");
-    o.length_m =
-        inRange(r, "length", r.number("length"), limits::kMinLengthM, limits::kMaxLengthM, "m");
-  } else if (o.shape == ShapeKind::Disk) {
-    o.axis = r.direction("normal");
+    o.shape = readAnalytic(r, shape);
   }
   const std::string material = r.string("material");
-  const auto it = std::find_if(materials.begin(), materials.end(),
-                               [&](const MaterialSpec& m) { return m.name == material; });
-  if (it == materials.end()) {
+  const auto it = std::find(material_names.begin(), material_names.end(), material);
+  if (it == material_names.end()) {
     std::vector<std::string> names;
-    for (const auto& m : materials) names.push_back("\"" + m.name + "\"");
+    for (const auto& name : material_names) names.push_back("\"" + name + "\"");
     r.fail("material", "no material named \"" + material + "\" (defined: " + joinKeys(names) + ")");
   }
-  o.material = static_cast<std::uint32_t>(it - materials.begin());
-  if (o.shape != ShapeKind::Mesh) {
+  o.material = static_cast<std::uint32_t>(it - material_names.begin());
+  if (o.analytic()) {
     const std::int64_t segments = r.integer("segments", o.segments);
     if (segments < 3 || segments > 4096) r.fail("segments", "must be an integer in [3, 4096]");
     o.segments = static_cast<int>(segments);
@@ -366,10 +371,12 @@ ObjectSpec readObject(ObjectReader r, const std::vector<MaterialSpec>& materials
   return o;
 }
 
-AccuracySpec readAccuracy(ObjectReader r) {
-  AccuracySpec a;
+// The `accuracy` settings; the floor is @p default_floor_w_m2 unless the file gives one.
+IntegratorOptions readAccuracy(ObjectReader r, double default_floor_w_m2) {
+  IntegratorOptions a;
   a.tolerance = r.number("tolerance", a.tolerance);
   if (!(a.tolerance > 0.0 && a.tolerance < 1.0)) r.fail("tolerance", "must be in (0, 1)");
+  a.floor_w_m2 = default_floor_w_m2;
   if (auto floor = r.optionalNumber("floor_w_m2")) {
     if (!(*floor >= 0.0)) r.fail("floor_w_m2", "must be ≥ 0");
     a.floor_w_m2 = *floor;
@@ -512,20 +519,24 @@ Scene parseScene(std::string_view text, const std::string& source,
   ObjectReader r(root, "", source);
   scene.description = r.string("description", "");
   scene.laser = readLaser(r.object("laser"), scene.hazard);
+  const double wavelength_nm = scene.hazard.wavelength_nm;
   if (r.has("atmosphere")) {
-    scene.hazard.atmosphere = readAtmosphere(r.object("atmosphere"), scene.laser.wavelength_nm);
+    scene.hazard.atmosphere = readAtmosphere(r.object("atmosphere"), wavelength_nm);
   }
+  scene.laser.extinction_per_m = scene.hazard.atmosphere.extinction_per_m;
+  scene.laser.return_extinction_per_m = scene.hazard.atmosphere.extinction_per_m;
   if (r.has("optical_aid")) {
     scene.hazard.aid =
-        readOpticalAid(r.object("optical_aid"), scene.laser.wavelength_nm, scene.hazard.standard);
+        readOpticalAid(r.object("optical_aid"), wavelength_nm, scene.hazard.standard);
   }
-  completeHazard(scene.hazard, scene.laser.wavelength_nm);
+  completeHazard(scene.hazard);
 
   ObjectReader materials = r.object("materials");
   if (materials.raw().empty()) materials.failHere("must define at least one material");
   for (const auto& [name, value] : materials.raw().items()) {
     materials.has(name);
-    scene.materials.push_back(readMaterial(ObjectReader(value, materials.at(name), source), name));
+    scene.materials.push_back(readMaterial(ObjectReader(value, materials.at(name), source)));
+    scene.material_names.push_back(name);
   }
   materials.finish();
 
@@ -534,11 +545,13 @@ Scene parseScene(std::string_view text, const std::string& source,
     r.fail("objects", "must be a non-empty array of objects");
   }
   // Before the objects: whether a mesh joins an occluder decides what it costs in memory.
-  if (r.has("accuracy")) scene.accuracy = readAccuracy(r.object("accuracy"));
+  const double default_floor_w_m2 = 1e-9 * scene.laser.peakIrradiance();
+  scene.accuracy.floor_w_m2 = default_floor_w_m2;
+  if (r.has("accuracy")) scene.accuracy = readAccuracy(r.object("accuracy"), default_floor_w_m2);
   for (std::size_t i = 0; i < objects.size(); ++i) {
     scene.objects.push_back(readObject(
-        ObjectReader(objects[i], "/objects/" + std::to_string(i), source), scene.materials, base,
-        mesh_limits, {memory_budget_bytes, scene.accuracy.occlusion}));
+        ObjectReader(objects[i], "/objects/" + std::to_string(i), source), scene.material_names,
+        base, mesh_limits, {memory_budget_bytes, scene.accuracy.occlusion}));
   }
 
   if (r.has("observers")) scene.observers = readObservers(r.object("observers"));
@@ -587,23 +600,23 @@ std::string fnv1a64Hex(std::string_view bytes) {
 }
 
 void recheckScene(const Scene& scene) {
-  // Through the readers of the file's own keys, so that a rule is written once and a value
-  // made in memory is refused with the words and JSON pointer the same value in a file gets.
-  auto vec = [](const Vec3& v) { return json::array({v.x, v.y, v.z}); };
-  for (const MaterialSpec& m : scene.materials) {
-    const json j = {{"specular_reflectance", m.specular_reflectance},
-                    {"diffuse_reflectance", m.diffuse_reflectance},
-                    {"sigma", m.sigma}};
-    (void)readMaterial(ObjectReader(j, "/materials/" + escapeToken(m.name), scene.source), m.name);
+  // The reader's own rules (materialViolation(), positionVerdict()), so that a value made in
+  // memory is refused with the words and JSON pointer the same value in a file gets.
+  auto refuse = [&](const std::string& at, const std::string& message) {
+    throw InputError(scene.source + ": " + at + ": " + message);
+  };
+  for (std::size_t i = 0; i < scene.materials.size(); ++i) {
+    if (auto v = materialViolation(scene.materials[i])) {
+      const std::string at = "/materials/" + escapeToken(scene.material_names[i]);
+      refuse(v->key.empty() ? at : at + "/" + escapeToken(v->key), v->message);
+    }
   }
   for (std::size_t i = 0; i < scene.objects.size(); ++i) {
     const ObjectSpec& o = scene.objects[i];
-    const std::string at = "/objects/" + std::to_string(i);
-    // ObjectReader keeps a reference: the JSON must outlive it.
-    const char* key = o.mesh ? "translation" : "center";
-    const json j = {{key, vec(o.center_m)}};
-    ObjectReader r(j, o.mesh ? at + "/transform" : at, scene.source);
-    (void)position(r, key);
+    if (auto v = positionVerdict(o.centre_m())) {
+      refuse("/objects/" + std::to_string(i) + (o.mesh() ? "/transform/translation" : "/center"),
+             *v);
+    }
   }
 }
 
@@ -612,7 +625,7 @@ Scene loadScene(const std::filesystem::path& path, std::uint64_t memory_budget_b
                     memory_budget_bytes);
 }
 
-void overrideAccuracy(AccuracySpec& accuracy, std::optional<NormalModel> normals,
+void overrideAccuracy(IntegratorOptions& accuracy, std::optional<NormalModel> normals,
                       std::optional<IntegrationScheme> scheme, const std::string& source) {
   if (normals) {
     accuracy.normals = *normals;

@@ -10,10 +10,12 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <variant>
 #include <vector>
 
 #include "facets/beam.h"
-#include "facets/integrator.h"  // IntegrationScheme, IntegratorOptions (the defaults)
+#include "facets/integrator.h"
+#include "facets/material.h"
 #include "facets/patch.h"
 #include "facets/tessellate.h"
 #include "facets/vec3.h"
@@ -21,31 +23,6 @@
 #include "pipeline/gltf_loader.h"
 
 namespace glint {
-
-/// @brief The laser of a scene (key `laser`).
-struct LaserSpec {
-  Vec3 position_m{0.0};
-  Vec3 direction{1.0, 0.0, 0.0};  ///< unit (the file's vector, normalised)
-  /// Mean power over the exposure: a pulse train's energy × repetition rate, a single pulse's
-  /// energy / duration (`power_w`, or from `pulse`).
-  double power_w = 0.0;
-  double wavelength_nm = 0.0;
-  std::optional<double> exposure_s;  ///< as in the file; HazardSpec has the one in use
-  BeamProfile profile = BeamProfile::FlatTop;
-  double radius_m = 0.0;        ///< flat_top `radius_m` or gaussian `w_m`
-  double divergence_rad = 0.0;  ///< full angle
-};
-
-/// @brief One named material (key `materials/<name>`).
-struct MaterialSpec {
-  std::string name;
-  double specular_reflectance = 0.0;
-  double diffuse_reflectance = 0.0;
-  double sigma = 0.0;
-};
-
-/// @brief The analytic shapes and triangle meshes from glTF files.
-enum class ShapeKind { Cylinder, Sphere, Disk, Mesh };
 
 /// @brief Where a mesh's model frame sits in the scene (key `transform`): a point p of the
 /// model is at translation_m + rotation (scale ∘ p).
@@ -59,44 +36,33 @@ struct MeshTransform {
 /// `mesh`).
 struct MeshSpec {
   std::filesystem::path file;  ///< as resolved against the scene's folder
-  MeshTransform transform;
+  MeshTransform transform;     ///< its translation_m is the object's centre
   MeshSurface surface = MeshSurface::PN;
   double crease_angle_deg = 30.0;  ///< for normals the file does not give
-  /// Rotated and scaled, relative to transform.translation_m (the object's centre_m).
+  /// Rotated and scaled, relative to transform.translation_m.
   std::shared_ptr<const TriangleMesh> mesh;
   std::size_t normals_computed = 0;    ///< triangle corners given crease-angle normals
   std::size_t primitives_skipped = 0;  ///< points and lines in the file
   std::size_t mirrored_instances = 0;  ///< node instances with a negative determinant
 };
 
-/// @brief One object (key `objects/<i>`).
+/// @brief One object (key `objects/<i>`): an analytic shape, which knows its tessellation and
+/// its inside (facets/tessellate.h), or a mesh read from a glTF file.
 struct ObjectSpec {
-  ShapeKind shape = ShapeKind::Sphere;
-  Vec3 center_m{0.0};
-  Vec3 axis{0.0, 0.0, 1.0};  ///< unit: cylinder `axis` or disk `normal`
-  double radius_m = 0.0;
-  double length_m = 0.0;         ///< cylinder only
-  std::uint32_t material = 0;    ///< index into Scene::materials
-  int segments = 16;             ///< coarse facets around the circumference
-  std::optional<MeshSpec> mesh;  ///< mesh only; centre_m is its translation
+  std::variant<AnalyticShape, MeshSpec> shape;
+  std::uint32_t material = 0;  ///< index into Scene::materials
+  int segments = 16;           ///< an analytic shape's coarse facets around its circumference
 
-  /// @brief The analytic shape this object is, which knows its tessellation, its count of
-  /// coarse facets and where observers are inside it (facets/tessellate.h); nothing for a mesh.
-  [[nodiscard]] std::optional<AnalyticShape> analytic() const;
-};
-
-/// @brief Accuracy settings (key `accuracy`, all optional).
-struct AccuracySpec {
-  // The defaults are the integrator's own (facets/integrator.h).
-  double tolerance = IntegratorOptions{}.tolerance;  ///< relative accuracy of each total
-  std::optional<double> floor_w_m2;               ///< default: 1e-9 × the beam's peak irradiance
-  int max_depth = IntegratorOptions{}.max_depth;  ///< deepest 1→4 subdivision level
-  std::int64_t max_evaluations = IntegratorOptions{}.max_evaluations;  ///< per observer
-  NormalModel normals = NormalModel::Surface;
-  bool occlusion = true;  ///< occlusion rays where the target can shadow itself
-  /// `lobe` (the default), `cubature` or `paper` (integrator.h); `paper` where `normals` is
-  /// `flat` and no scheme is named, since flat facets are the paper scheme's model only.
-  IntegrationScheme scheme = IntegrationScheme::Lobe;
+  /// @brief The analytic shape, or null for a mesh.
+  [[nodiscard]] const AnalyticShape* analytic() const { return std::get_if<AnalyticShape>(&shape); }
+  /// @brief The mesh, or null for an analytic shape.
+  [[nodiscard]] const MeshSpec* mesh() const { return std::get_if<MeshSpec>(&shape); }
+  [[nodiscard]] MeshSpec* mesh() { return std::get_if<MeshSpec>(&shape); }
+  /// @brief The shape's centre, or the mesh's translation (its model frame's origin).
+  [[nodiscard]] Vec3 centre_m() const {
+    const MeshSpec* m = mesh();
+    return m ? m->transform.translation_m : centreOf(*analytic());
+  }
 };
 
 /// @brief The observer box of `glint run` (key `observers`; see FieldSpec for the meaning).
@@ -138,11 +104,18 @@ struct FarFieldSettings {
 struct Scene {
   std::string source;  ///< the file name as given, for messages
   std::string description;
-  LaserSpec laser;
+  /// Key `laser`: its position, direction, mean power (a pulse train's energy × repetition
+  /// rate, a single pulse's energy / duration) and profile, attenuated by the `atmosphere`
+  /// on its way out and back. Its wavelength and exposure are the hazard's.
+  Beam laser;
   HazardSpec hazard;
-  std::vector<MaterialSpec> materials;
+  std::vector<Material> materials;          ///< key `materials`, in the order of their names
+  std::vector<std::string> material_names;  ///< materials[i]'s key
   std::vector<ObjectSpec> objects;
-  AccuracySpec accuracy;
+  /// Key `accuracy`; the floor, unless given, 1e-9 × the beam's peak irradiance (far below
+  /// any exposure limit, yet scaled to the scene); `paper` the scheme where `normals` is `flat`
+  /// and no scheme is named, since flat facets are the paper scheme's model only.
+  IntegratorOptions accuracy;
   std::optional<ObserversSpec> observers;  ///< `glint run` needs this or planes
   std::vector<PlaneSpec> planes;
   FarFieldSettings far_field;
@@ -150,7 +123,7 @@ struct Scene {
   /// @brief Whether any object is a mesh (whose surface is a model, not the shape itself).
   [[nodiscard]] bool hasMeshes() const {
     for (const ObjectSpec& o : objects) {
-      if (o.mesh) return true;
+      if (o.mesh()) return true;
     }
     return false;
   }
@@ -172,7 +145,8 @@ Scene parseScene(std::string_view json_text, const std::string& source,
                  const GltfLimits& mesh_limits = {}, std::uint64_t memory_budget_bytes = 0);
 
 /// @brief Checks the values of @p scene that code may change after parsing (a study's scenario
-/// moves and turns objects, turns the laser, changes materials) by the scene file's own rules.
+/// moves and turns objects, turns the laser, changes materials) by the rules the scene file's
+/// reader applies to them.
 /// @throw InputError naming scene.source and the JSON pointer, as parseScene() words it.
 void recheckScene(const Scene& scene);
 
@@ -180,7 +154,7 @@ void recheckScene(const Scene& scene);
 /// scene file's rule: flat normals are the paper scheme's model only, so flat normals without a
 /// named scheme select it, and flat normals with another scheme are refused.
 /// @throw InputError naming @p source and `--scheme paper`.
-void overrideAccuracy(AccuracySpec& accuracy, std::optional<NormalModel> normals,
+void overrideAccuracy(IntegratorOptions& accuracy, std::optional<NormalModel> normals,
                       std::optional<IntegrationScheme> scheme, const std::string& source);
 
 /// @brief The rotation R = Rz(yaw) Ry(pitch) Rx(roll), angles in degrees (the convention of

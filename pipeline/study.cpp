@@ -1,5 +1,6 @@
 #include "pipeline/study.h"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -138,7 +139,7 @@ glm::dquat scenarioTurn(const Scenario& s) {
 
 Vec3 scenarioCentre(const Study& study, const Scenario& s, const glm::dquat& turn,
                     const ObjectSpec& base) {
-  return study.pivot_m + s.pose.offset_m + turn * (base.center_m - study.pivot_m);
+  return study.pivot_m + s.pose.offset_m + turn * (base.centre_m() - study.pivot_m);
 }
 
 // The laser's direction d with the pointing error of Scenario::jitter_u_rad, jitter_v_rad, not
@@ -175,19 +176,19 @@ Scene applyScenario(const Study& study, const Scenario& s, bool turn_meshes) {
   const glm::dquat turn = scenarioTurn(s);
   const bool turned = turn != glm::dquat(1.0, 0.0, 0.0, 0.0);
   for (ObjectSpec& o : scene.objects) {
-    const ObjectSpec base = o;
-    o.center_m = scenarioCentre(study, s, turn, base);
-    if (o.mesh) {
-      o.mesh->transform.translation_m = o.center_m;
-      o.mesh->transform.rotation = turn * base.mesh->transform.rotation;
-      if (turned && turn_meshes) o.mesh->mesh = turnedMesh(*base.mesh->mesh, turn);
-    } else if (o.shape != ShapeKind::Sphere) {   // a sphere's axis means nothing
-      o.axis = *tryNormalize(turn * base.axis);  // as the reader normalises the file's
+    const Vec3 centre_m = scenarioCentre(study, s, turn, o);
+    if (MeshSpec* mesh = o.mesh()) {
+      mesh->transform.translation_m = centre_m;
+      mesh->transform.rotation = turn * mesh->transform.rotation;
+      if (turned && turn_meshes) mesh->mesh = turnedMesh(*mesh->mesh, turn);
+    } else {
+      o.shape = placed(*o.analytic(), centre_m, turn);
     }
   }
-  for (MaterialSpec& m : scene.materials) {
-    if (!study.material.empty() && m.name != study.material) continue;
-    if (s.sigma) m.sigma = *s.sigma;
+  for (std::size_t i = 0; i < scene.materials.size(); ++i) {
+    if (!study.material.empty() && scene.material_names[i] != study.material) continue;
+    Material& m = scene.materials[i];
+    if (s.sigma) m.lobe.sigma = *s.sigma;
     if (s.specular_reflectance) m.specular_reflectance = *s.specular_reflectance;
   }
   if (s.jitter_sample >= 0) {
@@ -223,7 +224,7 @@ Study parseStudy(std::string_view text, const std::string& source,
   }
 
   Vec3 sum(0.0);
-  for (const ObjectSpec& o : study.base.objects) sum += o.center_m;
+  for (const ObjectSpec& o : study.base.objects) sum += o.centre_m();
   study.pivot_m =
       r.has("pivot") ? r.vec3("pivot") : sum / static_cast<double>(study.base.objects.size());
 
@@ -250,9 +251,8 @@ Study parseStudy(std::string_view text, const std::string& source,
     }
     study.material = s.string("material", "");
     if (!study.material.empty()) {
-      const auto& m = study.base.materials;
-      if (std::none_of(m.begin(), m.end(),
-                       [&](const MaterialSpec& x) { return x.name == study.material; }))
+      const std::vector<std::string>& names = study.base.material_names;
+      if (std::find(names.begin(), names.end(), study.material) == names.end())
         s.fail("material", "the scene has no material \"" + study.material + "\"");
     }
     s.finish();
@@ -326,20 +326,22 @@ std::string scenarioSceneJson(const Study& study, const Scenario& s) {
     json& o = scene["objects"][i];
     const ObjectSpec& base = study.base.objects[i];
     const Vec3 c = scenarioCentre(study, s, turn, base);
-    if (base.mesh) {
+    if (const MeshSpec* mesh = base.mesh()) {
       // The mesh's frame turns with the scenario; its file is named absolutely, so that the
       // scenario's scene.json stands on its own.
-      const glm::dquat q = turn * base.mesh->transform.rotation;
+      const glm::dquat q = turn * mesh->transform.rotation;
       json& t = o["transform"];
       t["translation"] = vecJson(c);
       t.erase("yaw_pitch_roll_deg");
       t["rotation"] = json::array({q.x, q.y, q.z, q.w});
-      o["file"] = std::filesystem::absolute(base.mesh->file).lexically_normal().string();
+      o["file"] = std::filesystem::absolute(mesh->file).lexically_normal().string();
       continue;
     }
     o["center"] = vecJson(c);
-    for (const char* key : {"axis", "normal"}) {
-      if (o.contains(key)) o[key] = vecJson(turn * base.axis);
+    if (const std::optional<Vec3> axis = axisOf(*base.analytic())) {
+      for (const char* key : {"axis", "normal"}) {
+        if (o.contains(key)) o[key] = vecJson(turn * *axis);
+      }
     }
   }
   for (auto& [name, m] : scene["materials"].items()) {

@@ -34,9 +34,9 @@ SurfaceModelCheck checkSurfaceModel(const Scene& scene, const FacetIntegrator& i
   SurfaceModelCheck check;
   std::size_t triangles = 0, alternatives = 0;
   for (const ObjectSpec& o : scene.objects) {
-    if (!o.mesh) continue;
-    triangles += o.mesh->mesh->triangles.size();
-    alternatives = std::max(alternatives, alternativeSurfaces(o.mesh->surface).size());
+    if (!o.mesh()) continue;
+    triangles += o.mesh()->mesh->triangles.size();
+    alternatives = std::max(alternatives, alternativeSurfaces(o.mesh()->surface).size());
   }
   if (triangles == 0) {
     check.skipped = "no mesh";
@@ -61,10 +61,10 @@ SurfaceModelCheck checkSurfaceModel(const Scene& scene, const FacetIntegrator& i
     Scene other = scene;  // the meshes themselves are shared, not copied
     std::string name;
     for (ObjectSpec& o : other.objects) {
-      if (!o.mesh) continue;
-      const std::vector<MeshSurface> list = alternativeSurfaces(o.mesh->surface);
-      o.mesh->surface = list[std::min(k, list.size() - 1)];
-      if (name.empty()) name = toString(o.mesh->surface);
+      if (!o.mesh()) continue;
+      const std::vector<MeshSurface> list = alternativeSurfaces(o.mesh()->surface);
+      o.mesh()->surface = list[std::min(k, list.size() - 1)];
+      if (name.empty()) name = toString(o.mesh()->surface);
     }
     const FacetIntegrator alternative(buildTarget(other), integrator.beam(), integrator.options());
     for (SurfaceProbe& p : check.probes) {

@@ -18,32 +18,18 @@
 
 namespace glint {
 
-Beam beamOf(const Scene& scene) {
-  const LaserSpec& l = scene.laser;
-  Beam beam;
-  beam.origin_m = l.position_m;
-  beam.direction = l.direction;
-  beam.power_w = l.power_w;
-  beam.profile = l.profile;
-  beam.radius_m = l.radius_m;
-  beam.divergence_rad = l.divergence_rad;
-  beam.extinction_per_m = scene.hazard.atmosphere.extinction_per_m;
-  beam.return_extinction_per_m = scene.hazard.atmosphere.extinction_per_m;
-  return beam;
-}
-
 Target buildTarget(const Scene& scene, std::vector<MeshStats>* mesh_stats) {
   Target target;
-  for (const MaterialSpec& m : scene.materials) {
-    target.addMaterial({m.specular_reflectance, m.diffuse_reflectance, Beckmann{m.sigma}});
-  }
+  for (const Material& m : scene.materials) target.addMaterial(m);
   const Vec3 toward_laser = -scene.laser.direction;
   for (const ObjectSpec& o : scene.objects) {
-    if (const auto shape = o.analytic()) {
+    if (const AnalyticShape* shape = o.analytic()) {
       addShape(target, *shape, o.material, o.segments, toward_laser);
       continue;
     }
-    const MeshStats stats = addMesh(target, o.center_m, o.material, *o.mesh->mesh, o.mesh->surface);
+    const MeshSpec& mesh = *o.mesh();
+    const MeshStats stats =
+        addMesh(target, mesh.transform.translation_m, o.material, *mesh.mesh, mesh.surface);
     if (mesh_stats) mesh_stats->push_back(stats);
   }
   return target;
@@ -116,7 +102,7 @@ std::uint64_t litFacetCount(const Target& target, const Beam& beam, NormalModel 
 }  // namespace
 
 std::uint64_t coarseFacetCount(const ObjectSpec& o) {
-  const auto shape = o.analytic();
+  const AnalyticShape* shape = o.analytic();
   return shape ? saturated(coarseFacets(*shape, o.segments)) : 0;
 }
 
@@ -135,17 +121,18 @@ TargetMemory targetMemory(const Scene& scene, const IntegratorOptions& options) 
   // As needsOcclusion(): more than one object, or one that is not convex (a mesh).
   m.occlusion = options.occlusion && (scene.objects.size() > 1 || scene.hasMeshes());
   for (const ObjectSpec& o : scene.objects) {
-    if (!o.mesh) {
+    const MeshSpec* spec = o.mesh();
+    if (!spec) {
       facets += static_cast<double>(coarseFacetCount(o));
       continue;
     }
     // Every triangle a facet: addMesh() drops only degenerate ones, which no real model is
     // made of.
-    const TriangleMesh& mesh = *o.mesh->mesh;
+    const TriangleMesh& mesh = *spec->mesh;
     const auto t = static_cast<double>(mesh.triangles.size());
     facets += t;
     bytes += kMeshBytesPerVertex * static_cast<double>(mesh.positions_m.size()) +
-             t * (kMeshBytesPerTriangle + surfaceBytesPerFacet(o.mesh->surface));
+             t * (kMeshBytesPerTriangle + surfaceBytesPerFacet(spec->surface));
   }
   // Per facet: its arrays, its surface map (the cubature and lobe schemes), its share of the
   // occluder.
@@ -179,7 +166,7 @@ FacetIntegrator buildIntegrator(const Scene& scene, const IntegratorOptions& opt
   const TargetMemory memory = targetMemory(scene, options);
   requireTargetWithinBudget(memory, budget);
   Target target = buildTarget(scene, mesh_stats);
-  const Beam beam = beamOf(scene);
+  const Beam& beam = scene.laser;
   // The lit facets are counted only where storing them all might not fit, and only where no
   // shadow ray can take any of them away (then the count is the integrator's own).
   const double all_lit =
@@ -191,19 +178,6 @@ FacetIntegrator buildIntegrator(const Scene& scene, const IntegratorOptions& opt
     requireTargetWithinBudget(memory, budget, litFacetCount(target, beam, options.normals));
   }
   return FacetIntegrator(std::move(target), beam, options);
-}
-
-IntegratorOptions integratorOptions(const Scene& scene) {
-  const AccuracySpec& a = scene.accuracy;
-  IntegratorOptions o;
-  o.tolerance = a.tolerance;
-  o.floor_w_m2 = a.floor_w_m2 ? *a.floor_w_m2 : 1e-9 * beamOf(scene).peakIrradiance();
-  o.max_depth = a.max_depth;
-  o.max_evaluations = a.max_evaluations;
-  o.normals = a.normals;
-  o.occlusion = a.occlusion;
-  o.scheme = a.scheme;
-  return o;
 }
 
 FieldSpec fieldSpec(const Scene& scene) {
@@ -238,50 +212,49 @@ FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane) {
 
 namespace {
 
-// The narrowest specular lobe of the scene's materials (∞ when none has a specular part).
-double narrowestSigma(const Scene& scene) {
-  double sigma = std::numeric_limits<double>::infinity();
-  for (const MaterialSpec& m : scene.materials) {
-    if (m.specular_reflectance > 0.0) sigma = std::min(sigma, m.sigma);
-  }
-  return sigma;
-}
-
-}  // namespace
-
-FarFieldSpec farFieldLattice(const Scene& scene) {
-  const FarFieldSettings& settings = scene.far_field;
+// The lattice of the far field of @p settings for light whose narrowest lobe is @p narrowest.
+FarFieldSpec farFieldLattice(const FarFieldSettings& settings,
+                             const std::optional<Beckmann>& narrowest) {
   FarFieldSpec f;
   f.tolerance = settings.tolerance;
   if (settings.face_pixels) {
     f.face_pixels = *settings.face_pixels;
   } else {
-    // At a face's centre directions are 2/N rad apart: at most σ.
-    const double sigma = narrowestSigma(scene);
+    // At a face's centre directions are 2/N rad apart: at most the lobe's width.
+    const double width_rad =
+        narrowest ? narrowest->widthRad() : std::numeric_limits<double>::infinity();
     f.face_pixels = 64;
-    while (f.face_pixels < 4096 && 2.0 / f.face_pixels > sigma) f.face_pixels *= 2;
+    while (f.face_pixels < 4096 && 2.0 / f.face_pixels > width_rad) f.face_pixels *= 2;
   }
   f.block_pixels = std::max(1, f.face_pixels / 16);
   return f;
 }
 
+}  // namespace
+
+FarFieldSpec farFieldLattice(const Scene& scene) {
+  // The target is not built yet: its materials are the scene's (buildTarget()).
+  return farFieldLattice(scene.far_field, narrowestLobe(scene.materials));
+}
+
 FarFieldSpec farFieldSpec(const Scene& scene, const FacetIntegrator& integrator) {
   const FarFieldSettings& settings = scene.far_field;
-  const double sigma = narrowestSigma(scene);
-  FarFieldSpec f = farFieldLattice(scene);
+  const std::optional<Beckmann> narrowest = integrator.target().narrowestLobe();
+  const double sigma = narrowest ? narrowest->widthRad() : std::numeric_limits<double>::infinity();
+  FarFieldSpec f = farFieldLattice(settings, narrowest);
   // Nothing lit: any radius will do, the map is dark.
   const double lit_radius_m = std::max(litBall(integrator).radius_m, limits::kMinLengthM);
   f.far_radius_m = farRadius(lit_radius_m, sigma, f.tolerance);
   f.lit_radius_m = lit_radius_m;
   f.narrowest_sigma = sigma;
-  f.beam_direction = beamOf(scene).direction;
+  f.beam_direction = scene.laser.direction;
   f.floor_w_sr =
       settings.floor_w_sr.value_or(scene.hazard.negligibleW_m2() * f.far_radius_m * f.far_radius_m);
   return f;
 }
 
 IntegratorOptions fieldIntegratorOptions(const Scene& scene, const FieldSpec& field) {
-  IntegratorOptions o = integratorOptions(scene);
+  IntegratorOptions o = scene.accuracy;
   o.tolerance = 0.25 * field.tolerance;
   o.floor_w_m2 = 0.25 * field.floor_w_m2;
   return o;
@@ -308,7 +281,7 @@ ExcludedFn excludedRegion(const Scene& scene, double margin_m) {
   // Observers near a mesh are computed: its inside is not known in closed form.
   std::vector<AnalyticShape> shapes;
   for (const ObjectSpec& o : scene.objects) {
-    if (auto shape = o.analytic()) shapes.push_back(*shape);
+    if (const AnalyticShape* shape = o.analytic()) shapes.push_back(*shape);
   }
   return [shapes = std::move(shapes), margin_m](const Vec3& x) {
     return std::any_of(shapes.begin(), shapes.end(),

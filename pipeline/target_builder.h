@@ -14,9 +14,6 @@
 
 namespace glint {
 
-/// @brief The scene's laser as a Beam.
-Beam beamOf(const Scene& scene);
-
 /// @brief The scene's objects tessellated into coarse facets. Tessellations are oriented by the
 /// direction toward the laser, so rotating a whole scene rotates its facets with it. What
 /// became of each mesh's triangles is appended to @p mesh_stats, in object order.
@@ -67,10 +64,6 @@ FacetIntegrator buildIntegrator(const Scene& scene, const IntegratorOptions& opt
                                 const TargetBudget& budget = {},
                                 std::vector<MeshStats>* mesh_stats = nullptr);
 
-/// @brief The scene's accuracy settings; the floor defaults to 1e-9 × the beam's peak
-/// irradiance, far below any exposure limit yet scaled to the scene.
-IntegratorOptions integratorOptions(const Scene& scene);
-
 /// @brief The observer box of the scene's `observers` section; the floor defaults to
 /// HazardSpec::negligibleW_m2().
 /// @throw InputError when the scene has no `observers` section.
@@ -81,14 +74,15 @@ FieldSpec fieldSpec(const Scene& scene);
 FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane);
 
 /// @brief The far field of the scene's `far_field` key for the target @p integrator lights:
-/// the far radius from its lit ball, the narrowest lobe of the scene's materials and the
-/// tolerance (farRadius()); the face lattice samples directions at most that lobe's σ apart
-/// unless the scene says otherwise; the floor defaults to the intensity that gives
+/// the far radius from its lit ball, the target's narrowest lobe and the tolerance
+/// (farRadius()); the face lattice samples directions at most that lobe's width apart unless
+/// the scene says otherwise; the floor defaults to the intensity that gives
 /// HazardSpec::negligibleW_m2() at the far radius.
 FarFieldSpec farFieldSpec(const Scene& scene, const FacetIntegrator& integrator);
 
 /// @brief What farFieldSpec() says of the faces' lattices (face_pixels, block_pixels) and the
-/// tolerance, from the scene alone: known before the target is built.
+/// tolerance, from the scene alone (the narrowest lobe of its materials, which the target
+/// will have): known before the target is built.
 FarFieldSpec farFieldLattice(const Scene& scene);
 
 /// @brief Integrator settings for the points of an observer field: the scene's accuracy

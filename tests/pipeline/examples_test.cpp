@@ -27,9 +27,9 @@ std::string example(const std::string& name) {
 std::vector<ObserverResult> run(const std::string& scene_file, const std::string& points_file,
                                 double tolerance_factor = 1.0) {
   const Scene scene = loadScene(example(scene_file));
-  IntegratorOptions o = integratorOptions(scene);
+  IntegratorOptions o = scene.accuracy;
   o.tolerance *= tolerance_factor;
-  const FacetIntegrator fi(buildTarget(scene), beamOf(scene), o);
+  const FacetIntegrator fi(buildTarget(scene), scene.laser, o);
   return evaluatePoints(fi, loadPoints(example(points_file)), PointScheme{});
 }
 
@@ -60,7 +60,7 @@ TEST(Examples, RangeSceneIsAKilometreBoxWhoseSheetIsHazardousToAbout490Metres) {
   const auto n = spec.nodes();
   EXPECT_LE(spec.voxel_m, 0.25);
   EXPECT_GE(static_cast<double>(n[0]) * n[1] * n[2], 1e9) << n[0] << "×" << n[1] << "×" << n[2];
-  const FacetIntegrator fi(buildTarget(scene), beamOf(scene), integratorOptions(scene));
+  const FacetIntegrator fi(buildTarget(scene), scene.laser, scene.accuracy);
   IntegratorWorkspace ws;
   const double mpe = scene.hazard.mpe_w_m2;
   ASSERT_NEAR(mpe, 50.0, 0.5) << "1064 nm, 10 s";
@@ -88,11 +88,11 @@ TEST(Examples, FinnedMissileOcclusionOnlyEverRemovesLight) {
   // The finned missile with and without occlusion rays, over the eye-level plane: the rays can
   // only take light away (within the integration tolerance), and here they do take some.
   const Scene scene = loadScene(example("finned_missile.json"));
-  IntegratorOptions with = integratorOptions(scene);
+  IntegratorOptions with = scene.accuracy;
   IntegratorOptions without = with;
   without.occlusion = false;
-  const FacetIntegrator occluded(buildTarget(scene), beamOf(scene), with);
-  const FacetIntegrator open(buildTarget(scene), beamOf(scene), without);
+  const FacetIntegrator occluded(buildTarget(scene), scene.laser, with);
+  const FacetIntegrator open(buildTarget(scene), scene.laser, without);
   EXPECT_TRUE(occluded.cullStats().occlusion);
   EXPECT_GT(occluded.cullStats().shadowed, 0u) << "the fins shadow the body";
   EXPECT_EQ(occluded.cullStats().lit + occluded.cullStats().shadowed, open.cullStats().lit);
@@ -227,8 +227,8 @@ TEST(Examples, TheCarBodyWithoutNormalsGlintsOnEverySurface) {
     nlohmann::json s = scene;
     s["objects"][0]["surface"] = surface;
     const Scene parsed = parseScene(s.dump(), "car.json", GLINT_EXAMPLES_DIR);
-    ASSERT_GT(parsed.objects[0].mesh->normals_computed, 0u) << "the file gives no normals";
-    const FacetIntegrator fi(buildTarget(parsed), beamOf(parsed), integratorOptions(parsed));
+    ASSERT_GT(parsed.objects[0].mesh()->normals_computed, 0u) << "the file gives no normals";
+    const FacetIntegrator fi(buildTarget(parsed), parsed.laser, parsed.accuracy);
     const auto results = evaluatePoints(fi, observers, PointScheme{});
     double lit = 0.0;
     for (std::size_t k = 0; k < results.size(); ++k) {

@@ -249,9 +249,9 @@ TEST_F(GltfLoader, MeshObjectsAreReadRelativeToTheSceneAndPlaced) {
                {"transform",
                 {{"translation", {5, 0, 0}}, {"scale", 2.0}, {"yaw_pitch_roll_deg", {90, 0, 0}}}}});
   const Scene s = parseScene(scene.dump(), "scene.json", dir_);
-  ASSERT_TRUE(s.objects[0].mesh);
-  const MeshSpec& m = *s.objects[0].mesh;
-  EXPECT_EQ(s.objects[0].center_m, Vec3(5, 0, 0));
+  ASSERT_TRUE(s.objects[0].mesh());
+  const MeshSpec& m = *s.objects[0].mesh();
+  EXPECT_EQ(s.objects[0].centre_m(), Vec3(5, 0, 0));
   // (1, 0, 0) scaled by 2 and turned 90° about z: (0, 2, 0) from the centre.
   EXPECT_NEAR(m.mesh->positions_m[1].x, 0.0, 1e-12);
   EXPECT_NEAR(m.mesh->positions_m[1].y, 2.0, 1e-12);

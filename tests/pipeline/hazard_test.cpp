@@ -126,7 +126,7 @@ json diskScene() {
 
 double irradianceAt(const json& scene_json, const Vec3& observer_m) {
   const Scene scene = parseScene(scene_json.dump(), "scene.json");
-  const FacetIntegrator integrator(buildTarget(scene), beamOf(scene), integratorOptions(scene));
+  const FacetIntegrator integrator(buildTarget(scene), scene.laser, scene.accuracy);
   IntegratorWorkspace ws;
   return integrator.adaptive(observer_m, ws).irradiance_w_m2;
 }
@@ -210,7 +210,7 @@ TEST(SceneHazard, AtmosphereFromVisibilityOrExtinctionButNotBoth) {
   const Scene s = parseScene(j.dump(), "scene.json");
   EXPECT_NEAR(s.hazard.atmosphere.extinction_per_m,
               extinctionFromVisibility(23000, 1064, VisibilityModel::Kim), 1e-18);
-  EXPECT_NEAR(beamOf(s).extinction_per_m, s.hazard.atmosphere.extinction_per_m, 0.0);
+  EXPECT_NEAR(s.laser.extinction_per_m, s.hazard.atmosphere.extinction_per_m, 0.0);
   j["atmosphere"]["extinction_per_m"] = 1e-4;
   EXPECT_NE(test::refusalOf([&] { parseScene(j.dump(), "scene.json"); }).find("one of them"),
             std::string::npos);

@@ -131,8 +131,7 @@ TEST(TargetMemory, EveryShapesFacetsAreCountedBeforeItIsBuilt) {
                                   std::to_string(segments) + "}");
       EXPECT_EQ(coarseFacetCount(scene.objects[0]), buildTarget(scene).facetCount())
           << shape << ", " << segments << " segments";
-      EXPECT_EQ(targetMemory(scene, integratorOptions(scene)).facets,
-                buildTarget(scene).facetCount())
+      EXPECT_EQ(targetMemory(scene, scene.accuracy).facets, buildTarget(scene).facetCount())
           << shape << ", " << segments << " segments";
     }
   }
@@ -141,7 +140,7 @@ TEST(TargetMemory, EveryShapesFacetsAreCountedBeforeItIsBuilt) {
   const Scene needle = sceneOf(R"({"shape": "cylinder", "center": [0, 0, 0], "axis": [1, 0, 0],
       "radius": 0.001, "length": 1000, "material": "glass", "segments": 4096})");
   EXPECT_GT(coarseFacetCount(needle.objects[0]), 5e12);
-  EXPECT_THROW(requireTargetWithinBudget(targetMemory(needle, integratorOptions(needle)),
+  EXPECT_THROW(requireTargetWithinBudget(targetMemory(needle, needle.accuracy),
                                          {std::uint64_t{1} << 40, 0, ""}),
                InputError)
       << "a petabyte-sized target in a terabyte";
@@ -170,11 +169,10 @@ TEST(TargetMemory, TheEstimateIsAFloorOfWhatTheTargetTakes) {
        [] {
          Scene scene = sceneOf(R"({"shape": "sphere", "center": [0, 0, 0], "radius": 0.5,
                  "material": "glass"})");
-         ObjectSpec& o = scene.objects[0];
-         o.shape = ShapeKind::Mesh;
-         o.mesh.emplace();
-         o.mesh->surface = MeshSurface::PN;
-         o.mesh->mesh = std::make_shared<const TriangleMesh>(test::unitIcosphere(6));
+         MeshSpec mesh;
+         mesh.surface = MeshSurface::PN;
+         mesh.mesh = std::make_shared<const TriangleMesh>(test::unitIcosphere(6));
+         scene.objects[0].shape = std::move(mesh);
          return scene;
        }},
   };
@@ -182,9 +180,9 @@ TEST(TargetMemory, TheEstimateIsAFloorOfWhatTheTargetTakes) {
     malloc_trim(0);
     const std::uint64_t before = residentBytes();
     const Scene scene = make();
-    const IntegratorOptions options = integratorOptions(scene);
+    const IntegratorOptions options = scene.accuracy;
     const TargetMemory memory = targetMemory(scene, options);
-    const FacetIntegrator integrator(buildTarget(scene), beamOf(scene), options);
+    const FacetIntegrator integrator(buildTarget(scene), scene.laser, options);
     const auto grown = static_cast<double>(residentBytes() - before);
     ASSERT_EQ(memory.facets, integrator.cullStats().coarse_facets) << what;
     const double floor_bytes =

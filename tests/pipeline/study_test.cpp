@@ -35,9 +35,9 @@ TEST(Study, WithoutSweepsIsTheBaseSceneOnce) {
   const Study s = study("");
   ASSERT_EQ(s.scenarios.size(), 1u);
   const Scene scene = scenarioScene(s, s.scenarios[0]);
-  expectNear(scene.objects[0].center_m, s.base.objects[0].center_m, 0.0, "centre");
+  expectNear(scene.objects[0].centre_m(), s.base.objects[0].centre_m(), 0.0, "centre");
   expectNear(scene.laser.direction, s.base.laser.direction, 0.0, "laser direction");
-  EXPECT_EQ(scene.materials[0].sigma, s.base.materials[0].sigma) << "σ as in the scene";
+  EXPECT_EQ(scene.materials[0].lobe.sigma, s.base.materials[0].lobe.sigma) << "σ as in the scene";
 }
 
 TEST(Study, SweepsMultiplyInNestedOrderWithJitterInnermost) {
@@ -71,8 +71,8 @@ TEST(Study, TurnsTheTargetAboutThePivotYawThenPitch) {
   const Study s = study(R"("pivot": [0, 0, -1], "sweep": {"pitch_deg": [90]})");
   const Scene scene = scenarioScene(s, s.scenarios[0]);
   // The centre (0, 0, 0) is 1 m above the pivot: the pitch swings it to (1, 0, -1).
-  expectNear(scene.objects[0].center_m, Vec3(1, 0, -1), 1e-12, "centre");
-  expectNear(scene.objects[0].axis, Vec3(1, 0, 0), 1e-12, "axis");
+  expectNear(scene.objects[0].centre_m(), Vec3(1, 0, -1), 1e-12, "centre");
+  expectNear(*axisOf(*scene.objects[0].analytic()), Vec3(1, 0, 0), 1e-12, "axis");
 }
 
 TEST(Study, TurnsAMeshAboutThePivotWithItsOwnRotation) {
@@ -92,10 +92,10 @@ TEST(Study, TurnsAMeshAboutThePivotWithItsOwnRotation) {
       parseStudy(R"({"scene": "mesh_scene.json", "pivot": [0, 0, 3], "sweep": {"yaw_deg": [90]}})",
                  "study.json", dir);
   const Scene scene = scenarioScene(s, s.scenarios[0]);
-  ASSERT_TRUE(scene.objects[0].mesh);
-  expectNear(scene.objects[0].center_m, Vec3(0, 2, 3), 1e-12, "the translation about the pivot");
+  ASSERT_TRUE(scene.objects[0].mesh());
+  expectNear(scene.objects[0].centre_m(), Vec3(0, 2, 3), 1e-12, "the translation about the pivot");
   double nose_x = 0.0, nose_y = -1e9;
-  for (const Vec3& p : scene.objects[0].mesh->mesh->positions_m) {
+  for (const Vec3& p : scene.objects[0].mesh()->mesh->positions_m) {
     if (p.y > nose_y) nose_y = p.y, nose_x = p.x;
   }
   EXPECT_NEAR(nose_y, 1.5, 1e-6) << "the nose tip, turned from +x to +y";
@@ -142,8 +142,8 @@ TEST(Study, ScenarioMadeInMemoryIsTheSceneItsFileDescribes) {
     expectNear(memory.laser.direction, file.laser.direction, 0.0, what + " laser");
     ASSERT_EQ(memory.materials.size(), file.materials.size());
     for (std::size_t m = 0; m < file.materials.size(); ++m) {
-      EXPECT_EQ(memory.materials[m].name, file.materials[m].name) << what;
-      EXPECT_EQ(memory.materials[m].sigma, file.materials[m].sigma) << what;
+      EXPECT_EQ(memory.material_names[m], file.material_names[m]) << what;
+      EXPECT_EQ(memory.materials[m].lobe.sigma, file.materials[m].lobe.sigma) << what;
       EXPECT_EQ(memory.materials[m].specular_reflectance, file.materials[m].specular_reflectance)
           << what;
       EXPECT_EQ(memory.materials[m].diffuse_reflectance, file.materials[m].diffuse_reflectance)
@@ -154,14 +154,16 @@ TEST(Study, ScenarioMadeInMemoryIsTheSceneItsFileDescribes) {
       const ObjectSpec& a = memory.objects[i];
       const ObjectSpec& b = file.objects[i];
       const std::string obj = what + " object " + std::to_string(i);
-      expectNear(a.center_m, b.center_m, 0.0, obj + " centre");
-      if (!b.mesh) {
-        expectNear(a.axis, b.axis, 0.0, obj + " axis");
+      expectNear(a.centre_m(), b.centre_m(), 0.0, obj + " centre");
+      if (!b.mesh()) {
+        ASSERT_TRUE(a.analytic()) << obj;
+        expectNear(axisOf(*a.analytic()).value_or(Vec3(0.0)),
+                   axisOf(*b.analytic()).value_or(Vec3(0.0)), 0.0, obj + " axis");
         continue;
       }
-      ASSERT_TRUE(a.mesh) << obj;
-      const TriangleMesh& ma = *a.mesh->mesh;
-      const TriangleMesh& mb = *b.mesh->mesh;
+      ASSERT_TRUE(a.mesh()) << obj;
+      const TriangleMesh& ma = *a.mesh()->mesh;
+      const TriangleMesh& mb = *b.mesh()->mesh;
       ASSERT_EQ(ma.positions_m.size(), mb.positions_m.size()) << obj;
       ASSERT_EQ(ma.triangles, mb.triangles) << obj << ": the same normals filled in";
       double worst_p = 0.0, worst_n = 0.0;
@@ -189,7 +191,7 @@ TEST(Study, TrajectoryIsSampledEveryStepBetweenItsPoses) {
   expectNear(s.scenarios[3].pose.offset_m, Vec3(2, 2, 0), 1e-12, "offset at 1.5 s");
   EXPECT_DOUBLE_EQ(s.scenarios[5].pose.time_s, 2.25);
   const Scene moved = scenarioScene(s, s.scenarios[3]);
-  expectNear(moved.objects[0].center_m, Vec3(2, 2, 0), 1e-12, "the target moves with its pose");
+  expectNear(moved.objects[0].centre_m(), Vec3(2, 2, 0), 1e-12, "the target moves with its pose");
 }
 
 TEST(Study, PointingJitterIsSeededGaussianAndReproducible) {
@@ -285,6 +287,32 @@ TEST(Study, ScenarioThatBreaksTheSceneIsRefusedByNumber) {
   }
 }
 
+// A pose can carry an object beyond the coordinates the scene file allows: refused with the
+// pointer of the key that file would have had (a shape's centre, a mesh's translation).
+TEST(Study, ScenarioThatMovesAnObjectOutOfRangeIsRefusedAtItsKey) {
+  EXPECT_EQ(
+      refusal(
+          R"("trajectory": {"poses": [{"time_s": 0}, {"time_s": 1, "offset_m": [2e7, 0, 0]}]})"),
+      "study.json scenario 1: /objects/0/center: must lie within ±1e+07 m on every axis");
+  const std::string dir = ::testing::TempDir();
+  std::ofstream(dir + "/far_mesh_scene.json") << R"({
+    "laser": {"position": [0, -100, 3], "direction": [0, 1, 0], "power_w": 1, "wavelength_nm": 532,
+              "beam": {"profile": "flat_top", "radius_m": 1}},
+    "materials": {"m": {"specular_reflectance": 0.5, "sigma": 0.1}},
+    "objects": [{"shape": "mesh", "file": ")" GLINT_EXAMPLES_DIR R"(/targets/capsule.glb",
+                 "transform": {"translation": [9.9e6, 0, 3]}, "material": "m"}],
+    "planes": [{"name": "p", "origin": [-5, -1, 0], "u_axis": [1, 0, 0], "v_axis": [0, 1, 0],
+                "size_m": [1, 1], "pixel_m": 0.5}]})";
+  EXPECT_EQ(test::refusalOf([&] {
+              parseStudy(R"({"scene": "far_mesh_scene.json", "pivot": [0, 0, 3],
+                             "trajectory": {"poses": [{"time_s": 0, "offset_m": [2e5, 0, 0]}]}})",
+                         "study.json", dir);
+            }),
+            "study.json scenario 0: /objects/0/transform/translation: must lie within ±1e+07 m on "
+            "every axis")
+      << "9.9e6 m + 2e5 m is beyond 1e7 m";
+}
+
 TEST(Study, ExampleStudyHasTwentyValidScenarios) {
   const Study s = loadStudy(std::string(GLINT_EXAMPLES_DIR) + "/cylinder_study.json");
   ASSERT_EQ(s.scenarios.size(), 20u) << "5 pitches × 4 jitter samples";
@@ -295,7 +323,7 @@ TEST(Study, ExampleStudyHasTwentyValidScenarios) {
   EXPECT_EQ(s.base.planes[0].name, "eye_level");
   // The pivot is the cylinder's centre, 3 m up: tipping it does not move it.
   expectNear(s.pivot_m, Vec3(0, 0, 3), 0.0, "pivot");
-  expectNear(scenarioScene(s, s.scenarios[0]).objects[0].center_m, Vec3(0, 0, 3), 1e-12,
+  expectNear(scenarioScene(s, s.scenarios[0]).objects[0].centre_m(), Vec3(0, 0, 3), 1e-12,
              "centre of a tipped cylinder");
 }
 

@@ -18,22 +18,23 @@ Scene sphereScene(int level, bool analytic) {
   Scene scene;
   scene.source = "in memory";
   scene.laser.direction = glm::normalize(Vec3(1.0, 0.2, -0.1));
-  scene.laser.position_m = Vec3(0.0, 0.05, 0.03) - 100.0 * scene.laser.direction;
+  scene.laser.origin_m = Vec3(0.0, 0.05, 0.03) - 100.0 * scene.laser.direction;
   scene.laser.power_w = 1000.0;
   scene.laser.profile = BeamProfile::Gaussian;
   scene.laser.radius_m = 0.5;
-  scene.materials.push_back({"polished", 0.95, 0.0, 0.01});
+  scene.materials.push_back({0.95, 0.0, Beckmann{0.01}});
+  scene.material_names.push_back("polished");
   ObjectSpec o;
-  o.radius_m = 1.0;
   if (analytic) {
-    o.shape = ShapeKind::Sphere;
+    o.shape = AnalyticShape(SphereShape{Vec3(0.0), 1.0});
   } else {
-    o.shape = ShapeKind::Mesh;
-    o.mesh = MeshSpec{};
-    o.mesh->mesh = std::make_shared<const TriangleMesh>(test::unitIcosphere(level));
+    MeshSpec mesh;
+    mesh.mesh = std::make_shared<const TriangleMesh>(test::unitIcosphere(level));
+    o.shape = std::move(mesh);
   }
   scene.objects.push_back(o);
   scene.accuracy.tolerance = 1e-5;  // the integration's error far below the surfaces'
+  scene.accuracy.floor_w_m2 = 1e-9 * scene.laser.peakIrradiance();  // as the scene file's
   return scene;
 }
 
@@ -50,10 +51,10 @@ TEST(SurfaceCheck, ComparesEachSurfaceWithAnotherBuiltFromTheSameVertices) {
 
 TEST(SurfaceCheck, SaysWhyItWasNotMade) {
   const Scene analytic = sphereScene(0, true);
-  const FacetIntegrator a(buildTarget(analytic), beamOf(analytic), integratorOptions(analytic));
+  const FacetIntegrator a(buildTarget(analytic), analytic.laser, analytic.accuracy);
   EXPECT_EQ(checkSurfaceModel(analytic, a, {{"anywhere", Vec3(5, 0, 0)}}).skipped, "no mesh");
   const Scene mesh = sphereScene(2, false);
-  const FacetIntegrator m(buildTarget(mesh), beamOf(mesh), integratorOptions(mesh));
+  const FacetIntegrator m(buildTarget(mesh), mesh.laser, mesh.accuracy);
   // Behind the sphere, in its shadow: no observer sees the target.
   const SurfaceModelCheck dark = checkSurfaceModel(mesh, m, {{"behind", Vec3(5, 1, -0.5)}});
   EXPECT_EQ(dark.skipped, "no observer of the run sees the target");
@@ -65,9 +66,9 @@ TEST(SurfaceCheck, IsAtLeastTheMeshErrorOnASphereAndFallsWithTheTessellation) {
   // the three on a sphere, so the change to the others is mostly their own error: at least
   // PN's, and falling with the edge length as all do.
   const Scene analytic = sphereScene(0, true);
-  const FacetIntegrator exact(buildTarget(analytic), beamOf(analytic), integratorOptions(analytic));
+  const FacetIntegrator exact(buildTarget(analytic), analytic.laser, analytic.accuracy);
   const std::vector<Vec3> observers =
-      test::glintObservers(test::unitIcosphere(4), beamOf(analytic), 0.01, 2.0, 45.0, 6);
+      test::glintObservers(test::unitIcosphere(4), analytic.laser, 0.01, 2.0, 45.0, 6);
   std::vector<std::pair<std::string, Vec3>> probes;
   for (std::size_t i = 0; i < observers.size(); ++i)
     probes.emplace_back("observer " + std::to_string(i), observers[i]);
@@ -75,7 +76,7 @@ TEST(SurfaceCheck, IsAtLeastTheMeshErrorOnASphereAndFallsWithTheTessellation) {
   double previous = std::numeric_limits<double>::infinity();
   for (const int level : {2, 3, 4}) {
     const Scene scene = sphereScene(level, false);
-    const FacetIntegrator mesh(buildTarget(scene), beamOf(scene), integratorOptions(scene));
+    const FacetIntegrator mesh(buildTarget(scene), scene.laser, scene.accuracy);
     const SurfaceModelCheck check = checkSurfaceModel(scene, mesh, probes);
     ASSERT_TRUE(check.skipped.empty()) << check.skipped;
     ASSERT_EQ(check.probes.size(), probes.size()) << "every observer sees the glint";

@@ -361,8 +361,8 @@ TEST(StressPlacement, SceneMovedAThousandKilometresAndTurnedGivesTheSameIrradian
 
   const Scene here = parseScene(placedScene(glm::dmat3(1.0), Vec3(0.0)), "here");
   const Scene there = parseScene(placedScene(rot, shift), "there");
-  const FacetIntegrator a(buildTarget(here), beamOf(here), integratorOptions(here));
-  const FacetIntegrator b(buildTarget(there), beamOf(there), integratorOptions(there));
+  const FacetIntegrator a(buildTarget(here), here.laser, here.accuracy);
+  const FacetIntegrator b(buildTarget(there), there.laser, there.accuracy);
   IntegratorWorkspace ws;
   for (const std::vector<double>& obs :
        {std::vector<double>{-4, 1, 0.3}, {-2.0, 2.5, 0.1}, {-3, -3, -0.5}, {1, 4, 0}}) {
