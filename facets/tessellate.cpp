@@ -100,6 +100,10 @@ bool nearOrInside(const AnalyticShape& shape, const Vec3& x_m, double margin_m) 
   return std::visit([&](const auto& s) { return s.nearOrInside(x_m, margin_m); }, shape);
 }
 
+bool isConvex(const AnalyticShape& shape) {
+  return std::visit([](const auto& s) { return s.kConvex; }, shape);
+}
+
 Vec3 centreOf(const AnalyticShape& shape) {
   return std::visit([](const auto& s) { return s.center_m; }, shape);
 }
@@ -121,7 +125,8 @@ AnalyticShape placed(const AnalyticShape& shape, const Vec3& centre_m, const glm
 
 std::uint32_t addCylinder(Target& target, const CylinderShape& s, std::uint32_t material,
                           int segments, const Vec3& reference) {
-  const std::uint32_t obj = target.addObject({s.center_m, material, std::nullopt, true});
+  const std::uint32_t obj =
+      target.addObject({s.center_m, material, std::nullopt, CylinderShape::kConvex});
   const std::uint32_t q = target.addQuadric(Quadric::cylinder(Vec3(0.0), s.axis, s.radius_m));
   const Vec3 u = perpendicularToward(s.axis, reference);
   const Vec3 v = glm::cross(s.axis, u);
@@ -144,7 +149,8 @@ std::uint32_t addCylinder(Target& target, const CylinderShape& s, std::uint32_t 
 
 std::uint32_t addSphere(Target& target, const SphereShape& s, std::uint32_t material, int segments,
                         const Vec3& reference) {
-  const std::uint32_t obj = target.addObject({s.center_m, material, std::nullopt, true});
+  const std::uint32_t obj =
+      target.addObject({s.center_m, material, std::nullopt, SphereShape::kConvex});
   const std::uint32_t q = target.addQuadric(Quadric::sphere(Vec3(0.0), s.radius_m));
   const Vec3 pole = reference;
   const Vec3 e1 = anyPerpendicular(pole);
@@ -173,7 +179,7 @@ std::uint32_t addSphere(Target& target, const SphereShape& s, std::uint32_t mate
 std::uint32_t addDisk(Target& target, const DiskShape& s, std::uint32_t material, int segments,
                       const Vec3& reference) {
   const RimCircle rim{Vec3(0.0), s.normal, s.radius_m};
-  const std::uint32_t obj = target.addObject({s.center_m, material, rim, true});
+  const std::uint32_t obj = target.addObject({s.center_m, material, rim, DiskShape::kConvex});
   const std::uint32_t q = target.addQuadric(Quadric::plane(Vec3(0.0), s.normal));
   const Vec3 u = perpendicularToward(s.normal, reference);
   const Vec3 v = glm::cross(s.normal, u);

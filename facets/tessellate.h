@@ -17,7 +17,8 @@ namespace glint {
 
 // Each analytic shape knows, in one place, how it is tessellated (addCylinder() and its
 // siblings below), how many coarse facets that makes (what a run's memory is reckoned from
-// before it builds them) and where an observer is inside it or on it (those are not computed).
+// before it builds them), where an observer is inside it or on it (those are not computed) and
+// whether it is convex (alone, it cannot shadow itself: no occlusion rays).
 // Counts are doubles: a count too large to build is reckoned and refused, not wrapped.
 
 /// @brief The open side surface of a right circular cylinder (no caps), reflecting outward.
@@ -33,6 +34,8 @@ struct CylinderShape {
   [[nodiscard]] double coarseFacets(int segments) const { return 2.0 * segments * rings(segments); }
   /// @brief Whether @p x_m lies inside the closed cylinder grown by @p margin_m.
   [[nodiscard]] bool nearOrInside(const Vec3& x_m, double margin_m) const;
+  /// The outside of the side surface never hides one part of itself from another.
+  static constexpr bool kConvex = true;
 };
 
 /// @brief A sphere, reflecting outward.
@@ -48,6 +51,7 @@ struct SphereShape {
   }
   /// @brief Whether @p x_m lies within radius + @p margin_m of the centre.
   [[nodiscard]] bool nearOrInside(const Vec3& x_m, double margin_m) const;
+  static constexpr bool kConvex = true;
 };
 
 /// @brief A one-sided disk: only the side its normal points to reflects.
@@ -64,6 +68,7 @@ struct DiskShape {
   }
   /// @brief Whether @p x_m lies within @p margin_m of the disk (a slab as thick as the margin).
   [[nodiscard]] bool nearOrInside(const Vec3& x_m, double margin_m) const;
+  static constexpr bool kConvex = true;  ///< flat: nothing of it is in front of the rest
 };
 
 /// @brief One of the analytic shapes.
@@ -78,6 +83,9 @@ double coarseFacets(const AnalyticShape& shape, int segments);
 
 /// @brief Whether @p x_m lies inside @p shape or within @p margin_m of it.
 bool nearOrInside(const AnalyticShape& shape, const Vec3& x_m, double margin_m);
+
+/// @brief Whether @p shape is convex (TargetObject::convex).
+bool isConvex(const AnalyticShape& shape);
 
 /// @brief The centre of @p shape.
 Vec3 centreOf(const AnalyticShape& shape);

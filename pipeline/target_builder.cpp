@@ -118,8 +118,11 @@ std::uint64_t meshMemoryFloorBytes(std::uint64_t triangles, std::uint64_t vertic
 TargetMemory targetMemory(const Scene& scene, const IntegratorOptions& options) {
   TargetMemory m;
   double facets = 0.0, bytes = 0.0;
-  // As needsOcclusion(): more than one object, or one that is not convex (a mesh).
-  m.occlusion = options.occlusion && (scene.objects.size() > 1 || scene.hasMeshes());
+  // As needsOcclusion(): more than one object, or one that is not convex (a mesh never is).
+  const bool concave =
+      std::any_of(scene.objects.begin(), scene.objects.end(),
+                  [](const ObjectSpec& o) { return !o.analytic() || !isConvex(*o.analytic()); });
+  m.occlusion = options.occlusion && (scene.objects.size() > 1 || concave);
   for (const ObjectSpec& o : scene.objects) {
     const MeshSpec* spec = o.mesh();
     if (!spec) {

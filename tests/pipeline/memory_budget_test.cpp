@@ -151,6 +151,31 @@ TEST(TargetMemory, EveryShapesFacetsAreCountedBeforeItIsBuilt) {
 // system first, so none of it is reused unseen), is at least the estimate and at most 1.5 ×
 // it. Measured (glint_memory_bench): 94 % of the growth for a disk lit whole, 87 % for two disks
 // with their occluder, 82 % for a PN mesh with its occluder.
+// The estimate reckons the occluder's memory exactly where the integrator builds one: a convex
+// shape alone casts no shadow on itself; two objects, or a mesh, may.
+TEST(TargetMemory, CountsTheOccluderExactlyWhereTheTargetNeedsOne) {
+  const std::string cylinder = R"({"shape": "cylinder", "center": [0, 0, 0], "axis": [1, 0, 0],
+      "radius": 0.5, "length": 3.0, "material": "glass"})";
+  const std::string sphere =
+      R"({"shape": "sphere", "center": [0, 0, 3], "radius": 0.5, "material": "glass"})";
+  const std::string disk = R"({"shape": "disk", "center": [0, 0, -3], "normal": [0, 0, 1],
+      "radius": 0.5, "material": "glass"})";
+  const std::string mesh = R"({"shape": "mesh", "file": ")" GLINT_EXAMPLES_DIR
+                           R"(/targets/capsule.glb", "material": "glass"})";
+  for (const auto& [objects, occluded] :
+       std::vector<std::pair<std::string, bool>>{{cylinder, false},
+                                                 {sphere, false},
+                                                 {disk, false},
+                                                 {mesh, true},
+                                                 {cylinder + ", " + sphere, true},
+                                                 {sphere + ", " + disk, true}}) {
+    const Scene scene = sceneOf(objects);
+    const FacetIntegrator integrator(buildTarget(scene), scene.laser, scene.accuracy);
+    EXPECT_EQ(integrator.cullStats().occlusion, occluded) << objects;
+    EXPECT_EQ(targetMemory(scene, scene.accuracy).occlusion, occluded) << objects;
+  }
+}
+
 TEST(TargetMemory, TheEstimateIsAFloorOfWhatTheTargetTakes) {
   const std::vector<std::pair<std::string, std::function<Scene()>>> cases = {
       {"a disk of 1024 segments, lit whole (332 800 facets, no occluder)",
