@@ -96,14 +96,14 @@ BallBound FacetIntegrator::boundBall(const Vec3& centre_m, double radius_m,
     if (drop[k] != 0) continue;
     total.add(bounds[k]);
     // The light of the whole coarse facet fills at least its own width plus what its cone
-    // and lobe (±2σ in the normal, twice that after reflection) spread over the distance.
+    // and lobe (±2 widths in the normal, twice that after reflection) spread over the distance.
     const Candidate& c = kept[k];
     const TargetObject& obj = target_->objects[c.object];
-    const double sigma = target_->materials[obj.material].lobe.sigma;
+    const double lobe_rad = target_->materials[obj.material].lobe.widthRad();
     const Vec3 x = centre_m - obj.origin_m;
     const double d_min =
         std::max(0.0, glm::length(x - c.geometry.centre_m) - c.fan_radius_m - radius_m);
-    const double width = 2.0 * c.fan_radius_m + 4.0 * d_min * (c.fan_rad + 2.0 * sigma);
+    const double width = 2.0 * c.fan_radius_m + 4.0 * d_min * (c.fan_rad + 2.0 * lobe_rad);
     // A width that cannot be computed counts as narrow: the block then looks closer.
     if (!(width >= std::sqrt(3.0) * options.sample_spacing_m)) {
       narrow.add(bounds[k]);

@@ -72,9 +72,10 @@ struct FarFieldSpec {
   double floor_w_sr = 0.0;    ///< intensity below this counts as negligible
   double far_radius_m = 0.0;  ///< farRadius() away from the forward cone: the smallest
   double lit_radius_m = 0.0;  ///< of the LitBall (for farRadiusToward())
-  double narrowest_sigma =
-      std::numeric_limits<double>::infinity();  ///< smallest specular σ of the target's materials
-  Vec3 beam_direction{1.0, 0.0, 0.0};           ///< unit propagation direction of the laser
+  /// The width of the target's narrowest specular lobe (Target::narrowestLobe(),
+  /// Beckmann::widthRad()); ∞ when nothing reflects specularly.
+  double narrowest_sigma = std::numeric_limits<double>::infinity();
+  Vec3 beam_direction{1.0, 0.0, 0.0};  ///< unit propagation direction of the laser
   int bound_split_depth = 2;  ///< FieldSpec::bound_split_depth of the faces: shallow, since
   /// every block of a face sees the whole target under a tiny angle and deep pieces only
   /// multiply its candidate list (cylinder, σ = 0.003: 1.1 GB at depth 2, over 8 GB at 6)
