@@ -21,6 +21,7 @@
 #include "glint/version.h"
 #include "pipeline/batch_report.h"
 #include "pipeline/cluster.h"
+#include "pipeline/hazard_report.h"
 #include "pipeline/input_error.h"
 #include "pipeline/input_files.h"
 #include "pipeline/json_reader.h"
@@ -82,14 +83,6 @@ std::string fileChecksum(const fs::path& path) {
   }
   if (in.bad()) throw OutputError(path.string() + ": cannot be read");
   return hex64(h);
-}
-
-// The names glint writes in a scenario folder: all that --fresh and a failed run may remove.
-std::vector<std::string> scenarioFileNames(const std::vector<StudyLattice>& lattices) {
-  std::vector<std::string> names = {output_names::kScenarioScene, output_names::kScenarioResult,
-                                    output_names::kIrradianceVdb};
-  for (const StudyLattice& r : lattices) names.push_back(r.scenarioFile());
-  return names;
 }
 
 // One of @p names, or a temporary of one (export/atomic_file.h: `.<name>.glint-<pid>-<random>`,
@@ -160,8 +153,9 @@ void removeFailedRun(const OutputFolder& out, const std::vector<std::string>& na
   }
 }
 
-// Computes one scenario on this rank, writes its folder (result.json last: its presence means
-// the scenario is done) and adds it to the rank's aggregates. Returns result.json's text.
+// Computes one scenario on this rank, writes its folder (its maps by the run's writers,
+// ScenarioMaps; result.json last: its presence means the scenario is done) and adds it to the
+// rank's aggregates. Returns result.json's text.
 std::string runScenario(const Study& study, const Scenario& s, std::vector<StudyLattice>& lattices,
                         const fs::path& out_dir, const MemoryWatch& watch) {
   const auto start = Clock::now();
@@ -188,6 +182,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
   std::int64_t evaluations = 0, unconverged = 0;
   // The scenario's target, built and culled once for all its lattices.
   const SceneTarget target = sceneTarget(scene, lattices.front().spec);
+  ScenarioMaps maps(scene, dir);
   for (StudyLattice& r : lattices) {
     // The region's own lattice (the observers do not move with the target), so every
     // scenario's map adds point for point.
@@ -204,16 +199,16 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
     }();
     requireFinite(field, "scenario " + std::to_string(s.index) + ", region " + r.name);
     const FieldStats st = field.stats();
-    AtomicFile map(dir / r.scenarioFile());
-    std::vector<float> e;
+    // As the maps hold it, and taken before the VDB takes the grids.
+    const std::vector<float> e = r.plane ? planeIrradiance(field) : field.irradianceLattice();
+    std::vector<std::string> written;
     if (r.plane) {
-      e = writePlaneExr(map.stream(), field, scene.hazard, info).irradiance_w_m2;
+      written = maps.writePlane(r.plane_index, {field, scene.hazard, info});
     } else {
-      e = field.irradianceLattice();
-      writeVdb(map.stream(), std::move(field), info);
+      BoxResults box{field, problem.integrator, info};
+      written = maps.writeBox(box);
     }
-    map.commit();
-    files[r.scenarioFile()] = fileChecksum(dir / r.scenarioFile());
+    for (const std::string& name : written) files[name] = fileChecksum(dir / name);
     results.push_back(scenarioRegionJson(r, st, scene.hazard, r.add(e, scene.hazard)));
     evaluations += st.evaluations;
     unconverged += st.unconverged_points;
@@ -289,7 +284,7 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
   // Each file as written: a map edited, damaged or swapped for another scenario's would
   // otherwise enter the aggregates while the record's figures say something else.
   std::vector<std::string> names = {output_names::kScenarioScene};
-  for (const StudyLattice& r : lattices) names.push_back(r.scenarioFile());
+  for (const std::string& map : ScenarioMaps(study.base, dir).names()) names.push_back(map);
   const nlohmann::json* files = nullptr;
   if (const auto it = record.find(kFileChecksums); it != record.end() && it->is_object())
     files = &*it;
@@ -373,7 +368,7 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   // Rank 0 holds the folder for the whole run (the other ranks write only the scenarios it hands
   // them), and on failure takes away the folders the run made, if nothing in them is worth
   // resuming from.
-  const std::vector<std::string> own_files = scenarioFileNames(lattices);
+  const std::vector<std::string> own_files = ScenarioMaps::folderNames(study.base);
   std::optional<OutputFolder> out;
   if (root) {
     InputFiles inputs;
