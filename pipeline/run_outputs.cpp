@@ -274,11 +274,12 @@ std::vector<std::string> ScenarioMaps::names() const {
   return names;
 }
 
-std::vector<std::string> ScenarioMaps::writeBox(BoxResults& box) {
+std::vector<std::string> ScenarioMaps::writeBox(BoxResults& box) const {
   return writeScenarioMaps(scene_, dir_, Region::Box, "", box);
 }
 
-std::vector<std::string> ScenarioMaps::writePlane(std::size_t index, const PlaneResults& plane) {
+std::vector<std::string> ScenarioMaps::writePlane(std::size_t index,
+                                                  const PlaneResults& plane) const {
   return writeScenarioMaps(scene_, dir_, Region::Plane, scene_.planes.at(index).name, plane);
 }
 

@@ -114,10 +114,10 @@ class ScenarioMaps {
   /// @brief Writes the box's maps (the one that takes the field's grids last); returns their
   /// names.
   /// @throw OutputError when one cannot be written.
-  std::vector<std::string> writeBox(BoxResults& box);
+  std::vector<std::string> writeBox(BoxResults& box) const;
   /// @brief Writes the maps of the scene's plane @p index; returns their names.
   /// @throw OutputError when one cannot be written.
-  std::vector<std::string> writePlane(std::size_t index, const PlaneResults& plane);
+  std::vector<std::string> writePlane(std::size_t index, const PlaneResults& plane) const;
 
   /// @brief Every name glint writes in a scenario folder of a study of @p base: scene.json,
   /// result.json and the maps, a box's whether or not @p base has one (another study's
