@@ -21,6 +21,7 @@
 #include "glint/version.h"
 #include "pipeline/batch_report.h"
 #include "pipeline/cluster.h"
+#include "pipeline/hazard_report.h"
 #include "pipeline/input_error.h"
 #include "pipeline/input_files.h"
 #include "pipeline/json_reader.h"
@@ -82,14 +83,6 @@ std::string fileChecksum(const fs::path& path) {
   }
   if (in.bad()) throw OutputError(path.string() + ": cannot be read");
   return hex64(h);
-}
-
-// The names glint writes in a scenario folder: all that --fresh and a failed run may remove.
-std::vector<std::string> scenarioFileNames(const std::vector<StudyLattice>& lattices) {
-  std::vector<std::string> names = {output_names::kScenarioScene, output_names::kScenarioResult,
-                                    output_names::kIrradianceVdb};
-  for (const StudyLattice& r : lattices) names.push_back(r.scenarioFile());
-  return names;
 }
 
 // One of @p names, or a temporary of one (export/atomic_file.h: `.<name>.glint-<pid>-<random>`,
@@ -160,76 +153,85 @@ void removeFailedRun(const OutputFolder& out, const std::vector<std::string>& na
   }
 }
 
-// Computes one scenario on this rank, writes its folder (result.json last: its presence means
-// the scenario is done) and adds it to the rank's aggregates. Returns result.json's text.
-std::string runScenario(const Study& study, const Scenario& s, std::vector<StudyLattice>& lattices,
-                        const fs::path& out_dir, const MemoryWatch& watch) {
-  const auto start = Clock::now();
-  // The scene from the base scene in memory; its file is the scenario's record.
-  const Scene scene = scenarioScene(study, s);
-  const std::string scene_json = scenarioSceneJson(study, s);
-  const fs::path dir = out_dir / output_names::kScenariosFolder / scenarioDirName(s.index);
+// A scenario's folder: scenarios/sNNNNNN.
+fs::path scenarioDir(const fs::path& out_dir, std::size_t index) {
+  return out_dir / output_names::kScenariosFolder / scenarioDirName(index);
+}
+
+// One scenario as this rank computes it: its scene, target and folder.
+struct ScenarioWork {
+  const Scene& scene;
+  const SceneTarget& target;
+  const RunInfo& info;
+  const ScenarioMaps& maps;
+  const fs::path& dir;
+  const MemoryWatch& watch;
+  std::string what;  // "scenario <index>", as the errors name it
+};
+
+// What the scenario's record adds up over its regions.
+struct ScenarioTally {
+  nlohmann::json files;  // each file's checksum, by name
+  nlohmann::json regions = nlohmann::json::array();
+  std::int64_t evaluations = 0;
+  std::int64_t unconverged = 0;
+};
+
+// The field of region @p r on the region's own lattice (the observers do not move with the
+// target, so every scenario's map adds point for point).
+// @throw std::runtime_error when the memory budget stops it or a value is not finite.
+ObserverField scenarioField(const ScenarioWork& w, const FieldProblem& problem,
+                            const StudyLattice& r) {
+  WorkCounter counter;
+  counter.stop = &w.watch.stopFlag();
+  ObserverField field = [&] {
+    try {
+      return computeField(problem.integrator, r.spec, problem.excluded, &counter);
+    } catch (const WorkStopped&) {
+      w.watch.check(w.what + ", region " + r.name);
+      throw;
+    }
+  }();
+  requireFinite(field, w.what + ", region " + r.name);
+  return field;
+}
+
+// Computes one region of the scenario, writes its maps (the run's writers, ScenarioMaps) and
+// adds it to the rank's aggregates and to @p tally.
+void runScenarioRegion(const ScenarioWork& w, StudyLattice& r, ScenarioTally& tally) {
+  const FieldProblem problem = fieldProblem(w.target, w.scene, r.spec);
+  ObserverField field = scenarioField(w, problem, r);
+  const FieldStats st = field.stats();
+  // As the maps hold it, and taken before the VDB takes the grids.
+  const std::vector<float> e = r.plane ? planeIrradiance(field) : field.irradianceLattice();
+  std::vector<std::string> written;
+  if (r.plane) {
+    written = w.maps.writePlane(r.plane_index, {field, w.scene.hazard, w.info});
+  } else {
+    BoxResults box{field, problem.integrator, w.info};
+    written = w.maps.writeBox(box);
+  }
+  for (const std::string& name : written) tally.files[name] = fileChecksum(w.dir / name);
+  tally.regions.push_back(scenarioRegionJson(r, st, w.scene.hazard, r.add(e, w.scene.hazard)));
+  tally.evaluations += st.evaluations;
+  tally.unconverged += st.unconverged_points;
+}
+
+// The scenario's scene.json, its record of the scene (written first). Returns its text.
+std::string writeScenarioScene(const Study& study, const Scenario& s, const fs::path& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw OutputError(dir.string() + ": cannot create the scenario folder: " + ec.message());
-
+  const std::string scene_json = scenarioSceneJson(study, s);
   AtomicFile scene_file(dir / output_names::kScenarioScene);
   scene_file.stream() << scene_json;
   scene_file.commit();
+  return scene_json;
+}
 
-  const RunInfo info =
-      runInfo(scene, (dir / output_names::kScenarioScene).string(), scene_json, "adaptive");
-  nlohmann::json files = {{output_names::kScenarioScene, fnv1a64Hex(scene_json)}};
-
-  nlohmann::json record = {{"study_fnv1a64", study.fnv1a64},
-                           {"scenario", s.index},
-                           {"parameters", scenarioParametersJson(s)}};
-  nlohmann::json results = nlohmann::json::array();
-  std::int64_t evaluations = 0, unconverged = 0;
-  // The scenario's target, built and culled once for all its lattices.
-  const SceneTarget target = sceneTarget(scene, lattices.front().spec);
-  for (StudyLattice& r : lattices) {
-    // The region's own lattice (the observers do not move with the target), so every
-    // scenario's map adds point for point.
-    const FieldProblem problem = fieldProblem(target, scene, r.spec);
-    WorkCounter counter;
-    counter.stop = &watch.stopFlag();
-    ObserverField field = [&] {
-      try {
-        return computeField(problem.integrator, r.spec, problem.excluded, &counter);
-      } catch (const WorkStopped&) {
-        watch.check("scenario " + std::to_string(s.index) + ", region " + r.name);
-        throw;
-      }
-    }();
-    requireFinite(field, "scenario " + std::to_string(s.index) + ", region " + r.name);
-    const FieldStats st = field.stats();
-    AtomicFile map(dir / r.scenarioFile());
-    std::vector<float> e;
-    if (r.plane) {
-      e = writePlaneExr(map.stream(), field, scene.hazard, info).irradiance_w_m2;
-    } else {
-      e = field.irradianceLattice();
-      writeVdb(map.stream(), std::move(field), info);
-    }
-    map.commit();
-    files[r.scenarioFile()] = fileChecksum(dir / r.scenarioFile());
-    results.push_back(scenarioRegionJson(r, st, scene.hazard, r.add(e, scene.hazard)));
-    evaluations += st.evaluations;
-    unconverged += st.unconverged_points;
-  }
-  record["regions"] = results;
-  if (scene.far_field.enabled) {
-    const FarField far =
-        sceneFarField(target, scene, watch, "scenario " + std::to_string(s.index) + ", far field",
-                      nullptr, false);
-    record["far_field"] = scenarioFarFieldJson(far, scene.hazard);
-    evaluations += far.stats().evaluations;
-  }
-  record["evaluations"] = evaluations;
-  record["unconverged_points"] = unconverged;
-  record["seconds"] = std::chrono::duration<double>(Clock::now() - start).count();
-  record[kFileChecksums] = files;
+// result.json, written last (its presence means the scenario is done), with its own checksum.
+// Returns its text.
+std::string writeScenarioResult(nlohmann::json record, const fs::path& dir) {
   record[kRecordChecksum] = recordChecksum(record);
   const std::string text = record.dump(2) + "\n";
   AtomicFile result(dir / output_names::kScenarioResult);
@@ -238,58 +240,95 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
   return text;
 }
 
-// A finished scenario of an earlier run: its record and maps, when they are whole, unedited and
-// belong to this study. Nothing when the scenario must be (re)computed.
-std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario& s,
-                                             std::vector<StudyLattice>& lattices,
-                                             const fs::path& out_dir, bool fresh, std::ostream& err,
-                                             bool quiet) {
-  const fs::path dir = out_dir / output_names::kScenariosFolder / scenarioDirName(s.index);
-  auto redo = [&](const std::string& why) -> std::optional<nlohmann::json> {
-    if (!quiet) err << "glint batch: scenario " << s.index << " redone: " << why << "\n";
-    return std::nullopt;
-  };
-  std::error_code ec;
-  if (!fs::is_regular_file(dir / output_names::kScenarioResult, ec)) return std::nullopt;
+// Computes one scenario on this rank, writes its folder (scene.json, the maps, result.json
+// last) and adds it to the rank's aggregates. Returns result.json's text.
+std::string runScenario(const Study& study, const Scenario& s, std::vector<StudyLattice>& lattices,
+                        const fs::path& out_dir, const MemoryWatch& watch) {
+  const auto start = Clock::now();
+  // The scene from the base scene in memory; its file is the scenario's record.
+  const Scene scene = scenarioScene(study, s);
+  const fs::path dir = scenarioDir(out_dir, s.index);
+  const std::string scene_json = writeScenarioScene(study, s, dir);
+  const RunInfo info =
+      runInfo(scene, (dir / output_names::kScenarioScene).string(), scene_json, "adaptive");
+  // The scenario's target, built and culled once for all its lattices.
+  const SceneTarget target = sceneTarget(scene, lattices.front().spec);
+  const ScenarioMaps maps(scene, dir);
+  const ScenarioWork w{
+      scene, target, info, maps, dir, watch, "scenario " + std::to_string(s.index)};
+  ScenarioTally tally;
+  tally.files[output_names::kScenarioScene] = fnv1a64Hex(scene_json);
+  for (StudyLattice& r : lattices) runScenarioRegion(w, r, tally);
+
+  nlohmann::json record = {{"study_fnv1a64", study.fnv1a64},
+                           {"scenario", s.index},
+                           {"parameters", scenarioParametersJson(s)},
+                           {"regions", tally.regions}};
+  if (scene.far_field.enabled) {
+    const FarField far =
+        sceneFarField(target, scene, watch, w.what + ", far field", nullptr, false);
+    record["far_field"] = scenarioFarFieldJson(far, scene.hazard);
+    tally.evaluations += far.stats().evaluations;
+  }
+  record["evaluations"] = tally.evaluations;
+  record["unconverged_points"] = tally.unconverged;
+  record["seconds"] = std::chrono::duration<double>(Clock::now() - start).count();
+  record[kFileChecksums] = tally.files;
+  return writeScenarioResult(std::move(record), dir);
+}
+
+// A finished scenario's result.json in @p dir, when it is whole, unedited, of this study and of
+// its shape. Otherwise nothing, with @p why it is redone (empty: recomputed without a word,
+// --fresh's other study).
+// @throw InputError when it is another study's and not @p fresh.
+std::optional<nlohmann::json> readScenarioRecord(const Study& study, const Scenario& s,
+                                                 std::size_t regions, const fs::path& out_dir,
+                                                 const fs::path& dir, bool fresh,
+                                                 std::string& why) {
+  const std::string path = (dir / output_names::kScenarioResult).string();
   nlohmann::json record;
   std::string fnv;
   bool matches = false;
   try {
-    record =
-        nlohmann::json::parse(readUserFile(dir / output_names::kScenarioResult, "scenario result"));
+    record = nlohmann::json::parse(readUserFile(path, "scenario result"));
     fnv = record.at("study_fnv1a64").get<std::string>();
     matches =
         record.at("scenario").get<std::size_t>() == s.index &&
-        record.at("regions").size() == lattices.size() &&
+        record.at("regions").size() == regions &&
         record.contains("far_field") == study.base.far_field.enabled &&
         // A result from before the scene had an optical aid lacks the aided figures.
         (!study.base.hazard.aid || record.at("regions").at(0).contains("aided_peak_hazard_ratio"));
   } catch (const std::exception&) {
-    return redo((dir / output_names::kScenarioResult).string() + " unreadable");
+    why = path + " unreadable";
+    return std::nullopt;
   }
   if (fnv != study.fnv1a64) {
     if (fresh) return std::nullopt;
     throw InputError(out_dir.string() + ": holds results of another study (or of this study " +
-                     "before it changed): " + (dir / output_names::kScenarioResult).string() +
-                     " has study " + printable(fnv) + ", this study is " + study.fnv1a64 +
+                     "before it changed): " + path + " has study " + printable(fnv) +
+                     ", this study is " + study.fnv1a64 +
                      ". Use --fresh to discard them, or another --out folder");
   }
   // Its figures as written: an edited number (or a record of a glint without checksums) is not
   // carried into the study's table and summary.
   const auto stated = record.find(kRecordChecksum);
   if (stated == record.end() || !stated->is_string()) {
-    return redo((dir / output_names::kScenarioResult).string() +
-                " has no checksum (written by an older glint)");
+    why = path + " has no checksum (written by an older glint)";
+  } else if (stated->get<std::string>() != recordChecksum(record)) {
+    why = path + " does not match its checksum (edited or damaged)";
+  } else if (!matches) {
+    why = path + " does not match";
+  } else {
+    return record;
   }
-  if (stated->get<std::string>() != recordChecksum(record)) {
-    return redo((dir / output_names::kScenarioResult).string() +
-                " does not match its checksum (edited or damaged)");
-  }
-  if (!matches) return redo((dir / output_names::kScenarioResult).string() + " does not match");
-  // Each file as written: a map edited, damaged or swapped for another scenario's would
-  // otherwise enter the aggregates while the record's figures say something else.
-  std::vector<std::string> names = {output_names::kScenarioScene};
-  for (const StudyLattice& r : lattices) names.push_back(r.scenarioFile());
+  return std::nullopt;
+}
+
+// Why one of the files @p record vouches for (@p names, in @p dir) is not as written, if one
+// is not: a map edited, damaged or swapped for another scenario's would otherwise enter the
+// aggregates while the record's figures say something else.
+std::optional<std::string> unvouchedFile(const nlohmann::json& record, const fs::path& dir,
+                                         const std::vector<std::string>& names) {
   const nlohmann::json* files = nullptr;
   if (const auto it = record.find(kFileChecksums); it != record.end() && it->is_object())
     files = &*it;
@@ -299,34 +338,221 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
     try {
       actual = fileChecksum(path);
     } catch (const std::exception& e) {
-      return redo(e.what());
+      return e.what();
     }
     const bool vouched = files != nullptr && files->contains(name) && files->at(name).is_string() &&
                          files->at(name).get<std::string>() == actual;
     if (!vouched) {
-      return redo(path.string() + " does not match its checksum in " +
-                  output_names::kScenarioResult + " (edited, damaged or replaced)");
+      return path.string() + " does not match its checksum in " + output_names::kScenarioResult +
+             " (edited, damaged or replaced)";
     }
+  }
+  return std::nullopt;
+}
+
+// Each region's irradiance read back from the scenario's map of it (StudyLattice::scenarioFile()).
+// @throw std::runtime_error when one cannot be read or does not fit its lattice.
+std::vector<std::vector<float>> readScenarioMaps(const std::vector<StudyLattice>& lattices,
+                                                 const fs::path& dir) {
+  std::vector<std::vector<float>> maps;
+  for (const StudyLattice& r : lattices) {
+    const std::string path = (dir / r.scenarioFile()).string();
+    if (r.plane) {
+      int w = 0, h = 0;
+      maps.push_back(readExrChannel(path, "irradiance_w_m2", w, h));
+      const auto n = r.spec.nodes();
+      if (w != n[0] || h != n[1]) throw std::runtime_error(path + ": not this plane's size");
+    } else {
+      maps.push_back(readLatticeVdb(path, "irradiance_w_m2", r.spec));
+    }
+  }
+  return maps;
+}
+
+// A finished scenario of an earlier run: its record and maps, when they are whole, unedited and
+// belong to this study, its maps added to the aggregates. Nothing when the scenario must be
+// (re)computed.
+std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario& s,
+                                             std::vector<StudyLattice>& lattices,
+                                             const fs::path& out_dir, bool fresh, std::ostream& err,
+                                             bool quiet) {
+  const fs::path dir = scenarioDir(out_dir, s.index);
+  std::string why;
+  auto redo = [&]() -> std::optional<nlohmann::json> {
+    if (!quiet && !why.empty())
+      err << "glint batch: scenario " << s.index << " redone: " << why << "\n";
+    return std::nullopt;
+  };
+  std::error_code ec;
+  if (!fs::is_regular_file(dir / output_names::kScenarioResult, ec)) return std::nullopt;
+  std::optional<nlohmann::json> record =
+      readScenarioRecord(study, s, lattices.size(), out_dir, dir, fresh, why);
+  if (!record) return redo();
+  std::vector<std::string> names = {output_names::kScenarioScene};
+  for (const std::string& map : ScenarioMaps(study.base, dir).names()) names.push_back(map);
+  if (auto unvouched = unvouchedFile(*record, dir, names)) {
+    why = std::move(*unvouched);
+    return redo();
   }
   // Maps read in full before any is added, so a damaged file leaves the aggregates untouched.
   std::vector<std::vector<float>> maps;
   try {
-    for (const StudyLattice& r : lattices) {
-      const std::string path = (dir / r.scenarioFile()).string();
-      if (r.plane) {
-        int w = 0, h = 0;
-        maps.push_back(readExrChannel(path, "irradiance_w_m2", w, h));
-        const auto n = r.spec.nodes();
-        if (w != n[0] || h != n[1]) throw std::runtime_error(path + ": not this plane's size");
-      } else {
-        maps.push_back(readLatticeVdb(path, "irradiance_w_m2", r.spec));
-      }
-    }
+    maps = readScenarioMaps(lattices, dir);
   } catch (const std::exception& e) {
-    return redo(e.what());
+    why = e.what();
+    return redo();
   }
   for (std::size_t i = 0; i < lattices.size(); ++i) lattices[i].add(maps[i], study.base.hazard);
   return record;
+}
+
+// Refuses a study whose maps, one scenario's field and target exceed the budget, before any of
+// them is allocated.
+void checkStudyMemory(const Study& study, const std::vector<StudyLattice>& lattices,
+                      std::uint64_t budget) {
+  // Each region keeps its dense maps over the scenarios besides one scenario's field at a time.
+  std::uint64_t floor_bytes = 0;
+  for (const StudyLattice& r : lattices) {
+    floor_bytes += r.mapBytes() + fieldMemoryFloorBytes(r.spec, false);
+  }
+  requireWithinBudget("the study's regions (" + std::to_string(lattices.size()) + ")", floor_bytes,
+                      budget,
+                      "coarsen the base scene's voxel_m or pixel_m, shrink its regions, or "
+                      "raise --memory");
+  // A scenario moves the base scene's objects and never adds facets: its target and far field
+  // are the base scene's, besides the maps.
+  const std::uint64_t far_bytes =
+      study.base.far_field.enabled ? farFieldMemoryFloorBytes(farFieldLattice(study.base)) : 0;
+  requireTargetWithinBudget(
+      targetMemory(study.base, fieldIntegratorOptions(study.base, lattices.front().spec)),
+      {budget, floor_bytes + far_bytes, "the study's regions and far field"});
+}
+
+// What the study's scenarios come to on rank 0 (besides the aggregates, in the lattices).
+struct StudyResults {
+  std::map<std::size_t, nlohmann::json> records;  // every scenario's result
+  std::vector<std::size_t> todo;                  // the scenarios this run computes
+  std::size_t resumed = 0;
+};
+
+// Readies the study's folder on rank 0 (--fresh's clearing, scenarios/) and takes up the
+// scenarios finished before. Returns them, and the scenarios still to run.
+StudyResults startStudy(const BatchArgs& args, const Study& study,
+                        std::vector<StudyLattice>& lattices, OutputFolder& out,
+                        const std::vector<std::string>& own_files, std::ostream& err) {
+  const bool talk = !args.quiet;
+  const fs::path scenarios = out.path() / output_names::kScenariosFolder;
+  if (args.fresh) {
+    const std::vector<fs::path> kept = removeScenarioFolders(scenarios, own_files);
+    if (talk && !kept.empty()) {
+      err << "glint batch: --fresh kept " << kept.size() << " file(s) or folder(s) glint did "
+          << "not write (and the scenario folders holding them): " << listed(kept) << "\n";
+    }
+  }
+  out.create(scenarios);
+  StudyResults results;
+  for (const Scenario& s : study.scenarios) {
+    if (auto rec = resumeScenario(study, s, lattices, out.path(), args.fresh, err, args.quiet)) {
+      results.records[s.index] = std::move(*rec);
+      ++results.resumed;
+    } else {
+      results.todo.push_back(s.index);
+    }
+  }
+  return results;
+}
+
+// The line that says the batch has begun.
+void printStart(std::ostream& err, const Study& study, const StudyResults& results,
+                const fs::path& out_dir, int ranks) {
+  err << "glint batch: " << study.scenarios.size() << " scenarios of " << study.source;
+  if (results.resumed > 0)
+    err << " (" << results.resumed << " done before, " << results.todo.size() << " to run)";
+  err << " on " << ranks << (ranks == 1 ? " process" : " MPI ranks") << "; scenario folders in "
+      << (out_dir / output_names::kScenariosFolder).string() << "\n";
+}
+
+// The progress of the scenarios this run computes, on rank 0: a line at least every 10 s
+// (redrawn in place on a terminal), and the last.
+class BatchProgress {
+ public:
+  BatchProgress(std::ostream& err, bool terminal, std::size_t todo)
+      : err_(err), terminal_(terminal), todo_(todo), start_(Clock::now()), last_print_(start_) {}
+
+  // Scenario @p index is done, with @p record.
+  void done(std::size_t index, const nlohmann::json& record) {
+    ++finished_;
+    const auto now = Clock::now();
+    const bool last = finished_ == todo_;
+    if (!terminal_ && !last && now - last_print_ < std::chrono::seconds(10)) return;
+    last_print_ = now;
+    const double elapsed = std::chrono::duration<double>(now - start_).count();
+    const double left =
+        elapsed / static_cast<double>(finished_) * static_cast<double>(todo_ - finished_);
+    double peak = 0.0;
+    for (const auto& r : record.at("regions"))
+      peak = std::max(peak, r.at("peak_hazard_ratio").get<double>());
+    std::string line = "batch: " + std::to_string(finished_) + "/" + std::to_string(todo_) +
+                       " scenarios, " + formatDuration(elapsed) +
+                       (last ? "" : ", about " + formatDuration(left) + " left") + "; scenario " +
+                       std::to_string(index) + ": peak hazard ratio " + formatNumber("%.3g", peak);
+    if (terminal_) {
+      err_ << "\r\033[K" << line << (last ? "\n" : "") << std::flush;
+    } else {
+      err_ << line << "\n";
+    }
+  }
+
+ private:
+  std::ostream& err_;
+  bool terminal_;
+  std::size_t todo_;
+  std::size_t finished_ = 0;
+  Clock::time_point start_;
+  Clock::time_point last_print_;
+};
+
+// Computes the scenarios rank 0 hands out, on every rank; rank 0 gathers their records into
+// @p results. Then every rank's aggregates are reduced into rank 0's.
+void runScenarios(const BatchArgs& args, const Study& study, std::vector<StudyLattice>& lattices,
+                  const fs::path& out_dir, const MemoryWatch& watch, Cluster& cluster,
+                  StudyResults& results, bool talk, std::ostream& err) {
+  BatchProgress progress(err, args.terminal, results.todo.size());
+  cluster.shareOut(
+      results.todo,
+      [&](std::size_t index) {
+        return runScenario(study, study.scenarios[index], lattices, out_dir, watch);
+      },
+      [&](std::size_t index, const std::string& record) {
+        results.records[index] = nlohmann::json::parse(record);
+        if (talk) progress.done(index, results.records[index]);
+      });
+  for (StudyLattice& r : lattices) {
+    cluster.maxToRoot(r.max_w_m2);
+    cluster.sumToRoot(r.hazardous);
+    if (r.aided) cluster.sumToRoot(r.aided_hazardous);
+  }
+}
+
+// The study's own files (rank 0): scenarios.csv, each region's aggregated map and summary.json
+// (with the run's time until then), then its summary on the terminal unless quiet.
+void writeStudy(const BatchArgs& args, const Study& study,
+                const std::vector<StudyLattice>& lattices, const StudyResults& results,
+                const fs::path& out_dir, int ranks, Clock::time_point wall_start,
+                std::ostream& err) {
+  AtomicFile csv(out_dir / output_names::kScenariosCsv);
+  csv.stream() << scenariosCsv(lattices, results.records, study.base.far_field.enabled,
+                               study.base.hazard.aid.has_value());
+  csv.commit();
+  for (const StudyLattice& r : lattices)
+    writeStudyMap(out_dir / r.studyFile(), r, study, study.scenarios.size());
+  const double wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
+  const nlohmann::json summary =
+      batchSummaryJson(study, lattices, results.records, results.resumed, ranks, wall_s);
+  AtomicFile summary_file(out_dir / output_names::kSummary);
+  summary_file.stream() << summary.dump(2) << "\n";
+  summary_file.commit();
+  if (!args.quiet) printBatchSummary(err, summary, lattices, out_dir, wall_s);
 }
 
 }  // namespace
@@ -346,121 +572,29 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   }
 
   std::vector<StudyLattice> lattices = studyLattices(study.base);
-  // Each region keeps its dense maps over the scenarios besides one scenario's field at a time:
-  // refused before any of them is allocated.
   const std::uint64_t budget =
       args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
-  std::uint64_t floor_bytes = 0;
-  for (const StudyLattice& r : lattices) {
-    floor_bytes += r.mapBytes() + fieldMemoryFloorBytes(r.spec, false);
-  }
-  requireWithinBudget("the study's regions (" + std::to_string(lattices.size()) + ")", floor_bytes,
-                      budget,
-                      "coarsen the base scene's voxel_m or pixel_m, shrink its regions, or "
-                      "raise --memory");
-  // A scenario moves the base scene's objects and never adds facets: its target and far field
-  // are the base scene's, besides the maps.
-  const std::uint64_t far_bytes =
-      study.base.far_field.enabled ? farFieldMemoryFloorBytes(farFieldLattice(study.base)) : 0;
-  requireTargetWithinBudget(
-      targetMemory(study.base, fieldIntegratorOptions(study.base, lattices.front().spec)),
-      {budget, floor_bytes + far_bytes, "the study's regions and far field"});
+  checkStudyMemory(study, lattices, budget);
   for (StudyLattice& r : lattices) r.allocate();
   const MemoryWatch watch(budget);
-  std::map<std::size_t, nlohmann::json> records;  // rank 0: every scenario's result
-  std::vector<std::size_t> todo;
-  std::size_t resumed = 0;
   // Rank 0 holds the folder for the whole run (the other ranks write only the scenarios it hands
   // them), and on failure takes away the folders the run made, if nothing in them is worth
   // resuming from.
-  const std::vector<std::string> own_files = scenarioFileNames(lattices);
+  const std::vector<std::string> own_files = ScenarioMaps::folderNames(study.base);
   std::optional<OutputFolder> out;
+  StudyResults results;
   if (root) {
     InputFiles inputs;
     inputs.add(args.study_path, "study file");
     inputs.addScene(study.scene_path, study.base);
     out.emplace(out_dir, inputs, "glint batch",
                 [&](const OutputFolder& f) { removeFailedRun(f, own_files); });
-    const fs::path scenarios = out_dir / output_names::kScenariosFolder;
-    if (args.fresh) {
-      const std::vector<fs::path> kept = removeScenarioFolders(scenarios, own_files);
-      if (talk && !kept.empty()) {
-        err << "glint batch: --fresh kept " << kept.size() << " file(s) or folder(s) glint did "
-            << "not write (and the scenario folders holding them): " << listed(kept) << "\n";
-      }
-    }
-    out->create(scenarios);
-    for (const Scenario& s : study.scenarios) {
-      if (auto rec = resumeScenario(study, s, lattices, out_dir, args.fresh, err, args.quiet)) {
-        records[s.index] = std::move(*rec);
-        ++resumed;
-      } else {
-        todo.push_back(s.index);
-      }
-    }
-    if (talk) {
-      err << "glint batch: " << study.scenarios.size() << " scenarios of " << study.source;
-      if (resumed > 0) err << " (" << resumed << " done before, " << todo.size() << " to run)";
-      err << " on " << cluster.size() << (cluster.size() == 1 ? " process" : " MPI ranks")
-          << "; scenario folders in " << (out_dir / output_names::kScenariosFolder).string()
-          << "\n";
-    }
+    results = startStudy(args, study, lattices, *out, own_files, err);
+    if (talk) printStart(err, study, results, out_dir, cluster.size());
   }
-
-  const auto run_start = Clock::now();
-  auto last_print = run_start;
-  std::size_t finished = 0;
-  cluster.shareOut(
-      todo,
-      [&](std::size_t index) {
-        return runScenario(study, study.scenarios[index], lattices, out_dir, watch);
-      },
-      [&](std::size_t index, const std::string& record) {
-        records[index] = nlohmann::json::parse(record);
-        ++finished;
-        if (!talk) return;
-        const auto now = Clock::now();
-        const bool last = finished == todo.size();
-        if (!args.terminal && !last && now - last_print < std::chrono::seconds(10)) return;
-        last_print = now;
-        const double elapsed = std::chrono::duration<double>(now - run_start).count();
-        const double left =
-            elapsed / static_cast<double>(finished) * static_cast<double>(todo.size() - finished);
-        double peak = 0.0;
-        for (const auto& r : records[index].at("regions"))
-          peak = std::max(peak, r.at("peak_hazard_ratio").get<double>());
-        std::string line = "batch: " + std::to_string(finished) + "/" +
-                           std::to_string(todo.size()) + " scenarios, " + formatDuration(elapsed) +
-                           (last ? "" : ", about " + formatDuration(left) + " left") +
-                           "; scenario " + std::to_string(index) + ": peak hazard ratio " +
-                           formatNumber("%.3g", peak);
-        if (args.terminal) {
-          err << "\r\033[K" << line << (last ? "\n" : "") << std::flush;
-        } else {
-          err << line << "\n";
-        }
-      });
-
-  for (StudyLattice& r : lattices) {
-    cluster.maxToRoot(r.max_w_m2);
-    cluster.sumToRoot(r.hazardous);
-    if (r.aided) cluster.sumToRoot(r.aided_hazardous);
-  }
+  runScenarios(args, study, lattices, out_dir, watch, cluster, results, talk, err);
   if (!root) return;
-
-  const std::size_t n = study.scenarios.size();
-  AtomicFile csv(out_dir / output_names::kScenariosCsv);
-  csv.stream() << scenariosCsv(lattices, records, study.base.far_field.enabled,
-                               study.base.hazard.aid.has_value());
-  csv.commit();
-  for (const StudyLattice& r : lattices) writeStudyMap(out_dir / r.studyFile(), r, study, n);
-  const double wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
-  const nlohmann::json summary =
-      batchSummaryJson(study, lattices, records, resumed, cluster.size(), wall_s);
-  AtomicFile summary_file(out_dir / output_names::kSummary);
-  summary_file.stream() << summary.dump(2) << "\n";
-  summary_file.commit();
-  if (talk) printBatchSummary(err, summary, lattices, out_dir, wall_s);
+  writeStudy(args, study, lattices, results, out_dir, cluster.size(), wall_start, err);
 }
 
 }  // namespace glint

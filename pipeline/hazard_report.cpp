@@ -130,6 +130,15 @@ std::vector<ScaledArray> hazardArrays(const HazardSpec& h) {
   return arrays;
 }
 
+std::vector<float> planeIrradiance(const ObserverField& field) {
+  const auto n = field.spec().nodes();
+  std::vector<float> e;
+  e.reserve(static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]));
+  for (int j = 0; j < n[1]; ++j)
+    for (int i = 0; i < n[0]; ++i) e.push_back(static_cast<float>(field.irradiance(i, j, 0)));
+  return e;
+}
+
 PlaneMap planeMap(const ObserverField& field, const HazardSpec& h) {
   const FieldSpec& spec = field.spec();
   const auto n = spec.nodes();
@@ -140,14 +149,17 @@ PlaneMap planeMap(const ObserverField& field, const HazardSpec& h) {
   m.u_axis = spec.axes[0];
   m.v_axis = spec.axes[1];
   m.pixel_m = spec.voxel_m;
-  const std::size_t count = static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]);
-  for (auto* channel : {&m.irradiance_w_m2, &m.hazard_ratio, &m.level, &m.status})
-    channel->reserve(count);
+  m.irradiance_w_m2 = planeIrradiance(field);
+  const std::size_t count = m.irradiance_w_m2.size();
+  for (auto* channel : {&m.hazard_ratio, &m.level, &m.status}) channel->reserve(count);
   if (h.aid) m.aided_hazard_ratio.reserve(count);
   for (int j = 0; j < n[1]; ++j)
     for (int i = 0; i < n[0]; ++i) {
-      const double e = field.irradiance(i, j, 0);
-      m.irradiance_w_m2.push_back(static_cast<float>(e));
+      // The stored float is the field's own (irradiance() widens it), so the ratios are as
+      // before.
+      const double e = static_cast<double>(
+          m.irradiance_w_m2[static_cast<std::size_t>(j) * static_cast<std::size_t>(n[0]) +
+                            static_cast<std::size_t>(i)]);
       m.hazard_ratio.push_back(static_cast<float>(h.ratio(e)));
       if (h.aid) m.aided_hazard_ratio.push_back(static_cast<float>(h.aidedRatio(e)));
       m.level.push_back(static_cast<float>(field.level(i, j, 0)));

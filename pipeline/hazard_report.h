@@ -34,6 +34,10 @@ std::vector<ScaledArray> hazardArrays(const HazardSpec& h);
 /// `hazard_ratio` and (with an aid) `aided_hazard_ratio` as @p h forms them.
 PlaneMap planeMap(const ObserverField& field, const HazardSpec& h);
 
+/// @brief A plane's irradiance as its map holds it (planeMap()'s `irradiance_w_m2`): the floats
+/// a batch adds up, so that a scenario counts as it does read back from its map.
+std::vector<float> planeIrradiance(const ObserverField& field);
+
 /// @brief hazardLimitsJson() with, where there is a @p zone, its peak ratios and the nominal
 /// hazard zone (`nominal_hazard_zone`, and `aided_nominal_hazard_zone` with an aid).
 nlohmann::json hazardJson(const HazardSpec& h, const HazardZone* zone);

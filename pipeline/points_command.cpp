@@ -35,42 +35,55 @@ std::size_t brightest(std::span<const ObserverResult> results) {
   return peak;
 }
 
-void printSummary(std::ostream& err, const PointsArgs& args, const Scene& scene,
-                  const FacetIntegrator& integrator, std::span<const Vec3> points,
-                  std::span<const ObserverResult> results, std::size_t peak, double seconds,
-                  int threads, const SurfaceModelCheck* surface_check) {
-  const HazardSpec& hazard = scene.hazard;
-  const IntegratorOptions& opt = integrator.options();
-  const CullStats& cull = integrator.cullStats();
-  std::int64_t total = 0, lo = results.empty() ? 0 : results[0].evaluations, hi = 0;
-  std::size_t unconverged = 0, depth_limited = 0;
-  for (const ObserverResult& r : results) {
-    total += r.evaluations;
-    lo = std::min(lo, r.evaluations);
-    hi = std::max(hi, r.evaluations);
-    unconverged += r.converged ? 0 : 1;
-    depth_limited += r.depth_limited ? 1 : 0;
+// Bytes of the points and their results.
+std::uint64_t pointsBytes(const std::vector<Vec3>& points) {
+  return points.size() * (sizeof(Vec3) + sizeof(ObserverResult));
+}
+
+// No infinity may reach the file or read as a harmless 0: within pipeline/limits.h none can
+// occur, so one is an internal error, reported before anything is written.
+void requireFiniteResults(const std::vector<ObserverResult>& results) {
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    if (!std::isfinite(results[i].irradiance_w_m2) ||
+        !std::isfinite(results[i].error_estimate_w_m2)) {
+      throw std::runtime_error("observer " + std::to_string(i + 1) +
+                               ": the irradiance or its error is not a finite number; nothing "
+                               "was written");
+    }
   }
-  const std::string scheme = args.uniform_level
-                                 ? "uniform twin, level " + std::to_string(*args.uniform_level)
-                                 : "adaptive, tolerance " + formatNumber("%g", opt.tolerance) +
-                                       ", floor " + formatNumber("%.3g", opt.floor_w_m2) + " W/m²";
-  err << "glint points: " << points.size() << " observers, " << scheme << ", " << threads
-      << (threads == 1 ? " thread\n" : " threads\n");
+}
+
+// The observers' evaluations and how many did not converge.
+struct EvaluationTally {
+  std::int64_t total = 0, lo = 0, hi = 0;
+  std::size_t unconverged = 0, depth_limited = 0;
+};
+
+EvaluationTally tally(std::span<const ObserverResult> results) {
+  EvaluationTally t;
+  t.lo = results.empty() ? 0 : results[0].evaluations;
+  for (const ObserverResult& r : results) {
+    t.total += r.evaluations;
+    t.lo = std::min(t.lo, r.evaluations);
+    t.hi = std::max(t.hi, r.evaluations);
+    t.unconverged += r.converged ? 0 : 1;
+    t.depth_limited += r.depth_limited ? 1 : 0;
+  }
+  return t;
+}
+
+// What culling made of the target's facets.
+void printTarget(std::ostream& err, const CullStats& cull) {
   err << "  target: " << cull.coarse_facets << " coarse facets; " << cull.lit << " lit, "
       << cull.facing_away << " facing away from the laser, " << cull.outside_beam
       << " outside the beam, " << cull.degenerate << " degenerate";
   if (cull.occlusion) err << ", " << cull.shadowed << " in the target's shadow";
   err << "\n";
   if (cull.occlusion) err << "  occlusion: rays to the laser and to each observer (Embree)\n";
-  err << "  evaluations: " << formatNumber("%.4g", static_cast<double>(total))
-      << " in all; per observer "
-      << formatNumber("%.4g", static_cast<double>(total) / static_cast<double>(results.size()))
-      << " on average, " << lo << " to " << hi << "\n";
-  const Vec3& p = points[peak];
-  const double e_peak = results[peak].irradiance_w_m2;
-  err << "  peak irradiance: " << formatNumber("%.6g", e_peak) << " W/m² at (" << p.x << ", " << p.y
-      << ", " << p.z << ")\n";
+}
+
+// The limits and the peak's hazard.
+void printHazard(std::ostream& err, const HazardSpec& hazard, double e_peak) {
   err << "  hazard: " << hazardLine(hazard) << "; peak hazard ratio "
       << formatNumber("%.3g", hazard.ratio(e_peak));
   if (hazard.aid) err << ", aided " << formatNumber("%.3g", hazard.aidedRatio(e_peak));
@@ -79,16 +92,40 @@ void printSummary(std::ostream& err, const PointsArgs& args, const Scene& scene,
         << " J/m² a pulse";
   }
   err << "\n";
+}
+
+void printSummary(std::ostream& err, const PointsArgs& args, const Scene& scene,
+                  const FacetIntegrator& integrator, std::span<const Vec3> points,
+                  std::span<const ObserverResult> results, std::size_t peak, double seconds,
+                  int threads, const SurfaceModelCheck* surface_check) {
+  const IntegratorOptions& opt = integrator.options();
+  const EvaluationTally t = tally(results);
+  const std::string scheme = args.uniform_level
+                                 ? "uniform twin, level " + std::to_string(*args.uniform_level)
+                                 : "adaptive, tolerance " + formatNumber("%g", opt.tolerance) +
+                                       ", floor " + formatNumber("%.3g", opt.floor_w_m2) + " W/m²";
+  err << "glint points: " << points.size() << " observers, " << scheme << ", " << threads
+      << (threads == 1 ? " thread\n" : " threads\n");
+  printTarget(err, integrator.cullStats());
+  err << "  evaluations: " << formatNumber("%.4g", static_cast<double>(t.total))
+      << " in all; per observer "
+      << formatNumber("%.4g", static_cast<double>(t.total) / static_cast<double>(results.size()))
+      << " on average, " << t.lo << " to " << t.hi << "\n";
+  const Vec3& p = points[peak];
+  const double e_peak = results[peak].irradiance_w_m2;
+  err << "  peak irradiance: " << formatNumber("%.6g", e_peak) << " W/m² at (" << p.x << ", " << p.y
+      << ", " << p.z << ")\n";
+  printHazard(err, scene.hazard, e_peak);
   err << "  time: " << formatDuration(seconds) << " ("
-      << formatNumber("%.3g", static_cast<double>(total) / std::max(seconds, 1e-9))
+      << formatNumber("%.3g", static_cast<double>(t.total) / std::max(seconds, 1e-9))
       << " evaluations/s)\n";
   if (!args.uniform_level) {
-    if (unconverged == 0) {
+    if (t.unconverged == 0) {
       err << "  accuracy: all observers within the tolerance\n";
     } else {
-      err << "  warning: " << unconverged << " of " << results.size()
+      err << "  warning: " << t.unconverged << " of " << results.size()
           << " observers did not reach the tolerance (converged = 0 in the output; "
-          << depth_limited << " hit accuracy.max_depth); raise accuracy.max_evaluations or "
+          << t.depth_limited << " hit accuracy.max_depth); raise accuracy.max_evaluations or "
           << "accuracy.max_depth, or loosen the tolerance\n";
     }
   }
@@ -114,6 +151,105 @@ std::vector<CsvColumn> hazardColumns(const HazardSpec& h, std::span<const Observ
   return columns;
 }
 
+// What to do when the target or the observers outgrow the memory budget.
+constexpr std::string_view kAdvice =
+    "Raise --memory, or lower the objects' segments, or decimate the meshes";
+
+// The observer points, refused when they and their results would not fit @p budget_bytes.
+std::vector<Vec3> loadObserverPoints(const std::string& path, std::uint64_t budget_bytes) {
+  // The text, its points (24 bytes each) and their results (about 40) take about three times
+  // the file's size at ~30 bytes a row: a quarter of the budget for the file keeps them in it.
+  std::vector<Vec3> points = loadPoints(path, budget_bytes / 4);
+  requireWithinBudget(std::to_string(points.size()) + " observer points", pointsBytes(points),
+                      budget_bytes, "split the points file or raise --memory");
+  return points;
+}
+
+// The output file, opened before the work: a missing folder, a device or an input named as the
+// output should stop the run before the work, not after. None for standard output.
+// @throw OutputError for such a path.
+std::unique_ptr<AtomicFile> openOutput(const PointsArgs& args, const Scene& scene) {
+  if (args.out_path == "-") return nullptr;
+  if (const auto kind = nonRegularKind(args.out_path)) {
+    throw OutputError(args.out_path + " is " + *kind +
+                      ", not a regular file: glint never replaces one; name a new or regular "
+                      "file, or write to standard output with --out -");
+  }
+  InputFiles inputs;
+  inputs.addScene(args.scene_path, scene);
+  inputs.add(args.points_path, "points file");
+  inputs.requireNotAnInput(args.out_path);
+  return std::make_unique<AtomicFile>(args.out_path);
+}
+
+// Every observer's result and the seconds they took.
+struct Evaluated {
+  std::vector<ObserverResult> results;
+  double seconds = 0.0;
+};
+
+// Evaluates every observer, with progress unless quiet, stopped by the memory watch before the
+// next one once the budget is spent.
+// @throw std::runtime_error when the budget is spent or a result is not finite.
+Evaluated evaluateObservers(const FacetIntegrator& integrator, const std::vector<Vec3>& points,
+                            const PointsArgs& args, const MemoryWatch& watch, std::ostream& err) {
+  PointScheme scheme;
+  if (args.uniform_level) {
+    scheme.uniform = true;
+    scheme.uniform_level = *args.uniform_level;
+  }
+  WorkCounter counter;
+  counter.stop = &watch.stopFlag();
+  const auto start = std::chrono::steady_clock::now();
+  Evaluated e;
+  {
+    std::unique_ptr<ProgressReporter> progress;
+    if (!args.quiet) {
+      progress = std::make_unique<ProgressReporter>(err, args.terminal, "observers", points.size(),
+                                                    counter);
+    }
+    try {
+      e.results = evaluatePoints(integrator, points, scheme, &counter);
+    } catch (const WorkStopped&) {
+      if (progress) progress->stop();
+      watch.check("the observer points", kAdvice);
+      throw;
+    }
+  }
+  watch.check("the observer points", kAdvice);
+  e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  requireFiniteResults(e.results);
+  return e;
+}
+
+// The table: to its file, committed, or to standard output.
+void writeTable(AtomicFile* file, std::ostream& out, const std::vector<Vec3>& points,
+                const std::vector<ObserverResult>& results, const HazardSpec& hazard) {
+  const std::vector<CsvColumn> columns = hazardColumns(hazard, results);
+  if (file != nullptr) {
+    writePointsCsv(file->stream(), points, results, columns);
+    file->commit();
+  } else {
+    writePointsCsv(out, points, results, columns);
+    out.flush();
+  }
+}
+
+// The summary on the terminal, with the meshes' surface model checked where it matters most:
+// at the brightest observer.
+void report(std::ostream& err, const PointsArgs& args, const Scene& scene,
+            const FacetIntegrator& integrator, const std::vector<Vec3>& points,
+            const Evaluated& evaluated, int threads) {
+  std::optional<SurfaceModelCheck> surface_check;
+  const std::size_t peak = brightest(evaluated.results);
+  if (scene.hasMeshes() && !args.uniform_level && !points.empty()) {
+    surface_check =
+        checkSurfaceModel(scene, integrator, {{"row " + std::to_string(peak + 1), points[peak]}});
+  }
+  printSummary(err, args, scene, integrator, points, evaluated.results, peak, evaluated.seconds,
+               threads, surface_check ? &*surface_check : nullptr);
+}
+
 }  // namespace
 
 void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
@@ -122,30 +258,10 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   // A mesh is refused before it is decoded, the target before it is built.
   Scene scene = loadScene(args.scene_path, budget);
   overrideAccuracy(scene.accuracy, args.normals, args.scheme, scene.source);
-  // The text, its points (24 bytes each) and their results (about 40) take about three times
-  // the file's size at ~30 bytes a row: a quarter of the budget for the file keeps them in it.
-  const std::vector<Vec3> points = loadPoints(args.points_path, budget / 4);
-  const std::uint64_t points_bytes = points.size() * (sizeof(Vec3) + sizeof(ObserverResult));
-  requireWithinBudget(std::to_string(points.size()) + " observer points", points_bytes, budget,
-                      "split the points file or raise --memory");
+  const std::vector<Vec3> points = loadObserverPoints(args.points_path, budget);
   IntegratorOptions options = scene.accuracy;
   if (args.tolerance) options.tolerance = *args.tolerance;
-
-  // Open the output first: a missing folder, a device or an input named as the output should
-  // stop the run before the work, not after.
-  std::unique_ptr<AtomicFile> file;
-  if (args.out_path != "-") {
-    if (const auto kind = nonRegularKind(args.out_path)) {
-      throw OutputError(args.out_path + " is " + *kind +
-                        ", not a regular file: glint never replaces one; name a new or regular "
-                        "file, or write to standard output with --out -");
-    }
-    InputFiles inputs;
-    inputs.addScene(args.scene_path, scene);
-    inputs.add(args.points_path, "points file");
-    inputs.requireNotAnInput(args.out_path);
-    file = std::make_unique<AtomicFile>(args.out_path);
-  }
+  std::unique_ptr<AtomicFile> file = openOutput(args, scene);
   if (file) pauseForTestsAfterTemporaries(err);
 
   std::unique_ptr<tbb::global_control> thread_limit;
@@ -158,67 +274,13 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   // The workspaces grow with what each observer sees, not with the scene: the watch covers
   // them (and whatever the estimate leaves out), stopping the points before their next one.
   const MemoryWatch watch(budget);
-  constexpr std::string_view kAdvice =
-      "Raise --memory, or lower the objects' segments, or decimate the meshes";
   const FacetIntegrator integrator = buildIntegrator(
-      scene, options, {budget, points_bytes, std::to_string(points.size()) + " observer points"});
+      scene, options,
+      {budget, pointsBytes(points), std::to_string(points.size()) + " observer points"});
   watch.check("building the target", kAdvice);
-  PointScheme scheme;
-  if (args.uniform_level) {
-    scheme.uniform = true;
-    scheme.uniform_level = *args.uniform_level;
-  }
-
-  WorkCounter counter;
-  counter.stop = &watch.stopFlag();
-  const auto start = std::chrono::steady_clock::now();
-  std::vector<ObserverResult> results;
-  {
-    std::unique_ptr<ProgressReporter> progress;
-    if (!args.quiet) {
-      progress = std::make_unique<ProgressReporter>(err, args.terminal, "observers", points.size(),
-                                                    counter);
-    }
-    try {
-      results = evaluatePoints(integrator, points, scheme, &counter);
-    } catch (const WorkStopped&) {
-      if (progress) progress->stop();
-      watch.check("the observer points", kAdvice);
-      throw;
-    }
-  }
-  watch.check("the observer points", kAdvice);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
-  // No infinity may reach the file or read as a harmless 0: within pipeline/limits.h none can
-  // occur, so one is an internal error, reported before anything is written.
-  for (std::size_t i = 0; i < results.size(); ++i) {
-    if (!std::isfinite(results[i].irradiance_w_m2) ||
-        !std::isfinite(results[i].error_estimate_w_m2)) {
-      throw std::runtime_error("observer " + std::to_string(i + 1) +
-                               ": the irradiance or its error is not a finite number; nothing "
-                               "was written");
-    }
-  }
-  const std::vector<CsvColumn> hazard = hazardColumns(scene.hazard, results);
-  if (file) {
-    writePointsCsv(file->stream(), points, results, hazard);
-    file->commit();
-  } else {
-    writePointsCsv(out, points, results, hazard);
-    out.flush();
-  }
-  if (args.quiet) return;
-  // The meshes' surface model, checked where it matters most: at the brightest observer.
-  std::optional<SurfaceModelCheck> surface_check;
-  const std::size_t peak = brightest(results);
-  if (scene.hasMeshes() && !args.uniform_level && !points.empty()) {
-    surface_check =
-        checkSurfaceModel(scene, integrator, {{"row " + std::to_string(peak + 1), points[peak]}});
-  }
-  printSummary(err, args, scene, integrator, points, results, peak, seconds, threads,
-               surface_check ? &*surface_check : nullptr);
+  const Evaluated evaluated = evaluateObservers(integrator, points, args, watch, err);
+  writeTable(file.get(), out, points, evaluated.results, scene.hazard);
+  if (!args.quiet) report(err, args, scene, integrator, points, evaluated, threads);
 }
 
 }  // namespace glint

@@ -1,6 +1,9 @@
 #include "pipeline/run_outputs.h"
 
 #include <algorithm>
+#include <iterator>
+#include <optional>
+#include <utility>
 
 #include "export/atomic_file.h"
 #include "export/vtk_files.h"
@@ -46,20 +49,35 @@ void writeFarVtp(std::ostream& out, const FarResults& r, double threshold_w_m2) 
                                            r.hazard.atmosphere.extinction_per_m));
 }
 
+void writePlaneExr(std::ostream& out, const PlaneResults& r) {
+  writeExr(out, planeMap(r.field, r.hazard), exrInfo(r.info));
+}
+
 }  // namespace
 
-// Every output of glint run but the planes' maps (one per plane, after these): its name, the
-// region it is written from and its writer. A region's files are written in this order, but
-// for the one that takes the field's grids, written last.
+// Every output of glint run: its name, the region it is written from, its writer and whether a
+// study's scenario writes it too. A region's files are written in this order, but for the one
+// that takes the field's grids, written last; summary.json lists them in this order, a plane's
+// one a plane.
 struct RunOutputs::Declared {
-  enum class Region { Run, Box, Far };
-  const char* name;
-  Region region;
+  enum class Region { Run, Box, Plane, Far };
+  const char* name = nullptr;
+  std::string (*plane_name)(const std::string&) = nullptr;  // instead of name, a plane's
+  Region region = Region::Run;
   void (*box)(std::ostream&, BoxResults&) = nullptr;
+  void (*plane)(std::ostream&, const PlaneResults&) = nullptr;
   void (*far)(std::ostream&, const FarResults&) = nullptr;
   bool takes_field = false;    // the box's VDB moves the grids out of the field
   bool staged_folder = false;  // the AMR data set: a folder staged beside its .vthb
   bool aided_only = false;     // written with an optical aid only
+  // A study's scenario writes it too, under the same name in its folder, so that a scenario's
+  // map is what glint run writes of the scenario's scene (its result.json vouches for it).
+  bool scenario = false;
+
+  // Its name; a plane's of the plane named @p plane_of.
+  [[nodiscard]] std::string fileName(const std::string& plane_of) const {
+    return plane_name != nullptr ? plane_name(plane_of) : std::string(name);
+  }
 
   [[nodiscard]] bool wanted(const Scene& s) const {
     switch (region) {
@@ -67,23 +85,31 @@ struct RunOutputs::Declared {
         return true;
       case Region::Box:
         return s.observers.has_value();
+      case Region::Plane:
+        return !s.planes.empty();
       case Region::Far:
         return s.far_field.enabled && (!aided_only || s.hazard.aid.has_value());
     }
     return false;
   }
+
+  void write(std::ostream& out, BoxResults& r) const { box(out, r); }
+  void write(std::ostream& out, const PlaneResults& r) const { plane(out, r); }
+  void write(std::ostream& out, const FarResults& r) const { far(out, r); }
 };
 
 namespace {
 
-using Region = RunOutputs::Declared::Region;
+using Declared = RunOutputs::Declared;
+using Region = Declared::Region;
 
-constexpr RunOutputs::Declared kOutputs[] = {
+constexpr Declared kOutputs[] = {
     {.name = output_names::kSummary, .region = Region::Run},
     {.name = output_names::kIrradianceVdb,
      .region = Region::Box,
      .box = [](std::ostream& out, BoxResults& b) { writeVdb(out, std::move(b.field), b.info); },
-     .takes_field = true},
+     .takes_field = true,
+     .scenario = true},
     {.name = output_names::kIrradianceVti,
      .region = Region::Box,
      .box =
@@ -106,18 +132,48 @@ constexpr RunOutputs::Declared kOutputs[] = {
      .far = [](std::ostream& out,
                const FarResults& f) { writeFarVtp(out, f, f.hazard.aidedMpeW_m2()); },
      .aided_only = true},
+    {.plane_name = output_names::planeExr,
+     .region = Region::Plane,
+     .plane = writePlaneExr,
+     .scenario = true},
 };
+
+// A scenario writes maps of its box and planes only (its far field is a figure of its
+// result.json), and commits each as it is written: none is a folder to stage.
+static_assert(std::all_of(std::begin(kOutputs), std::end(kOutputs), [](const Declared& d) {
+  return !d.scenario ||
+         ((d.region == Region::Box || d.region == Region::Plane) && !d.staged_folder);
+}));
+
+// The outputs of @p region in the order they are written: the list's, but the one that takes
+// the field's grids last.
+std::vector<const Declared*> writingOrder(Region region) {
+  std::vector<const Declared*> order;
+  const Declared* last = nullptr;
+  for (const Declared& d : kOutputs) {
+    if (d.region != region) continue;
+    if (d.takes_field) {
+      last = &d;
+    } else {
+      order.push_back(&d);
+    }
+  }
+  if (last != nullptr) order.push_back(last);
+  return order;
+}
 
 }  // namespace
 
 RunOutputs::RunOutputs(const Scene& scene, const std::filesystem::path& dir,
                        const InputFiles& inputs, bool writer)
-    : dir_(dir), writer_(writer), scene_(scene) {
-  auto declare = [&](const std::string& name, const Declared* d) {
+    : dir_(dir), writer_(writer) {
+  auto declare = [&](const Declared& d, std::size_t plane) {
+    const std::string name = d.fileName(d.region == Region::Plane ? scene.planes[plane].name : "");
     names_.push_back(name);
-    declared_.push_back(d);
-    const bool folder = d != nullptr && d->staged_folder;
-    if (!writer_ || folder) {
+    if (d.region == Region::Far) far_names_.push_back(name);
+    declared_.push_back(&d);
+    planes_.push_back(plane);
+    if (!writer_ || d.staged_folder) {
       files_.push_back(nullptr);
       return;
     }
@@ -126,13 +182,22 @@ RunOutputs::RunOutputs(const Scene& scene, const std::filesystem::path& dir,
   };
   for (const Declared& d : kOutputs) {
     if (!d.wanted(scene)) continue;
-    declare(d.name, &d);
-    if (d.region == Region::Far) far_names_.emplace_back(d.name);
+    if (d.region != Region::Plane) {
+      declare(d, 0);
+      continue;
+    }
+    for (std::size_t p = 0; p < scene.planes.size(); ++p) declare(d, p);
   }
-  for (const PlaneSpec& plane : scene.planes) declare(output_names::planeExr(plane.name), nullptr);
 }
 
 RunOutputs::~RunOutputs() = default;
+
+std::optional<std::size_t> RunOutputs::slotOf(const Declared& d, std::size_t plane) const {
+  for (std::size_t i = 0; i < declared_.size(); ++i) {
+    if (declared_[i] == &d && planes_[i] == plane) return i;
+  }
+  return std::nullopt;  // not an output of this scene
+}
 
 std::ostream* RunOutputs::summary() {
   return writer_ && files_.at(0) ? &files_[0]->stream() : nullptr;
@@ -140,33 +205,29 @@ std::ostream* RunOutputs::summary() {
 
 void RunOutputs::writeBox(BoxResults& box) {
   if (!writer_) return;
-  std::optional<std::size_t> last;
-  for (std::size_t i = 0; i < names_.size(); ++i) {
-    const Declared* d = declared_[i];
-    if (d == nullptr || d->region != Region::Box) continue;
+  for (const Declared* d : writingOrder(Region::Box)) {
+    const std::optional<std::size_t> i = slotOf(*d, 0);
+    if (!i) continue;
     if (d->staged_folder) {
-      amr_ = std::make_unique<StagedAmr>(writeAmr(dir_ / names_[i], box.field, box.info.scaled));
-    } else if (d->takes_field) {
-      last = i;
+      amr_ = std::make_unique<StagedAmr>(writeAmr(dir_ / names_[*i], box.field, box.info.scaled));
     } else {
-      d->box(files_[i]->stream(), box);
+      d->write(files_[*i]->stream(), box);
     }
   }
-  if (last) declared_[*last]->box(files_[*last]->stream(), box);
 }
 
 void RunOutputs::writePlane(std::size_t index, const PlaneResults& plane) {
   if (!writer_) return;
-  // The planes' maps follow the declared outputs, in the scene's order.
-  const std::size_t i = names_.size() - scene_.planes.size() + index;
-  writePlaneExr(files_.at(i)->stream(), plane.field, plane.hazard, plane.info);
+  for (const Declared* d : writingOrder(Region::Plane)) {
+    if (const std::optional<std::size_t> i = slotOf(*d, index))
+      d->write(files_[*i]->stream(), plane);
+  }
 }
 
 void RunOutputs::writeFar(const FarResults& far) {
   if (!writer_) return;
-  for (std::size_t i = 0; i < names_.size(); ++i) {
-    const Declared* d = declared_[i];
-    if (d != nullptr && d->region == Region::Far) d->far(files_[i]->stream(), far);
+  for (const Declared* d : writingOrder(Region::Far)) {
+    if (const std::optional<std::size_t> i = slotOf(*d, 0)) d->write(files_[*i]->stream(), far);
   }
 }
 
@@ -177,15 +238,66 @@ void RunOutputs::commit() {
   if (amr_) amr_->commit();
 }
 
-ExrInfo exrInfo(const RunInfo& info) {
-  return {info.program_version, info.wavelength_nm, info.mpe_w_m2};
+namespace {
+
+// Writes a scenario's maps of @p region (of plane @p plane: its name) into @p dir, each
+// committed once written. Returns their names.
+template <class Results>
+std::vector<std::string> writeScenarioMaps(const Scene& scene, const std::filesystem::path& dir,
+                                           Region region, const std::string& plane,
+                                           Results& results) {
+  std::vector<std::string> names;
+  for (const Declared* d : writingOrder(region)) {
+    if (!d->scenario || !d->wanted(scene)) continue;
+    names.push_back(d->fileName(plane));
+    AtomicFile file(dir / names.back());
+    d->write(file.stream(), results);
+    file.commit();
+  }
+  return names;
 }
 
-PlaneMap writePlaneExr(std::ostream& out, const ObserverField& field, const HazardSpec& hazard,
-                       const RunInfo& info) {
-  PlaneMap map = planeMap(field, hazard);
-  writeExr(out, map, exrInfo(info));
-  return map;
+}  // namespace
+
+ScenarioMaps::ScenarioMaps(const Scene& scene, std::filesystem::path dir)
+    : scene_(scene), dir_(std::move(dir)) {}
+
+std::vector<std::string> ScenarioMaps::names() const {
+  std::vector<std::string> names;
+  auto add = [&](Region region, const std::string& plane) {
+    for (const Declared& d : kOutputs) {
+      if (d.region == region && d.scenario && d.wanted(scene_)) names.push_back(d.fileName(plane));
+    }
+  };
+  add(Region::Box, "");
+  for (const PlaneSpec& plane : scene_.planes) add(Region::Plane, plane.name);
+  return names;
+}
+
+std::vector<std::string> ScenarioMaps::writeBox(BoxResults& box) const {
+  return writeScenarioMaps(scene_, dir_, Region::Box, "", box);
+}
+
+std::vector<std::string> ScenarioMaps::writePlane(std::size_t index,
+                                                  const PlaneResults& plane) const {
+  return writeScenarioMaps(scene_, dir_, Region::Plane, scene_.planes.at(index).name, plane);
+}
+
+std::vector<std::string> ScenarioMaps::folderNames(const Scene& base) {
+  std::vector<std::string> names = {output_names::kScenarioScene, output_names::kScenarioResult};
+  for (const Declared& d : kOutputs) {
+    if (!d.scenario) continue;
+    if (d.plane_name == nullptr) {
+      names.emplace_back(d.name);
+      continue;
+    }
+    for (const PlaneSpec& plane : base.planes) names.push_back(d.plane_name(plane.name));
+  }
+  return names;
+}
+
+ExrInfo exrInfo(const RunInfo& info) {
+  return {info.program_version, info.wavelength_nm, info.mpe_w_m2};
 }
 
 }  // namespace glint

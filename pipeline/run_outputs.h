@@ -1,11 +1,10 @@
 #pragma once
 /// @file
-/// @brief The files `glint run` writes, declared in one list (run_outputs.cpp): each is opened
-/// before the work (so that an unwritable folder or a path that must not be replaced stops the
-/// run at once), written from its region's results when that region is done (one region's
-/// field in memory at a time), and all are committed together once every check has passed.
-/// A new output is one writer and one line of that list; `glint batch` writes its scenarios'
-/// maps with the same writers.
+/// @brief The files `glint run` and a study's scenarios (`glint batch`) write, declared in one
+/// list (run_outputs.cpp): each a name, the region it is written from, its writer and whether a
+/// scenario writes it too. A new output is one writer and one line of that list; marked as a
+/// scenario's, every scenario writes it by the same writer (its map is then the bytes glint run
+/// writes of the scenario's scene), its result.json vouches for it and --fresh may remove it.
 
 #include <cstddef>
 #include <filesystem>
@@ -50,7 +49,11 @@ struct FarResults {
   const RunInfo& info;
 };
 
-/// @brief The outputs of one `glint run` (rank 0 writes; on other ranks nothing is opened).
+/// @brief The outputs of one `glint run` (rank 0 writes; on other ranks nothing is opened): each
+/// is opened before the work (so that an unwritable folder or a path that must not be replaced
+/// stops the run at once), written from its region's results when that region is done (one
+/// region's field in memory at a time), and all are committed together once every check has
+/// passed.
 class RunOutputs {
  public:
   /// @brief Opens every output @p scene's run writes into @p dir (none unless @p writer).
@@ -81,14 +84,50 @@ class RunOutputs {
   struct Declared;
 
  private:
+  /// The index in names_ of output @p d of plane @p plane (0 but for a plane's), if the scene
+  /// has it.
+  [[nodiscard]] std::optional<std::size_t> slotOf(const Declared& d, std::size_t plane) const;
+
   std::filesystem::path dir_;
   bool writer_;
   std::vector<std::string> names_;
   std::vector<std::string> far_names_;
-  std::vector<const Declared*> declared_;  ///< by the index of names_ (null: a plane's map)
-  std::vector<std::unique_ptr<AtomicFile>> files_;  ///< by the index of names_ (null: a folder)
+  // By the index of names_: each output's entry, its plane (a plane's) and its file (null for a
+  // staged folder, or when not the writer).
+  std::vector<const Declared*> declared_;
+  std::vector<std::size_t> planes_;
+  std::vector<std::unique_ptr<AtomicFile>> files_;
   std::unique_ptr<StagedAmr> amr_;
+};
+
+/// @brief The maps one scenario of a study writes into its folder (glint batch): of each of
+/// its regions, the outputs the list marks as a scenario's, by the run's writers. Each is
+/// committed once written; the scenario's result.json, written last, vouches for them.
+class ScenarioMaps {
+ public:
+  /// @brief The maps of a scenario of @p scene, into the scenario folder @p dir.
+  ScenarioMaps(const Scene& scene, std::filesystem::path dir);
+
+  /// @brief The maps a scenario writes, its box's then each plane's: those its result.json
+  /// vouches for.
+  [[nodiscard]] std::vector<std::string> names() const;
+  /// @brief Writes the box's maps (the one that takes the field's grids last); returns their
+  /// names.
+  /// @throw OutputError when one cannot be written.
+  std::vector<std::string> writeBox(BoxResults& box) const;
+  /// @brief Writes the maps of the scene's plane @p index; returns their names.
+  /// @throw OutputError when one cannot be written.
+  std::vector<std::string> writePlane(std::size_t index, const PlaneResults& plane) const;
+
+  /// @brief Every name glint writes in a scenario folder of a study of @p base: scene.json,
+  /// result.json and the maps, a box's whether or not @p base has one (another study's
+  /// scenarios may hold them) and a plane's for each of @p base's planes. All that --fresh and
+  /// a failed run may remove.
+  static std::vector<std::string> folderNames(const Scene& base);
+
+ private:
   const Scene& scene_;
+  std::filesystem::path dir_;
 };
 
 /// @brief The height of the far field's lat-long map (twice as wide): about as fine as the
@@ -97,10 +136,5 @@ inline int farMapHeight(int face_pixels) { return face_pixels < 2048 ? face_pixe
 
 /// @brief What an EXR map records of the run.
 ExrInfo exrInfo(const RunInfo& info);
-
-/// @brief A plane's map as `<plane>.exr` (glint run and a batch's scenarios): irradiance,
-/// hazard ratios, levels and status. Returns the map (a batch adds its irradiance up).
-PlaneMap writePlaneExr(std::ostream& out, const ObserverField& field, const HazardSpec& hazard,
-                       const RunInfo& info);
 
 }  // namespace glint

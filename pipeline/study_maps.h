@@ -40,7 +40,8 @@ struct StudyLattice {
   /// @brief Makes the maps, zeroed (aided counts only with an aid).
   void allocate();
 
-  /// @brief The map a scenario's folder keeps of this region.
+  /// @brief The map of this region a resumed scenario's irradiance is read back from: one of
+  /// the maps its folder keeps (ScenarioMaps::names(), pipeline/run_outputs.h).
   [[nodiscard]] std::string scenarioFile() const;
   /// @brief The aggregated map of the study's folder.
   [[nodiscard]] std::string studyFile() const;

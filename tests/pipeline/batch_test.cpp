@@ -19,8 +19,10 @@
 #include "export/lattice_vdb.h"
 #include "pipeline/output_folder.h"
 #include "pipeline/progress.h"
+#include "pipeline/run_outputs.h"
 #include "pipeline/scene.h"
 #include "pipeline/study.h"
+#include "pipeline/study_maps.h"
 #include "pipeline/target_builder.h"
 #include "support/cli.h"
 #include "support/files.h"
@@ -536,6 +538,42 @@ TEST(BatchFolder, AFailedRunTakesAwayTheFoldersItMadeAndNoOther) {
   ASSERT_TRUE(fs::is_directory(dir / "empty")) << "a folder the run found stays, though empty";
   EXPECT_TRUE(fs::is_empty(dir / "empty")) << "and holds nothing of the run";
   fs::remove_all(dir);
+}
+
+// Each scenario folder holds scene.json, result.json and the maps the list of outputs marks as a
+// scenario's, each vouched for by result.json, and no file --fresh or a failed run would leave
+// behind as not glint's: the names --fresh removes come from the same list as the files written.
+TEST_F(Batch, EveryFileAScenarioWritesIsVouchedForAndAmongTheNamesFreshRemoves) {
+  const Study study = loadStudy(kStudy);
+  const std::vector<std::string> removable = ScenarioMaps::folderNames(study.base);
+  std::size_t folders = 0;
+  for (const auto& e : fs::directory_iterator(dir_ / "scenarios")) {
+    ++folders;
+    std::vector<std::string> expected = {"result.json", "scene.json"};
+    for (const std::string& map : ScenarioMaps(study.base, e.path()).names())
+      expected.push_back(map);
+    std::sort(expected.begin(), expected.end());
+    const std::vector<std::string> files = namesIn(e.path());
+    EXPECT_EQ(files, expected) << e.path() << ": the maps the list names for the study's scene";
+    const auto vouched =
+        nlohmann::json::parse(readFile(e.path() / "result.json")).at("files_fnv1a64");
+    for (const std::string& file : files) {
+      EXPECT_TRUE(std::find(removable.begin(), removable.end(), file) != removable.end())
+          << e.path() / file << " is not among the names --fresh may remove";
+      if (file != "result.json") {
+        EXPECT_TRUE(vouched.contains(file))
+            << e.path() / file << " is not vouched for by its result.json";
+      }
+    }
+  }
+  EXPECT_EQ(folders, study.scenarios.size()) << "premise: every scenario's folder was looked at";
+  const std::vector<std::string> maps = ScenarioMaps(study.base, dir_).names();
+  for (const StudyLattice& r : studyLattices(study.base)) {
+    EXPECT_TRUE(std::find(maps.begin(), maps.end(), r.scenarioFile()) != maps.end())
+        << r.scenarioFile() << ", which a resumed scenario reads back, is not a map it writes";
+  }
+  EXPECT_GE(namesIn(dir_ / "scenarios" / "s000000").size(), 4u)
+      << "premise: the test study writes a box's and a plane's maps";
 }
 
 }  // namespace
