@@ -249,6 +249,112 @@ RunInfo runInfo(const Scene& scene, const std::string& scene_file, std::string_v
   return info;
 }
 
+namespace {
+
+// What the regions of one run share while they are computed and written.
+struct RunContext {
+  const RunArgs& args;
+  const Scene& scene;
+  const RunInfo& info;
+  const SceneTarget& target;
+  const MemoryWatch& watch;
+  RunOutputs& outputs;
+  std::ostream& err;
+  PointExchange* exchange;
+};
+
+// The summary as the regions add to it, and the brightest observer of each, where the meshes'
+// surface model is checked.
+struct RunSummary {
+  nlohmann::json j;
+  std::vector<std::pair<std::string, Vec3>> probes;
+
+  // The target as the first region's problem describes it (all share the same one).
+  void describeTarget(const Scene& scene, const FieldProblem& problem) {
+    if (!j.contains("target")) j["target"] = targetJson(problem.integrator.cullStats());
+    if (scene.hasMeshes() && !j.contains("meshes"))
+      j["meshes"] = meshesJson(scene, problem.mesh_stats);
+  }
+};
+
+// The far field, where the scene asks for it, and its reach against the hazard.
+struct FarResult {
+  std::optional<FarField> far;
+  FarHazard hazard;
+};
+
+void runBox(const RunContext& c, const FarResult& far, RunSummary& s) {
+  FieldResult box = computeObserverField(c.target, c.scene, fieldSpec(c.scene), c.args, "points",
+                                         c.watch, c.err, c.exchange);
+  ObserverField& field = *box.field;
+  requireFinite(field, "the observer box");
+  const FacetIntegrator& integrator = box.problem.integrator;
+  const HazardZone zone = hazardZone(field, c.scene.hazard, targetCentre(integrator.target()));
+  if (field.stats().peak_w_m2 > 0.0)
+    s.probes.emplace_back("the box's peak", field.stats().peak_at_m);
+  s.j = volumeSummaryJson(field, zone, c.info, integrator.cullStats());
+  s.describeTarget(c.scene, box.problem);
+  s.j["hazard"] = hazardJson(c.scene.hazard, &zone);
+  if (!c.args.quiet) {
+    printVolume(c.err, field, c.scene, zone, c.info, c.args.uniform,
+                far.far ? beyondTheBox(*far.far, far.hazard) : std::string());
+  }
+  BoxResults results{field, integrator, c.info};
+  c.outputs.writeBox(results);  // last: the VDB takes the field's grids
+}
+
+void runPlanes(const RunContext& c, RunSummary& s) {
+  nlohmann::json planes = nlohmann::json::array();
+  for (std::size_t p = 0; p < c.scene.planes.size(); ++p) {
+    const PlaneSpec& plane = c.scene.planes[p];
+    const FieldResult r =
+        computeObserverField(c.target, c.scene, planeFieldSpec(c.scene, plane), c.args,
+                             plane.name.c_str(), c.watch, c.err, c.exchange);
+    const ObserverField& field = *r.field;
+    requireFinite(field, "plane " + plane.name);
+    c.outputs.writePlane(p, {field, c.scene.hazard, c.info});
+    const HazardZone zone =
+        hazardZone(field, c.scene.hazard, targetCentre(r.problem.integrator.target()));
+    planes.push_back(planeJson(plane, field, zone));
+    if (field.stats().peak_w_m2 > 0.0) {
+      s.probes.emplace_back("plane " + plane.name + "'s peak", field.stats().peak_at_m);
+    }
+    s.describeTarget(c.scene, r.problem);
+    if (!c.args.quiet) printPlane(c.err, plane, field, zone);
+  }
+  s.j["planes"] = planes;
+}
+
+// The meshes' surface model against the alternatives, at the regions' peaks and the far
+// field's (rank 0).
+void checkSurfaces(const RunContext& c, const FarResult& far, RunSummary& s) {
+  if (far.far && far.far->peak().intensity_w_sr > 0.0) {
+    s.probes.emplace_back(
+        "the far field's peak",
+        far.far->ball().centre_m + far.far->mapDistance() * far.far->peak().direction);
+  }
+  const SurfaceModelCheck check = checkSurfaceModel(c.scene, c.target.integrator, s.probes);
+  s.j["surface_check"] = surfaceCheckJson(c.scene, check);
+  if (!c.args.quiet) printSurfaceCheck(c.err, c.scene, check);
+}
+
+// summary.json, and every output committed together (rank 0).
+void finishRun(const RunContext& c, const std::filesystem::path& dir,
+               const std::vector<std::string>& stale, RunSummary& s) {
+  s.j["scene_path"] = sceneIdentity(c.args.scene_path);
+  s.j["files"] = c.outputs.names();
+  if (!stale.empty()) s.j["earlier_files_kept"] = stale;
+  *c.outputs.summary() << s.j.dump(2) << "\n";
+  c.watch.check("writing the outputs");  // a file written short of memory is not committed
+  c.outputs.commit();
+  if (c.args.quiet) return;
+  std::string list;
+  for (const std::string& w : c.outputs.names()) list += (list.empty() ? "" : ", ") + w;
+  c.err << "  wrote " << dir.string() << "/{" << list << "}\n";
+}
+
+}  // namespace
+
 void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchange) {
   // Under MPI every rank computes the same field, sharing the points; rank 0 alone reports
   // and writes.
@@ -294,90 +400,28 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   const SceneTarget target = sceneTarget(scene, firstRegion(scene), target_budget);
   watch.check("building the target",
               "Raise --memory, or lower the objects' segments, or decimate the meshes");
-  std::optional<FarField> far;
-  FarHazard far_hazard;
+  const RunContext c{args, scene, info, target, watch, outputs, err, exchange};
+  FarResult far;
   if (scene.far_field.enabled) {
-    far.emplace(sceneFarField(target, scene, watch, "the far field", args.quiet ? nullptr : &err,
-                              args.terminal, exchange));
-    far_hazard = farHazard(*far, scene.hazard);
+    far.far.emplace(sceneFarField(target, scene, watch, "the far field",
+                                  args.quiet ? nullptr : &err, args.terminal, exchange));
+    far.hazard = farHazard(*far.far, scene.hazard);
   }
-  nlohmann::json j;
-  // The brightest observer of each region, where the meshes' surface model is checked.
-  std::vector<std::pair<std::string, Vec3>> probes;
-  // The target as the first lattice's problem describes it (all share the same one).
-  const bool has_meshes = scene.hasMeshes();
-  auto describeTarget = [&](const FieldProblem& problem) {
-    if (!j.contains("target")) j["target"] = targetJson(problem.integrator.cullStats());
-    if (has_meshes && !j.contains("meshes")) j["meshes"] = meshesJson(scene, problem.mesh_stats);
-  };
+  RunSummary summary;
   if (scene.observers) {
-    FieldResult box =
-        computeObserverField(target, scene, fieldSpec(scene), args, "points", watch, err, exchange);
-    ObserverField& field = *box.field;
-    requireFinite(field, "the observer box");
-    const FacetIntegrator& integrator = box.problem.integrator;
-    const HazardZone zone = hazardZone(field, scene.hazard, targetCentre(integrator.target()));
-    if (field.stats().peak_w_m2 > 0.0)
-      probes.emplace_back("the box's peak", field.stats().peak_at_m);
-    j = volumeSummaryJson(field, zone, info, integrator.cullStats());
-    describeTarget(box.problem);
-    j["hazard"] = hazardJson(scene.hazard, &zone);
-    if (!args.quiet) {
-      printVolume(err, field, scene, zone, info, args.uniform,
-                  far ? beyondTheBox(*far, far_hazard) : std::string());
-    }
-    BoxResults results{field, integrator, info};
-    outputs.writeBox(results);  // last: the VDB takes the field's grids
+    runBox(c, far, summary);
   } else {
-    j = runJson(info);
-    j["hazard"] = hazardJson(scene.hazard, nullptr);
+    summary.j = runJson(info);
+    summary.j["hazard"] = hazardJson(scene.hazard, nullptr);
   }
-
-  if (!scene.planes.empty()) {
-    nlohmann::json planes = nlohmann::json::array();
-    for (std::size_t p = 0; p < scene.planes.size(); ++p) {
-      const PlaneSpec& plane = scene.planes[p];
-      const FieldResult r = computeObserverField(target, scene, planeFieldSpec(scene, plane), args,
-                                                 plane.name.c_str(), watch, err, exchange);
-      const ObserverField& field = *r.field;
-      requireFinite(field, "plane " + plane.name);
-      outputs.writePlane(p, {field, scene.hazard, info});
-      const HazardZone zone =
-          hazardZone(field, scene.hazard, targetCentre(r.problem.integrator.target()));
-      planes.push_back(planeJson(plane, field, zone));
-      if (field.stats().peak_w_m2 > 0.0) {
-        probes.emplace_back("plane " + plane.name + "'s peak", field.stats().peak_at_m);
-      }
-      describeTarget(r.problem);
-      if (!args.quiet) printPlane(err, plane, field, zone);
-    }
-    j["planes"] = planes;
+  if (!scene.planes.empty()) runPlanes(c, summary);
+  if (far.far && writer) {
+    outputs.writeFar({*far.far, scene.hazard, info});
+    summary.j["far_field"] = farFieldJson(*far.far, far.hazard, outputs.farNames());
+    if (!args.quiet) printFarField(err, *far.far, far.hazard);
   }
-  if (far && writer) {
-    outputs.writeFar({*far, scene.hazard, info});
-    j["far_field"] = farFieldJson(*far, far_hazard, outputs.farNames());
-    if (!args.quiet) printFarField(err, *far, far_hazard);
-  }
-  if (has_meshes && writer) {
-    if (far && far->peak().intensity_w_sr > 0.0) {
-      probes.emplace_back("the far field's peak",
-                          far->ball().centre_m + far->mapDistance() * far->peak().direction);
-    }
-    const SurfaceModelCheck check = checkSurfaceModel(scene, target.integrator, probes);
-    j["surface_check"] = surfaceCheckJson(scene, check);
-    if (!args.quiet) printSurfaceCheck(err, scene, check);
-  }
-  if (!writer) return;
-  j["scene_path"] = sceneIdentity(args.scene_path);
-  j["files"] = outputs.names();
-  if (!stale.empty()) j["earlier_files_kept"] = stale;
-  *outputs.summary() << j.dump(2) << "\n";
-  watch.check("writing the outputs");  // a file written short of memory is not committed
-  outputs.commit();
-  if (args.quiet) return;
-  std::string list;
-  for (const std::string& w : outputs.names()) list += (list.empty() ? "" : ", ") + w;
-  err << "  wrote " << dir.string() << "/{" << list << "}\n";
+  if (scene.hasMeshes() && writer) checkSurfaces(c, far, summary);
+  if (writer) finishRun(c, dir, stale, summary);
 }
 
 }  // namespace glint
