@@ -27,6 +27,19 @@ std::string refusal(const std::string& body) {
   return test::refusalOf([&] { study(body); });
 }
 
+// A scene of one mesh of examples/targets (@p glb) placed by @p transform (its JSON), lit from
+// −y, with one small plane: what a study of a mesh needs.
+void writeMeshScene(const std::string& path, const std::string& glb, const std::string& transform) {
+  std::ofstream(path) << R"({
+    "laser": {"position": [0, -100, 3], "direction": [0, 1, 0], "power_w": 1, "wavelength_nm": 532,
+              "beam": {"profile": "flat_top", "radius_m": 1}},
+    "materials": {"m": {"specular_reflectance": 0.5, "sigma": 0.1}},
+    "objects": [{"shape": "mesh", "file": ")" GLINT_EXAMPLES_DIR R"(/targets/)"
+                      << glb << R"(", "transform": )" << transform << R"(, "material": "m"}],
+    "planes": [{"name": "p", "origin": [-5, -1, 0], "u_axis": [1, 0, 0], "v_axis": [0, 1, 0],
+                "size_m": [1, 1], "pixel_m": 0.5}]})";
+}
+
 void expectNear(const Vec3& a, const Vec3& b, double tol, const std::string& what) {
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(a[i], b[i], tol) << what << " component " << i;
 }
@@ -79,15 +92,8 @@ TEST(Study, TurnsAMeshAboutThePivotWithItsOwnRotation) {
   // The finned missile (axis along the model's +x, turned 90° about x to stand its fins up) in
   // a study that yaws it 90°: its nose, 1.5 m along the model's +x, must point along +y.
   const std::string dir = ::testing::TempDir();
-  std::ofstream(dir + "/mesh_scene.json") << R"({
-    "laser": {"position": [0, -100, 3], "direction": [0, 1, 0], "power_w": 1, "wavelength_nm": 532,
-              "beam": {"profile": "flat_top", "radius_m": 1}},
-    "materials": {"m": {"specular_reflectance": 0.5, "sigma": 0.1}},
-    "objects": [{"shape": "mesh", "file": ")" GLINT_EXAMPLES_DIR R"(/targets/finned_missile.glb",
-                 "transform": {"translation": [2, 0, 3], "yaw_pitch_roll_deg": [0, 0, 90]},
-                 "material": "m"}],
-    "planes": [{"name": "p", "origin": [-5, -1, 0], "u_axis": [1, 0, 0], "v_axis": [0, 1, 0],
-                "size_m": [1, 1], "pixel_m": 0.5}]})";
+  writeMeshScene(dir + "/mesh_scene.json", "finned_missile.glb",
+                 R"({"translation": [2, 0, 3], "yaw_pitch_roll_deg": [0, 0, 90]})");
   const Study s =
       parseStudy(R"({"scene": "mesh_scene.json", "pivot": [0, 0, 3], "sweep": {"yaw_deg": [90]}})",
                  "study.json", dir);
@@ -295,14 +301,7 @@ TEST(Study, ScenarioThatMovesAnObjectOutOfRangeIsRefusedAtItsKey) {
           R"("trajectory": {"poses": [{"time_s": 0}, {"time_s": 1, "offset_m": [2e7, 0, 0]}]})"),
       "study.json scenario 1: /objects/0/center: must lie within ±1e+07 m on every axis");
   const std::string dir = ::testing::TempDir();
-  std::ofstream(dir + "/far_mesh_scene.json") << R"({
-    "laser": {"position": [0, -100, 3], "direction": [0, 1, 0], "power_w": 1, "wavelength_nm": 532,
-              "beam": {"profile": "flat_top", "radius_m": 1}},
-    "materials": {"m": {"specular_reflectance": 0.5, "sigma": 0.1}},
-    "objects": [{"shape": "mesh", "file": ")" GLINT_EXAMPLES_DIR R"(/targets/capsule.glb",
-                 "transform": {"translation": [9.9e6, 0, 3]}, "material": "m"}],
-    "planes": [{"name": "p", "origin": [-5, -1, 0], "u_axis": [1, 0, 0], "v_axis": [0, 1, 0],
-                "size_m": [1, 1], "pixel_m": 0.5}]})";
+  writeMeshScene(dir + "/far_mesh_scene.json", "capsule.glb", R"({"translation": [9.9e6, 0, 3]})");
   EXPECT_EQ(test::refusalOf([&] {
               parseStudy(R"({"scene": "far_mesh_scene.json", "pivot": [0, 0, 3],
                              "trajectory": {"poses": [{"time_s": 0, "offset_m": [2e5, 0, 0]}]}})",
