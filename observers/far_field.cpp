@@ -9,6 +9,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "observers/block_check.h"
+
 namespace glint {
 namespace {
 
@@ -144,6 +146,7 @@ double farRadius(double lit_radius_m, double narrowest_sigma, double tolerance,
 }
 
 double farRadiusToward(const FarFieldSpec& spec, const Vec3& direction) {
+  if (spec.far_radius_verified) return spec.far_radius_m;
   const double psi = std::acos(std::clamp(glm::dot(direction, spec.beam_direction), -1.0, 1.0));
   const double r = farRadius(spec.lit_radius_m, spec.narrowest_sigma, spec.tolerance, psi);
   return std::isnan(r) ? std::numeric_limits<double>::infinity() : std::max(r, spec.far_radius_m);
@@ -227,7 +230,14 @@ FarField::Face::Face(const ObserverField& field, const Vec3& centre)
     }
   for (const FieldBlock& b : field.blocks()) {
     if (b.status == VoxelStatus::Unresolved) unresolved.push_back(b);
+    if (b.status == VoxelStatus::BelowFloor) continue;
+    field::forEachSample(b.size, [&](int di, int dj, int) {
+      const int i = b.origin[0] + di, j = b.origin[1] + dj;
+      if (i < n && j < n) integrated.push_back(static_cast<std::uint32_t>(j * n + i));
+    });
   }
+  std::sort(integrated.begin(), integrated.end());
+  integrated.erase(std::unique(integrated.begin(), integrated.end()), integrated.end());
 }
 
 FarField::FarField(LitBall ball, FarFieldSpec spec, double map_distance_m, std::vector<Face> faces,
@@ -426,6 +436,18 @@ double FarField::upperIntensityAt(int face, double x, double y) const {
   const double upper = std::max(bilinear(face, i, j, x, y) + cellAllowance(face, i, j),
                                 narrowGlintBoundAt(face, x, y));
   return std::min(hazardSafe(upper), peak_.intensity_w_sr);
+}
+
+Bracket FarField::bracketWithin(int face, int i, int j, int steps) const {
+  const int n = spec_.face_pixels;
+  Bracket b{std::numeric_limits<double>::infinity(), 0.0};
+  for (int y = std::max(0, j - steps); y <= std::min(n, j + steps); ++y)
+    for (int x = std::max(0, i - steps); x <= std::min(n, i + steps); ++x) {
+      const double v = hazardSafe(latticeIntensity(face, x, y));
+      b.low_w_sr = std::min(b.low_w_sr, v);
+      b.high_w_sr = std::max(b.high_w_sr, v);
+    }
+  return b;
 }
 
 double FarField::latticeUpperIntensity(int face, int i, int j) const {
@@ -709,6 +731,11 @@ FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& 
   std::vector<FarField::Peak> tops = locateLobeTops(lattice, integrator, &search_evaluations);
   FarField far(ball, spec, distance_m, std::move(lattice.faces_), std::move(tops));
   far.stats_.evaluations += search_evaluations;
+  far.radius_check_ = verifyFarRadius(far, integrator, counter, exchange);
+  if (far.radius_check_.radius_m > 0.0) {
+    far.spec_.far_radius_m = far.radius_check_.radius_m;
+    far.spec_.far_radius_verified = true;
+  }
   return far;
 }
 

@@ -67,9 +67,14 @@ struct FarFieldSpec {
   /// Lattice intervals along a cube face's edge, a power of two: directions are sampled 2/N
   /// rad apart at a face's centre (N = 1024: 0.11°), closer toward its edges.
   int face_pixels = 1024;
-  int block_pixels = 64;      ///< coarsest block edge (a power of two ≤ face_pixels)
-  double tolerance = 1e-2;    ///< of the map's interpolation, and of I/r² beyond far_radius_m
-  double floor_w_sr = 0.0;    ///< intensity below this counts as negligible
+  int block_pixels = 64;    ///< coarsest block edge (a power of two ≤ face_pixels)
+  double tolerance = 1e-2;  ///< of the map's interpolation, and of I/r² beyond far_radius_m
+  double floor_w_sr = 0.0;  ///< intensity below this counts as negligible
+  /// The lowest irradiance that is hazardous (W/m²: the MPE, or the aided MPE if lower; 0:
+  /// none given). The far radius check holds E r² to I(ω) within the tolerance × the larger of
+  /// the brightest intensity the parallax reaches and this × r²: an error in a direction too
+  /// dim to be hazardous at r that is a small share of the hazard there changes no verdict.
+  double hazard_threshold_w_m2 = 0.0;
   double far_radius_m = 0.0;  ///< farRadius() away from the forward cone: the smallest
   double lit_radius_m = 0.0;  ///< of the LitBall (for farRadiusToward())
   /// The width of the target's narrowest specular lobe (Target::narrowestLobe(),
@@ -79,10 +84,62 @@ struct FarFieldSpec {
   int bound_split_depth = 2;  ///< FieldSpec::bound_split_depth of the faces: shallow, since
   /// every block of a face sees the whole target under a tiny angle and deep pieces only
   /// multiply its candidate list (cylinder, σ = 0.003: 1.1 GB at depth 2, over 8 GB at 6)
+  /// The innermost sphere verifyFarRadius() may bring the far radius in to (m); 0: no check,
+  /// the first-order rule stands. The floor must be proven negligible there: a direction below
+  /// it has been computed by nobody, so the far field cannot speak for it any nearer.
+  double innermost_far_radius_m = 0.0;
+  /// Set by computeFarField(): far_radius_m was verified by direct integration and holds in
+  /// every direction, the forward cone included (farRadiusToward()).
+  bool far_radius_verified = false;
+  double first_order_far_radius_m = 0.0;  ///< farRadius() away from the forward cone
 };
 
-/// @brief The far radius toward unit @p direction: farRadius() at its angle from the beam.
+/// @brief The far radius toward unit @p direction: the verified radius (FarRadiusCheck) where
+/// the map has one, else farRadius() at the direction's angle from the beam.
 double farRadiusToward(const FarFieldSpec& spec, const Vec3& direction);
+
+/// @brief The far radius brought in from the first-order rule by checking it: on spheres about
+/// the lit centre, from the first-order radius inward by halves down to
+/// FarFieldSpec::innermost_far_radius_m, the near field is integrated directly toward every
+/// direction the map integrated (its blocks' samples, FarField::Face::integrated) and the
+/// lobe tops it located, and each E r² is compared with I(ω).
+///
+/// The first-order rule (farRadius()) bounds each lit point's contribution on its own; in the
+/// sum the symmetric part of the parallax cancels, and what is left falls as the light's
+/// virtual source (where the rays toward ω appear to come from) and its spread allow: a
+/// mirror sphere's virtual source lies half its radius behind the surface, a cylinder's glint
+/// line spreads only along its axis. Those are what E r² − I(ω) measures, so the check measures
+/// them rather than bounding them term by term.
+///
+/// A sphere holds where, at every direction checked, |E r² − I(ω)| ≤ tolerance × the larger of
+/// the brightest lattice intensity within the parallax angle a / (r − a) of ω (sought within
+/// 32 lattice steps, which can only tighten it) and the lowest hazardous irradiance × r², plus
+/// the floor; E r² is read at a tenth of the tolerance. The far radius is the innermost sphere
+/// of the unbroken run that holds from the first inward, settled to a factor √2 by one more
+/// sphere between the last that held and the first that failed. Between the spheres it read,
+/// the check relies on E r² − I(ω), a series in 1/r once it is this small, not rising again
+/// with r. If the first sphere fails, radius_m is 0 and the first-order rule stands. With
+/// @p exchange the directions are dealt out and every process gets the same answer.
+struct FarRadiusCheck {
+  struct Sphere {
+    double radius_m = 0.0;
+    /// The largest |E r² − I(ω)| over the allowance above: at most 1 where the sphere holds.
+    double worst_share = 0.0;
+    Vec3 worst_direction{1.0, 0.0, 0.0};
+    bool holds = false;
+  };
+  std::vector<Sphere> spheres;  ///< outside in
+  double radius_m = 0.0;
+  std::int64_t directions = 0;  ///< checked on each sphere
+  std::int64_t evaluations = 0;
+  double seconds = 0.0;
+};
+
+/// @brief The range of intensity over a set of directions (W/sr).
+struct Bracket {
+  double low_w_sr = 0.0;
+  double high_w_sr = 0.0;
+};
 
 /// @brief The computed map of radiant intensity over all directions.
 class FarField {
@@ -102,6 +159,9 @@ class FarField {
     /// The finest blocks where a glint narrower than the lattice may pass between the
     /// directions (VoxelStatus::Unresolved, with their bound).
     std::vector<FieldBlock> unresolved;
+    /// The lattice points integrated (the samples of every block not proven below the floor),
+    /// as j (face_pixels + 1) + i, ascending: where verifyFarRadius() reads the near field.
+    std::vector<std::uint32_t> integrated;
     /// @brief From the face's field, the cube's centre at @p centre.
     Face(const ObserverField& field, const Vec3& centre);
   };
@@ -162,6 +222,9 @@ class FarField {
   /// intensity toward the block's centre (basis NarrowGlintBound; +∞ where it has none).
   [[nodiscard]] const std::vector<Peak>& narrowGlints() const { return narrow_glints_; }
 
+  /// @brief How the far radius was verified (empty spheres where it was not).
+  [[nodiscard]] const FarRadiusCheck& farRadiusCheck() const { return radius_check_; }
+
   /// @brief Sums of the faces' statistics (lattice points, evaluations, time); the
   /// unconverged points' largest irradiance plus error is given as an intensity (W/sr).
   [[nodiscard]] const FieldStats& stats() const { return stats_; }
@@ -193,6 +256,9 @@ class FarField {
         faces_[static_cast<std::size_t>(face)]
             .intensity_w_sr[static_cast<std::size_t>(j) * row + static_cast<std::size_t>(i)]);
   }
+  /// @brief The least and the largest lattice intensity within @p steps lattice points of
+  /// (i, j) along either axis on face @p face (the square clipped to the face).
+  [[nodiscard]] Bracket bracketWithin(int face, int i, int j, int steps) const;
   /// @brief upperIntensity() at lattice point (i, j): its own intensity plus the largest
   /// interpolation allowance of the lattice cells around it, capped as upperIntensity() is.
   [[nodiscard]] double latticeUpperIntensity(int face, int i, int j) const;
@@ -223,6 +289,7 @@ class FarField {
 
   LitBall ball_;
   FarFieldSpec spec_;
+  FarRadiusCheck radius_check_;
   double map_distance_m_ = 0.0;
   std::vector<Face> faces_;
   FieldStats stats_;
@@ -263,9 +330,15 @@ FieldSpec cubeFaceSpec(int face, const Vec3& centre_m, double distance_m, const 
 /// at 4096, 1 174 MB (1 028 MB); the lat-long map at height 2048, 192 to 224 MB (192 MB).
 std::uint64_t farFieldMemoryFloorBytes(const FarFieldSpec& spec, int lat_long_height = 0);
 
+/// @brief Checks the far radius of @p map with @p integrator (see FarRadiusCheck).
+FarRadiusCheck verifyFarRadius(const FarField& map, const FacetIntegrator& integrator,
+                               WorkCounter* counter = nullptr, PointExchange* exchange = nullptr);
+
 /// @brief Computes the map: each cube face as an adaptive observer plane at a thousand far
 /// radii (where the map's own parallax is a thousandth of its tolerance), with @p integrator
-/// at that plane's accuracy. @p counter and @p exchange as for computeField().
+/// at that plane's accuracy; then, where the spec names an innermost radius, the far radius is
+/// verified inward (verifyFarRadius(); FarField::farRadiusCheck()). @p counter and @p exchange
+/// as for computeField().
 /// @throw std::invalid_argument when @p spec is out of range; WorkStopped as computeField().
 FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& spec,
                          WorkCounter* counter = nullptr, PointExchange* exchange = nullptr);

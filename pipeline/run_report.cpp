@@ -353,6 +353,26 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
   return j;
 }
 
+// The spheres the far radius was checked on, outside in (verifyFarRadius()).
+nlohmann::json farRadiusCheckJson(const FarRadiusCheck& check) {
+  nlohmann::json spheres = nlohmann::json::array();
+  for (const FarRadiusCheck::Sphere& s : check.spheres) {
+    const Vec3& d = s.worst_direction;
+    spheres.push_back({{"radius_m", s.radius_m},
+                       {"holds", s.holds},
+                       {"worst_share_of_allowance", s.worst_share},
+                       {"worst_direction", {d.x, d.y, d.z}}});
+  }
+  return {{"directions", check.directions},
+          {"spheres", spheres},
+          {"evaluations", check.evaluations},
+          {"seconds", check.seconds},
+          {"allowance",
+           "|E r^2 - I| <= tolerance x max(the brightest lattice intensity within the parallax "
+           "angle lit_radius_m / (r - lit_radius_m), the lowest hazardous irradiance x r^2) + "
+           "floor_w_sr"}};
+}
+
 nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard,
                             const std::vector<std::string>& files) {
   const FarFieldSpec& spec = field.spec();
@@ -388,10 +408,16 @@ nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard,
       {"peak_azimuth_deg", azimuth_deg},
       {"peak_elevation_deg", elevation_deg},
       {"beam_direction", {spec.beam_direction.x, spec.beam_direction.y, spec.beam_direction.z}},
-      {"far_radius_rule",
-       "lit_radius_m (1 + (3 + g / sigma) / tolerance), g = max(1, 0.43 / sin(psi / 2)), psi "
-       "the angle from beam_direction: far_radius_m beyond 51 degrees, growing into the "
-       "forward cone"}};
+      {"far_radius_rule", spec.far_radius_verified
+                              ? "verified: the innermost of the spheres checked by direct "
+                                "integration, outside in by halves from the first-order radius, "
+                                "on which every direction held (far_radius_check)"
+                              : "first order: lit_radius_m (1 + (3 + g / sigma) / tolerance), "
+                                "g = max(1, 0.43 / sin(psi / 2)), psi the angle from "
+                                "beam_direction: far_radius_m beyond 51 degrees, growing into "
+                                "the forward cone"},
+      {"first_order_far_radius_m", spec.first_order_far_radius_m},
+      {"far_radius_check", farRadiusCheckJson(field.farRadiusCheck())}};
   j.update(farHazardJson(hazard));
   if (s.unconverged_points > 0) {
     j["unconverged_max_intensity_plus_error_w_sr"] = s.unconverged_max_upper_w_m2;
@@ -405,10 +431,21 @@ void printFarField(std::ostream& err, const FarField& field, const FarHazard& fa
   const FieldStats& s = field.stats();
   err << "far field: 6 × " << spec.face_pixels + 1 << "² directions, " << s.evaluated_points
       << " evaluated, " << formatNumber("%.4g", static_cast<double>(s.evaluations))
-      << " evaluations in " << formatDuration(s.seconds) << "; E = I/r² within "
-      << formatNumber("%g", spec.tolerance) << " of the peak beyond "
-      << formatNumber("%.4g", spec.far_radius_m)
-      << " m (farther within 51° of the beam's direction)\n";
+      << " evaluations in " << formatDuration(s.seconds);
+  const FarRadiusCheck& check = field.farRadiusCheck();
+  if (spec.far_radius_verified) {
+    err << "; E = I/r² within " << formatNumber("%g", spec.tolerance)
+        << " of the brightest direction in reach (or of the MPE there) beyond "
+        << formatNumber("%.4g", spec.far_radius_m) << " m, checked at " << check.directions
+        << " directions on " << check.spheres.size() << " spheres in "
+        << formatDuration(check.seconds)
+        << " (first-order rule: " << formatNumber("%.4g", spec.first_order_far_radius_m) << " m)\n";
+  } else {
+    err << "; E = I/r² within " << formatNumber("%g", spec.tolerance) << " of the peak beyond "
+        << formatNumber("%.4g", spec.far_radius_m)
+        << " m (farther within 51° of the beam's direction"
+        << (check.spheres.empty() ? "" : "; the check found the first sphere short of it") << ")\n";
+  }
   const FarField::Peak& peak = field.peak();
   const Vec3& toward = peak.direction;
   switch (peak.basis) {

@@ -240,6 +240,10 @@ FarFieldSpec farFieldLattice(const Scene& scene) {
   return farFieldLattice(scene.far_field, narrowestLobe(scene.materials));
 }
 
+// The innermost sphere the far radius check may reach (FarFieldSpec::innermost_far_radius_m),
+// in lit radii: nearer, the parallax is a sizeable share of the lobe everywhere.
+constexpr double kInnermostFarRadiusInLitRadii = 16.0;
+
 FarFieldSpec farFieldSpec(const Scene& scene, const FacetIntegrator& integrator) {
   const FarFieldSettings& settings = scene.far_field;
   const std::optional<Beckmann> narrowest = integrator.target().narrowestLobe();
@@ -248,11 +252,19 @@ FarFieldSpec farFieldSpec(const Scene& scene, const FacetIntegrator& integrator)
   // Nothing lit: any radius will do, the map is dark.
   const double lit_radius_m = std::max(litBall(integrator).radius_m, limits::kMinLengthM);
   f.far_radius_m = farRadius(lit_radius_m, sigma, f.tolerance);
+  f.first_order_far_radius_m = f.far_radius_m;
   f.lit_radius_m = lit_radius_m;
   f.narrowest_sigma = sigma;
   f.beam_direction = scene.laser.direction;
-  f.floor_w_sr =
-      settings.floor_w_sr.value_or(scene.hazard.negligibleW_m2() * f.far_radius_m * f.far_radius_m);
+  f.hazard_threshold_w_m2 = scene.hazard.lowestHazardousW_m2();
+  // The floor says how near the far field can speak: a direction below it is hazardous no
+  // farther than a thirtieth of √(floor / negligible). By default that is the first-order
+  // radius, and nothing is checked; a lower floor lets verifyFarRadius() bring the radius in
+  // as far as it allows, but never nearer than a few lit radii.
+  const double negligible_w_m2 = scene.hazard.negligibleW_m2();
+  f.floor_w_sr = settings.floor_w_sr.value_or(negligible_w_m2 * f.far_radius_m * f.far_radius_m);
+  f.innermost_far_radius_m = std::max(kInnermostFarRadiusInLitRadii * lit_radius_m,
+                                      std::sqrt(f.floor_w_sr / negligible_w_m2));
   return f;
 }
 

@@ -46,6 +46,9 @@ Computed compute(const Scene& s, double floor_w_sr) {
   FarFieldSpec spec = farFieldSpec(s, target.integrator);
   spec.floor_w_sr = floor_w_sr;
   spec.block_pixels = 4;
+  // The far radius checked against the intensity alone: no hazard level relaxes it.
+  spec.hazard_threshold_w_m2 = 0.0;
+  spec.innermost_far_radius_m = 4.0 * spec.lit_radius_m;
   FarField field = computeFarField(target.integrator, spec);
   return {std::move(target), std::move(field)};
 }
@@ -93,40 +96,68 @@ struct NearFarCase {
 
 class NearAndFar : public testing::TestWithParam<NearFarCase> {};
 
-// Observers at the far radius toward them and beyond receive I(ω)/r² within the promise:
-// tolerance × the map's peak (farRadius()), the floor aside. Directions into the forward cone,
-// where the far radius grows, are included. The cylinder is lit off its centre by a beam
-// smaller than it, so no symmetry cancels the first-order parallax.
-TEST_P(NearAndFar, DirectIntegrationAgreesWithTheMapFromTheFarRadiusOut) {
+// Observers at the far radius and beyond receive I(ω)/r² within the promise the far radius
+// was checked to (verifyFarRadius()): tolerance × the brightest direction the parallax
+// reaches, here at most the peak, the floor aside. I(ω) is read directly too, ten thousand
+// far radii out, so what is measured is the near field's departure alone (the map's own
+// interpolation has its tests below). The directions are random, so most fall between those
+// the check read; directions into the forward cone are included. The cylinder is lit off its
+// centre by a beam smaller than it, so no symmetry cancels the first-order parallax. The
+// check must hold from the first-order radius inward, and the sphere inside the far radius
+// where it failed must show a departure beyond the tolerance when read again more accurately:
+// the radius is not farther than it need be by more than the factor between spheres.
+TEST_P(NearAndFar, NearFieldAgreesWithTheIntensityFromTheFarRadiusOut) {
   const NearFarCase& p = GetParam();
   const Scene s = scene(p.beam_radius, p.sigma, p.objects);
   const Computed c = compute(s, 1e-6);
   const FarField& f = c.field;
   const double peak = f.peak().intensity_w_sr;
   ASSERT_GT(peak, 0.0);
-  const FacetIntegrator direct = c.target.integrator.withAccuracy(1e-4, 1e-15);
+  const FarRadiusCheck& check = f.farRadiusCheck();
+  ASSERT_TRUE(f.spec().far_radius_verified) << "the check did not hold on its first sphere";
+  EXPECT_LE(f.spec().far_radius_m, f.spec().first_order_far_radius_m)
+      << "checked " << check.spheres.size() << " spheres";
+  const FacetIntegrator direct =
+      c.target.integrator.withAccuracy(1e-4, 1e-15).withReturnExtinction(0.0);
   IntegratorWorkspace ws;
+  const auto intensityAt = [&](const Vec3& d, double r) {
+    return direct.adaptive(f.ball().centre_m + r * d, ws).irradiance_w_m2 * r * r;
+  };
   std::mt19937_64 rng(5);
   double worst = 0.0;
   int lit = 0;
   for (int n = 0; n < 300; ++n) {
     const Vec3 d = randomDirection(rng);
+    const double far_w_sr = intensityAt(d, 1e4 * f.spec().far_radius_m);
     for (const double factor : {1.0, 3.0}) {
       const double r = factor * farRadiusToward(f.spec(), d);
-      const ObserverResult o = direct.adaptive(f.ball().centre_m + r * d, ws);
-      const double near_w_sr = o.irradiance_w_m2 * r * r;
-      const double far_w_sr = f.intensity(d);
+      const double near_w_sr = intensityAt(d, r);
       if (near_w_sr > 1e-3 * peak) ++lit;
       const double error = std::abs(near_w_sr - far_w_sr) / peak;
       worst = std::max(worst, error);
       EXPECT_LE(error, f.spec().tolerance)
-          << "r = " << r << " m toward (" << d.x << ", " << d.y << ", " << d.z << "): direct "
-          << near_w_sr << " W/sr, map " << far_w_sr << " W/sr, peak " << peak;
+          << "r = " << r << " m toward (" << d.x << ", " << d.y << ", " << d.z << "): near "
+          << near_w_sr << " W/sr, I " << far_w_sr << " W/sr, peak " << peak;
     }
   }
   EXPECT_GT(lit, 20) << "too few lit directions to test";
-  std::printf("[ far field ] %s: far radius %.4g m, worst |E r² - I| / peak %.3g (allowed %g)\n",
-              p.name.c_str(), f.spec().far_radius_m, worst, f.spec().tolerance);
+  // The innermost sphere that failed, read again at its worst direction.
+  const auto failing = std::find_if(check.spheres.rbegin(), check.spheres.rend(),
+                                    [](const FarRadiusCheck::Sphere& x) { return !x.holds; });
+  ASSERT_NE(failing, check.spheres.rend()) << "the check ran out of spheres before one failed";
+  const FarRadiusCheck::Sphere& failed = *failing;
+  const Vec3 w = failed.worst_direction;
+  const double intensity_w_sr = intensityAt(w, 1e4 * f.spec().far_radius_m);
+  const double departure = std::abs(intensityAt(w, failed.radius_m) - intensity_w_sr);
+  // The check's allowance there was at least the tolerance × I(ω) itself + the floor.
+  EXPECT_GT(departure, f.spec().tolerance * intensity_w_sr + f.spec().floor_w_sr)
+      << "at " << failed.radius_m << " m toward (" << w.x << ", " << w.y << ", " << w.z << "): I "
+      << intensity_w_sr << " W/sr";
+  std::printf(
+      "[ far field ] %s: far radius %.4g m (first order %.4g m), worst |E r² - I| / peak "
+      "%.3g (allowed %g); at %.4g m, where the check failed, %.3g of the peak\n",
+      p.name.c_str(), f.spec().far_radius_m, f.spec().first_order_far_radius_m, worst,
+      f.spec().tolerance, failed.radius_m, departure / peak);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -453,6 +484,44 @@ TEST(FarField, FarRadiusGrowsAsTheLobeNarrowsAndTheToleranceTightens) {
   EXPECT_NEAR(farRadius(1.0, 0.01, 0.01, 0.1), 1.0 + (3.0 + 0.43 / std::sin(0.05) / 0.01) / 0.01,
               1e-6)
       << "into the forward cone it grows as 1/sin(ψ/2)";
+}
+
+// The default floor is set for the first-order radius: the far field then claims nothing
+// nearer, so there is nothing to check, and the rule (with its growth into the forward cone)
+// stands. A floor four times lower lets the check go exactly one sphere, half as far, in.
+TEST(FarField, TheFloorSaysHowFarInTheFarRadiusIsChecked) {
+  const Scene s = scene("0.3", 0.05, R"({"shape": "sphere", "center": [0, 0, 0], "radius": 1.0,
+                                          "material": "m"})");
+  FieldSpec any;
+  any.tolerance = 1e-2;
+  const SceneTarget target = sceneTarget(s, any);
+  const FarFieldSpec spec = farFieldSpec(s, target.integrator);
+  EXPECT_DOUBLE_EQ(spec.first_order_far_radius_m, spec.far_radius_m);
+  const FarField kept = computeFarField(target.integrator, spec);
+  EXPECT_TRUE(kept.farRadiusCheck().spheres.empty()) << "the default floor checks nothing";
+  EXPECT_FALSE(kept.spec().far_radius_verified);
+  EXPECT_DOUBLE_EQ(kept.spec().far_radius_m, spec.first_order_far_radius_m);
+  const Vec3 forward = s.laser.direction;
+  EXPECT_GT(farRadiusToward(kept.spec(), forward), 10.0 * kept.spec().far_radius_m)
+      << "the first-order rule grows into the forward cone";
+
+  FarFieldSpec lower = spec;
+  lower.floor_w_sr = 0.25 * spec.floor_w_sr;
+  lower.innermost_far_radius_m = 0.5 * spec.far_radius_m;
+  const FarField checked = computeFarField(target.integrator, lower);
+  const FarRadiusCheck& check = checked.farRadiusCheck();
+  ASSERT_FALSE(check.spheres.empty());
+  EXPECT_DOUBLE_EQ(check.spheres.front().radius_m, spec.far_radius_m);
+  for (const FarRadiusCheck::Sphere& sphere : check.spheres) {
+    EXPECT_GE(sphere.radius_m, lower.innermost_far_radius_m) << "no sphere inside the innermost";
+  }
+  // A spot on a sphere: its light comes from one small region, and both spheres hold.
+  ASSERT_TRUE(checked.spec().far_radius_verified)
+      << check.spheres.size() << " spheres, the first at " << check.spheres.front().radius_m
+      << " m with " << check.spheres.front().worst_share << " of its allowance";
+  EXPECT_EQ(checked.spec().far_radius_m, check.radius_m);
+  EXPECT_DOUBLE_EQ(farRadiusToward(checked.spec(), forward), check.radius_m)
+      << "a verified radius holds in every direction";
 }
 
 }  // namespace
