@@ -50,6 +50,7 @@ std::vector<float> activeOnLattice(const openvdb::FloatGrid& grid, const std::ar
 }
 
 std::array<int, 3> FieldSpec::nodes() const {
+  if (radial) return {radial->face_cells + 1, radial->face_cells + 1, radial->layers + 1};
   std::array<int, 3> n{};
   for (int a = 0; a < 3; ++a) {
     if (plane && a == 2) {

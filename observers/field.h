@@ -11,12 +11,32 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "facets/integrator.h"
 #include "observers/point_set.h"
 
 namespace glint {
+
+/// @brief A lattice of directions × distances about a centre, one cube face of it: lattice
+/// point (i, j, k) lies at centre_m + ρ_k (n + u_i a + v_j b), where a, b, n are the field's
+/// axes, u_i = −1 + 2i / face_cells and v_j likewise, and ρ_k = near_m × ratio^k. Lines of
+/// constant (i, j) are rays from the centre; each layer is a square on a plane ρ_k from it.
+/// Its cells grow with the distance, so one lattice spans a target's surroundings and
+/// kilometres beyond with the same relative resolution (the hazard reach's lattice).
+struct RadialLattice {
+  Vec3 centre_m{0.0};
+  int face_cells = 64;  ///< lattice intervals along a face edge (a multiple of block_voxels)
+  double near_m = 1.0;  ///< ρ of layer 0 (m)
+  double ratio = 1.01;  ///< ρ_{k+1} / ρ_k, above 1
+  int layers = 64;      ///< lattice intervals along k (a multiple of block_voxels)
+
+  /// @brief ρ_k: the distance of layer @p k's plane from the centre (m).
+  [[nodiscard]] double layerDistance(int k) const {
+    return near_m * std::pow(ratio, static_cast<double>(k));
+  }
+};
 
 /// @brief The observer box or plane and its accuracy (scene keys `observers`, `planes`).
 ///
@@ -48,13 +68,25 @@ struct FieldSpec {
   /// whose bound reaches it while a glint narrower than its lattice may pass unseen marks its
   /// points below it VoxelStatus::Unresolved. 0: every such block marks all its points.
   double hazard_threshold_w_m2 = 0.0;
+  /// A lattice of directions × distances instead of the box (min_m, max_m and voxel_m are then
+  /// unused): see RadialLattice.
+  std::optional<RadialLattice> radial;
 
   /// @brief Lattice points per axis (voxels + 1), after extending to whole blocks.
   [[nodiscard]] std::array<int, 3> nodes() const;
   /// @brief World position of lattice point (i, j, k).
   [[nodiscard]] Vec3 position(int i, int j, int k) const {
+    if (radial) return radialPosition(i, j, k);
     return min_m + voxel_m * (static_cast<double>(i) * axes[0] + static_cast<double>(j) * axes[1] +
                               static_cast<double>(k) * axes[2]);
+  }
+
+ private:
+  [[nodiscard]] Vec3 radialPosition(int i, int j, int k) const {
+    const RadialLattice& r = *radial;
+    const double step = 2.0 / r.face_cells;
+    return r.centre_m + r.layerDistance(k) *
+                            (axes[2] + (-1.0 + step * i) * axes[0] + (-1.0 + step * j) * axes[1]);
   }
 };
 

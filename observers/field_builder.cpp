@@ -270,6 +270,12 @@ class FieldBuilder {
   // Whether E·r^p may be interpolated over block b for p > 0: only where the block keeps clear
   // of the centre by its own diagonal, so that no weight is near 0 and r varies smoothly.
   [[nodiscard]] bool farFromTarget(const Block& b) const {
+    // A radial lattice about the lit centre: r is the layer's distance times a smooth factor of
+    // the direction, never near 0, wherever the block lies.
+    if (spec_.radial &&
+        glm::length(spec_.radial->centre_m - lit_centre_m_) <= 1e-9 * spec_.radial->near_m) {
+      return true;
+    }
     const double diagonal_m = 2.0 * radius(b);
     return glm::length(centre(b) - lit_centre_m_) > 1.5 * diagonal_m;
   }
@@ -287,7 +293,44 @@ class FieldBuilder {
     return lattice_.key(p[0], p[1], p[2]);
   }
 
+  // The widest gap between samples (m): a glint narrower than that may pass between them.
+  // Three samples span each edge (the octant centres lie between them).
+  [[nodiscard]] double sampleSpacing(const Block& b) const {
+    const int widest = std::max({b.size[0], b.size[1], flat() ? 0 : b.size[2]});
+    if (!spec_.radial) return spec_.voxel_m * std::max(1, widest / 2);
+    // A radial block's edges are straight (rays and lines on a layer's plane): the longest.
+    const std::array<Vec3, 8> c = corners(b);
+    double longest_m = 0.0;
+    for (int q = 0; q < 8; ++q)
+      for (const int axis : {4, 2, 1}) {
+        if ((q & axis) == 0) {
+          longest_m = std::max(longest_m, glm::length(c[static_cast<std::size_t>(q | axis)] -
+                                                      c[static_cast<std::size_t>(q)]));
+        }
+      }
+    return 0.5 * longest_m;
+  }
+
+  // The block's corners: the convex hull of a radial lattice's block (a frustum of a pyramid
+  // with its apex at the centre) and so every point of it lies in a ball about them.
+  [[nodiscard]] std::array<Vec3, 8> corners(const Block& b) const {
+    std::array<Vec3, 8> c{};
+    for (int q = 0; q < 8; ++q) {
+      c[static_cast<std::size_t>(q)] =
+          spec_.position(b.o[0] + ((q >> 2) & 1) * b.size[0], b.o[1] + ((q >> 1) & 1) * b.size[1],
+                         b.o[2] + (q & 1) * b.size[2]);
+    }
+    return c;
+  }
+
   [[nodiscard]] Vec3 centre(const Block& b) const {
+    if (spec_.radial) {
+      // The middle of the corners' bounding box.
+      const std::array<Vec3, 8> c = corners(b);
+      Vec3 lo = c[0], hi = c[0];
+      for (const Vec3& p : c) lo = glm::min(lo, p), hi = glm::max(hi, p);
+      return 0.5 * (lo + hi);
+    }
     const std::array<Vec3, 3>& e = spec_.axes;
     return spec_.position(b.o[0], b.o[1], b.o[2]) +
            spec_.voxel_m * (0.5 * b.size[0] * e[0] + 0.5 * b.size[1] * e[1] +
@@ -296,6 +339,12 @@ class FieldBuilder {
   // Half the block's diagonal (a plane's block has no depth). The edges are powers of two, so
   // their ratios to the longest are exact.
   [[nodiscard]] double radius(const Block& b) const {
+    if (spec_.radial) {
+      const Vec3 m = centre(b);
+      double r = 0.0;
+      for (const Vec3& p : corners(b)) r = std::max(r, glm::length(p - m));
+      return r * (1.0 + 1e-12);
+    }
     const int longest = std::max({b.size[0], b.size[1], flat() ? 0 : b.size[2]});
     double squares = 0.0;
     for (std::size_t a = 0; a < (flat() ? 2u : 3u); ++a) {
@@ -329,9 +378,7 @@ class FieldBuilder {
           root ? integrator_.candidates() : std::span<const Candidate>(s.inherited);
       BallBoundOptions options;
       options.drop_allowance_w_m2 = kDropShareOfFloor * spec_.floor_w_m2;
-      // The widest gap between samples: a glint narrower than that may pass between them.
-      const int widest = std::max({b.size[0], b.size[1], flat() ? 0 : b.size[2]});
-      options.sample_spacing_m = spec_.voxel_m * std::max(1, widest / 2);
+      options.sample_spacing_m = sampleSpacing(b);
       options.max_split_depth = spec_.bound_split_depth;
       bounds[i] = integrator_.boundBall(centre(b), radius(b), inherited,
                                         root ? 0.0 : parent_dropped[b.parent], options, s.kept);

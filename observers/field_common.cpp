@@ -66,8 +66,15 @@ void validateFieldSpec(const FieldSpec& spec) {
       throw std::invalid_argument("FieldSpec: axes must be unit and orthogonal");
     }
     if (spec.plane && a == 2) continue;
-    if (!(glm::dot(spec.max_m - spec.min_m, spec.axes[a]) > 0.0))
+    if (!spec.radial && !(glm::dot(spec.max_m - spec.min_m, spec.axes[a]) > 0.0))
       throw std::invalid_argument("FieldSpec: empty box");
+  }
+  if (const std::optional<RadialLattice>& r = spec.radial) {
+    if (spec.plane || r->face_cells < b || r->face_cells % b != 0 || r->layers < b ||
+        r->layers % b != 0 || !(r->near_m > 0.0) || !std::isfinite(r->near_m) ||
+        !(r->ratio > 1.0) || !std::isfinite(r->layerDistance(r->layers))) {
+      throw std::invalid_argument("FieldSpec: radial lattice out of range");
+    }
   }
 }
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "hazard/hazard.h"
+#include "observers/far_field.h"
 #include "observers/field_compare.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
@@ -485,6 +486,50 @@ TEST(ObserverField, AGlintBetweenTheLatticePointsIsMarkedWithItsBoundAtEveryVoxe
   const ObserverField resolved = fieldAt(resolving_m);
   EXPECT_EQ(resolved.stats().unresolved_points, 0) << "at " << resolving_m << " m";
   EXPECT_GE(resolved.stats().peak_w_m2, mpe) << "at " << resolving_m << " m";
+}
+
+}  // namespace
+}  // namespace glint
+
+namespace glint {
+namespace {
+
+// The lattice of directions × distances (RadialLattice) is computed by the same block check:
+// toward a mirror ball's lit side, from twice its radius out to 40 radii, rays from its centre
+// every 1/8 of a face's half-width and layers 10 % apart. Its blocks grow with the distance,
+// their balls hold their frusta, and the field must match its dense twin to the same accuracy
+// as the box does, following the 1/r² fall-off along the rays.
+TEST(ObserverField, ARadialLatticeMatchesDenseFromNearTheTargetOut) {
+  const std::string json = sceneJson(
+      R"({"profile": "flat_top", "radius_m": 1.0})",
+      R"({"specular_reflectance": 0.6, "sigma": 0.01})",
+      R"({"shape": "sphere", "center": [0, 0, 0], "radius": 0.5, "material": "m"})",
+      R"({"min": [-4.4, -1.6, -1.6], "max": [-1.2, 1.6, 1.6], "voxel_m": 0.2, "block_m": 1.6,
+          "tolerance": 0.01, "floor_w_m2": 1e-2})");
+  const Scene scene = parseScene(json, "test.json");
+  FieldSpec spec = fieldSpec(scene);
+  spec.block_voxels = 8;
+  spec.axes = {Vec3(0.0, -1.0, 0.0), Vec3(0.0, 0.0, 1.0), Vec3(-1.0, 0.0, 0.0)};
+  // About the lit facets' centre, where the field weighs E by r^p.
+  const FieldProblem problem = fieldProblem(scene, spec);
+  spec.radial = RadialLattice{litBall(problem.integrator).centre_m, 16, 1.0, 1.1, 32};
+  const std::array<int, 3> n = spec.nodes();
+  ASSERT_EQ(n[0], 17);
+  ASSERT_EQ(n[2], 33);
+  const Vec3 c = spec.radial->centre_m;
+  EXPECT_NEAR(glm::length(spec.position(8, 8, 32) - c), std::pow(1.1, 32), 1e-9)
+      << "the face's centre ray";
+  EXPECT_NEAR(glm::length(spec.position(0, 0, 0) - c), std::sqrt(3.0), 1e-12) << "a corner ray";
+  const Comparison r = compare(scene, spec);
+  expectMatchesDense(r, spec, "mirror sphere, radial lattice");
+  EXPECT_GT(r.adaptive.blocks_accepted_spread, 0) << "the 1/r² fall-off along the rays";
+  EXPECT_LT(r.adaptive.evaluated_points, r.dense.evaluated_points / 2)
+      << "a smooth field in front of the ball needs few integrated points";
+  std::printf("[ radial ] %lld of %lld points evaluated, %lld blocks accepted (%lld as E r^p)\n",
+              static_cast<long long>(r.adaptive.evaluated_points),
+              static_cast<long long>(r.dense.evaluated_points),
+              static_cast<long long>(r.adaptive.blocks_accepted),
+              static_cast<long long>(r.adaptive.blocks_accepted_spread));
 }
 
 }  // namespace
