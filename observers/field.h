@@ -25,6 +25,8 @@ namespace glint {
 /// constant (i, j) are rays from the centre; each layer is a square on a plane ρ_k from it.
 /// Its cells grow with the distance, so one lattice spans a target's surroundings and
 /// kilometres beyond with the same relative resolution (the hazard reach's lattice).
+/// The field's grids are then indexed by (i, j, k) alone: their transform, volumeAbove() and
+/// exceedance() assume the box's equal cells and do not apply.
 struct RadialLattice {
   Vec3 centre_m{0.0};
   int face_cells = 64;  ///< lattice intervals along a face edge (a multiple of block_voxels)
