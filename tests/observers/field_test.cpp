@@ -394,17 +394,21 @@ TEST(ObserverPlane, HorizontalSliceAgreesWithTheBoxAtTheSameHeight) {
   EXPECT_LE(worst, allowed) << compared << " points compared";
 }
 
+// A mirror ball half a metre across, lit whole, and a box of observers in front of it.
+std::string mirrorBallScene() {
+  return sceneJson(R"({"profile": "flat_top", "radius_m": 1.0})",
+                   R"({"specular_reflectance": 0.6, "sigma": 0.01})",
+                   R"({"shape": "sphere", "center": [0, 0, 0], "radius": 0.5, "material": "m"})",
+                   R"({"min": [-4.4, -1.6, -1.6], "max": [-1.2, 1.6, 1.6], "voxel_m": 0.2,
+                       "block_m": 1.6, "tolerance": 0.01, "floor_w_m2": 1e-2})");
+}
+
 TEST(ObserverField, SphereFarFieldIsInterpolatedAlongItsFallOff) {
   // A mirror ball's glint fills the half-space in front of it and falls off as about 1/r².
   // Trilinear interpolation of 1/r² errs by about 0.75 (h/r)², more than 1 % for blocks
   // wider than a tenth of their distance; interpolating E·r², which is nearly constant, lets
   // large blocks through. They must still match dense to the same accuracy.
-  const std::string json = sceneJson(
-      R"({"profile": "flat_top", "radius_m": 1.0})",
-      R"({"specular_reflectance": 0.6, "sigma": 0.01})",
-      R"({"shape": "sphere", "center": [0, 0, 0], "radius": 0.5, "material": "m"})",
-      R"({"min": [-4.4, -1.6, -1.6], "max": [-1.2, 1.6, 1.6], "voxel_m": 0.2, "block_m": 1.6,
-          "tolerance": 0.01, "floor_w_m2": 1e-2})");
+  const std::string json = mirrorBallScene();
   const FieldSpec spec = specOf(json);
   const Comparison c = compare(json);
   expectMatchesDense(c, spec, "mirror sphere, far field");
@@ -500,12 +504,7 @@ namespace {
 // their balls hold their frusta, and the field must match its dense twin to the same accuracy
 // as the box does, following the 1/r² fall-off along the rays.
 TEST(ObserverField, ARadialLatticeMatchesDenseFromNearTheTargetOut) {
-  const std::string json = sceneJson(
-      R"({"profile": "flat_top", "radius_m": 1.0})",
-      R"({"specular_reflectance": 0.6, "sigma": 0.01})",
-      R"({"shape": "sphere", "center": [0, 0, 0], "radius": 0.5, "material": "m"})",
-      R"({"min": [-4.4, -1.6, -1.6], "max": [-1.2, 1.6, 1.6], "voxel_m": 0.2, "block_m": 1.6,
-          "tolerance": 0.01, "floor_w_m2": 1e-2})");
+  const std::string json = mirrorBallScene();
   const Scene scene = parseScene(json, "test.json");
   FieldSpec spec = fieldSpec(scene);
   spec.block_voxels = 8;
