@@ -81,11 +81,7 @@ int main(int argc, char** argv) {
     // Intensity, as the far field reads it: no attenuation on the way out.
     const FacetIntegrator direct =
         target.integrator.withAccuracy(1e-5, 1e-30).withReturnExtinction(0.0);
-    FarFieldSpec spec = farFieldSpec(scene, target.integrator);
-    // The floor set so that the check may come in to 16 lit radii (far_field.floor_w_sr).
-    const double innermost_m = spec.innermost_far_radius_m =
-        16.0 * std::max(spec.lit_radius_m, 1e-9);
-    spec.floor_w_sr = scene.hazard.negligibleW_m2() * innermost_m * innermost_m;
+    const FarFieldSpec spec = checkedFarFieldSpec(scene, target.integrator);
     const LitBall ball = litBall(direct);
     IntegratorWorkspace ws;
     const double width = std::isfinite(spec.narrowest_sigma) ? spec.narrowest_sigma : 0.1;

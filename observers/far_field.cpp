@@ -438,16 +438,13 @@ double FarField::upperIntensityAt(int face, double x, double y) const {
   return std::min(hazardSafe(upper), peak_.intensity_w_sr);
 }
 
-Bracket FarField::bracketWithin(int face, int i, int j, int steps) const {
+double FarField::brightestWithin(int face, int i, int j, int steps) const {
   const int n = spec_.face_pixels;
-  Bracket b{std::numeric_limits<double>::infinity(), 0.0};
+  double brightest = 0.0;
   for (int y = std::max(0, j - steps); y <= std::min(n, j + steps); ++y)
-    for (int x = std::max(0, i - steps); x <= std::min(n, i + steps); ++x) {
-      const double v = hazardSafe(latticeIntensity(face, x, y));
-      b.low_w_sr = std::min(b.low_w_sr, v);
-      b.high_w_sr = std::max(b.high_w_sr, v);
-    }
-  return b;
+    for (int x = std::max(0, i - steps); x <= std::min(n, i + steps); ++x)
+      brightest = std::max(brightest, hazardSafe(latticeIntensity(face, x, y)));
+  return brightest;
 }
 
 double FarField::latticeUpperIntensity(int face, int i, int j) const {

@@ -135,12 +135,6 @@ struct FarRadiusCheck {
   double seconds = 0.0;
 };
 
-/// @brief The range of intensity over a set of directions (W/sr).
-struct Bracket {
-  double low_w_sr = 0.0;
-  double high_w_sr = 0.0;
-};
-
 /// @brief The computed map of radiant intensity over all directions.
 class FarField {
  public:
@@ -256,9 +250,9 @@ class FarField {
         faces_[static_cast<std::size_t>(face)]
             .intensity_w_sr[static_cast<std::size_t>(j) * row + static_cast<std::size_t>(i)]);
   }
-  /// @brief The least and the largest lattice intensity within @p steps lattice points of
-  /// (i, j) along either axis on face @p face (the square clipped to the face).
-  [[nodiscard]] Bracket bracketWithin(int face, int i, int j, int steps) const;
+  /// @brief The largest lattice intensity within @p steps lattice points of (i, j) along
+  /// either axis on face @p face (the square clipped to the face), W/sr.
+  [[nodiscard]] double brightestWithin(int face, int i, int j, int steps) const;
   /// @brief upperIntensity() at lattice point (i, j): its own intensity plus the largest
   /// interpolation allowance of the lattice cells around it, capped as upperIntensity() is.
   [[nodiscard]] double latticeUpperIntensity(int face, int i, int j) const;

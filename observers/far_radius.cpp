@@ -95,8 +95,8 @@ Worst checkSphere(const FarField& map, const FacetIntegrator& at,
     if (stoppable && counter->stopRequested()) return;
     if (counter != nullptr) counter->items_done.fetch_add(1, std::memory_order_relaxed);
     const Direction& d = dirs[first + k * stride];
-    const Bracket cone = d.i < 0 ? Bracket{d.intensity_w_sr, d.intensity_w_sr}
-                                 : map.bracketWithin(d.face, d.i, d.j, steps);
+    const double brightest_w_sr =
+        d.i < 0 ? d.intensity_w_sr : map.brightestWithin(d.face, d.i, d.j, steps);
     // Dark within its whole parallax cone: every ray that reaches this observer leaves the
     // target in a direction where the intensity is at most the floor. Each lit point's own
     // light is part of the intensity in its direction, so only a focusing target gathers more,
@@ -104,14 +104,14 @@ Worst checkSphere(const FarField& map, const FacetIntegrator& at,
     // The floor is a thousandth of the hazard's intensity at the innermost sphere
     // (farFieldSpec()), so such a direction is not hazardous unless the target focuses more
     // than a thousandfold, and is not read.
-    if (!capped && cone.high_w_sr <= spec.floor_w_sr) return;
+    if (!capped && brightest_w_sr <= spec.floor_w_sr) return;
     const ObserverResult o =
         at.adaptive(map.ball().centre_m + radius_m * d.unit, workspaces.local());
     const double near_w_sr = o.irradiance_w_m2 * r2;
     // The allowance: the tolerance × the brightest direction the parallax reaches or the
     // hazard's intensity at this distance, whichever is more, and the floor.
     const double allowance =
-        spec.tolerance * std::max(cone.high_w_sr, hazard_w_sr) + spec.floor_w_sr;
+        spec.tolerance * std::max(brightest_w_sr, hazard_w_sr) + spec.floor_w_sr;
     double share = std::abs(near_w_sr - d.intensity_w_sr) / allowance;
     if (!std::isfinite(share)) share = std::numeric_limits<double>::infinity();
     Worst& w = worst.local();

@@ -323,14 +323,15 @@ class FieldBuilder {
     return c;
   }
 
+  // The middle of the bounding box of @p corners: a radial block's centre.
+  [[nodiscard]] static Vec3 middle(const std::array<Vec3, 8>& corners) {
+    Vec3 lo = corners[0], hi = corners[0];
+    for (const Vec3& p : corners) lo = glm::min(lo, p), hi = glm::max(hi, p);
+    return 0.5 * (lo + hi);
+  }
+
   [[nodiscard]] Vec3 centre(const Block& b) const {
-    if (spec_.radial) {
-      // The middle of the corners' bounding box.
-      const std::array<Vec3, 8> c = corners(b);
-      Vec3 lo = c[0], hi = c[0];
-      for (const Vec3& p : c) lo = glm::min(lo, p), hi = glm::max(hi, p);
-      return 0.5 * (lo + hi);
-    }
+    if (spec_.radial) return middle(corners(b));
     const std::array<Vec3, 3>& e = spec_.axes;
     return spec_.position(b.o[0], b.o[1], b.o[2]) +
            spec_.voxel_m * (0.5 * b.size[0] * e[0] + 0.5 * b.size[1] * e[1] +
@@ -340,10 +341,11 @@ class FieldBuilder {
   // their ratios to the longest are exact.
   [[nodiscard]] double radius(const Block& b) const {
     if (spec_.radial) {
-      const Vec3 m = centre(b);
+      const std::array<Vec3, 8> c = corners(b);
+      const Vec3 m = middle(c);
       double r = 0.0;
-      for (const Vec3& p : corners(b)) r = std::max(r, glm::length(p - m));
-      return r * (1.0 + 1e-12);
+      for (const Vec3& p : c) r = std::max(r, glm::length(p - m));
+      return r * (1.0 + 1e-12);  // the corners themselves inside, whatever the rounding
     }
     const int longest = std::max({b.size[0], b.size[1], flat() ? 0 : b.size[2]});
     double squares = 0.0;

@@ -268,6 +268,14 @@ FarFieldSpec farFieldSpec(const Scene& scene, const FacetIntegrator& integrator)
   return f;
 }
 
+FarFieldSpec checkedFarFieldSpec(const Scene& scene, const FacetIntegrator& integrator) {
+  FarFieldSpec f = farFieldSpec(scene, integrator);
+  f.innermost_far_radius_m = kInnermostFarRadiusInLitRadii * f.lit_radius_m;
+  f.floor_w_sr =
+      scene.hazard.negligibleW_m2() * f.innermost_far_radius_m * f.innermost_far_radius_m;
+  return f;
+}
+
 IntegratorOptions fieldIntegratorOptions(const Scene& scene, const FieldSpec& field) {
   IntegratorOptions o = scene.accuracy;
   o.tolerance = 0.25 * field.tolerance;

@@ -80,6 +80,11 @@ FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane);
 /// HazardSpec::negligibleW_m2() at the far radius.
 FarFieldSpec farFieldSpec(const Scene& scene, const FacetIntegrator& integrator);
 
+/// @brief farFieldSpec() with the floor lowered to 1e-3 × the lowest hazardous irradiance × the
+/// innermost sphere² (16 lit radii), so that the far radius check may come in that far: the far
+/// field that speaks as near as it can (the settling benchmark; the hazard reach).
+FarFieldSpec checkedFarFieldSpec(const Scene& scene, const FacetIntegrator& integrator);
+
 /// @brief What farFieldSpec() says of the faces' lattices (face_pixels, block_pixels) and the
 /// tolerance, from the scene alone (the narrowest lobe of its materials, which the target
 /// will have): known before the target is built.
