@@ -379,19 +379,30 @@ void writeTargetVtp(std::ostream& out, const FacetIntegrator& integrator, int le
   writeTo(out, *writer, poly, "the target's PolyData (.vtp)");
 }
 
-void writeHazardSurfaceVtp(std::ostream& out, const HazardSurface& surface) {
+namespace {
+
+// A surface of quads over @p points_m, to which the caller adds its point data.
+vtkSmartPointer<vtkPolyData> quadSurface(const std::vector<Vec3>& points_m,
+                                         const std::vector<std::array<std::int64_t, 4>>& quads) {
   std::vector<double> points;
-  points.reserve(3 * surface.points_m.size());
-  for (const Vec3& p : surface.points_m) points.insert(points.end(), {p.x, p.y, p.z});
+  points.reserve(3 * points_m.size());
+  for (const Vec3& p : points_m) points.insert(points.end(), {p.x, p.y, p.z});
   std::vector<std::int64_t> connectivity, offsets{0};
-  connectivity.reserve(4 * surface.quads.size());
-  for (const auto& q : surface.quads) {
+  connectivity.reserve(4 * quads.size());
+  for (const auto& q : quads) {
     connectivity.insert(connectivity.end(), q.begin(), q.end());
     offsets.push_back(static_cast<std::int64_t>(connectivity.size()));
   }
-  vtkNew<vtkPolyData> poly;
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
   poly->SetPoints(pointsOf(points));
   poly->SetPolys(cellArray(offsets, connectivity));
+  return poly;
+}
+
+}  // namespace
+
+void writeHazardSurfaceVtp(std::ostream& out, const HazardSurface& surface) {
+  const vtkSmartPointer<vtkPolyData> poly = quadSurface(surface.points_m, surface.quads);
   const auto n = static_cast<vtkIdType>(surface.points_m.size());
   auto nohd = namedArray<vtkFloatArray>("nohd_m", n);
   auto intensity = namedArray<vtkFloatArray>("intensity_w_sr", n);
@@ -406,6 +417,20 @@ void writeHazardSurfaceVtp(std::ostream& out, const HazardSurface& surface) {
   poly->GetPointData()->SetActiveScalars("nohd_m");
   vtkNew<vtkXMLPolyDataWriter> writer;
   writeTo(out, *writer, poly, "the far field's hazard surface (.vtp)");
+}
+
+void writeReachVtp(std::ostream& out, const ReachSurface& surface) {
+  const vtkSmartPointer<vtkPolyData> poly = quadSurface(surface.points_m, surface.quads);
+  const auto n = static_cast<vtkIdType>(surface.points_m.size());
+  auto distance = namedArray<vtkFloatArray>("distance_m", n);
+  auto ratio = namedArray<vtkFloatArray>("hazard_ratio", n);
+  std::copy(surface.distance_m.begin(), surface.distance_m.end(), distance->GetPointer(0));
+  std::copy(surface.hazard_ratio.begin(), surface.hazard_ratio.end(), ratio->GetPointer(0));
+  poly->GetPointData()->AddArray(distance);
+  poly->GetPointData()->AddArray(ratio);
+  poly->GetPointData()->SetActiveScalars("distance_m");
+  vtkNew<vtkXMLPolyDataWriter> writer;
+  writeTo(out, *writer, poly, "the hazard reach's surface (.vtp)");
 }
 
 // --- The AMR data set.

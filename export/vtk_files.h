@@ -17,6 +17,7 @@
 #include "facets/integrator.h"
 #include "observers/far_field.h"
 #include "observers/field.h"
+#include "observers/reach.h"
 
 namespace glint {
 
@@ -47,6 +48,12 @@ void writeTargetVtp(std::ostream& out, const FacetIntegrator& integrator, int le
 /// on the far radius).
 /// @throw OutputError when VTK's writer fails.
 void writeHazardSurfaceVtp(std::ostream& out, const HazardSurface& surface);
+
+/// @brief VTK PolyData (.vtp) of the hazard reach's boundary (reachSurface()): quads, point data
+/// `distance_m` (from the lit centre; 0 where nothing along the ray is hazardous) and
+/// `hazard_ratio` (Float32: the ray's largest irradiance over the MPE).
+/// @throw OutputError when VTK's writer fails.
+void writeReachVtp(std::ostream& out, const ReachSurface& surface);
 
 /// @brief An AMR data set written under a temporary name beside its target: commit() moves
 /// it into place, and one dropped uncommitted is removed, so that a failed run leaves

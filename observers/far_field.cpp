@@ -10,25 +10,22 @@
 #include <stdexcept>
 
 #include "observers/block_check.h"
+#include "observers/detail/cube_faces.h"
 
 namespace glint {
 namespace {
 
+using cube::FaceFrame;
+using cube::FaceHit;
+using cube::faceHit;
+using cube::kFaceFrames;
+using cube::latLongDirection;
+using cube::onFacePlane;
+using cube::planeDirection;
+using cube::PlanePoint;
+
 // The largest float: maps store distances and intensities as float, capped here.
 constexpr double kFloatMax = static_cast<double>(std::numeric_limits<float>::max());
-
-// Outward normal, u and v of each cube face (u × v = normal: the plane's lattice axes).
-struct FaceFrame {
-  Vec3 normal, u, v;
-};
-const std::array<FaceFrame, FarField::kFaces> kFaceFrames = {{
-    {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}},
-    {{-1, 0, 0}, {0, -1, 0}, {0, 0, 1}},
-    {{0, 1, 0}, {0, 0, 1}, {1, 0, 0}},
-    {{0, -1, 0}, {0, 0, -1}, {1, 0, 0}},
-    {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}},
-    {{0, 0, -1}, {-1, 0, 0}, {0, 1, 0}},
-}};
 
 // The map is integrated this many far radii out: its own parallax error is then a thousandth
 // of the tolerance (farRadius()), while positions keep ~1e-9 relative precision.
@@ -37,50 +34,6 @@ constexpr double kMapDistanceInFarRadii = 1e3;
 // The hazard surface draws a point whose far radius exceeds this many times the smallest (in
 // the forward cone) at that limit: the surface stays finite.
 constexpr double kForwardDisplayLimit = 10.0;
-
-// Where direction @p d (n · d > 0) crosses the plane of cube face @p face, in its lattice
-// units: 0 .. face_pixels on the face, beyond it on the plane's extension.
-struct PlanePoint {
-  double x = 0.0, y = 0.0;
-};
-PlanePoint onFacePlane(const Vec3& d, int face, int face_pixels) {
-  const FaceFrame& f = kFaceFrames[static_cast<std::size_t>(face)];
-  const double t = 1.0 / glm::dot(d, f.normal);
-  const double half = 0.5 * face_pixels;
-  return {(t * glm::dot(d, f.u) + 1.0) * half, (t * glm::dot(d, f.v) + 1.0) * half};
-}
-
-// The unit direction through point (x, y) of face @p face's plane, in its lattice units.
-Vec3 planeDirection(int face, double x, double y, int face_pixels) {
-  const FaceFrame& f = kFaceFrames[static_cast<std::size_t>(face)];
-  const double half = 0.5 * face_pixels;
-  return glm::normalize(f.normal + (x / half - 1.0) * f.u + (y / half - 1.0) * f.v);
-}
-
-// The face whose cone holds @p d, and where d crosses it in lattice units (0 .. face_pixels).
-struct FaceHit {
-  int face = 0;
-  double x = 0.0, y = 0.0;
-};
-FaceHit faceHit(const Vec3& d, int face_pixels) {
-  int axis = 0;
-  for (int a = 1; a < 3; ++a) {
-    if (std::abs(d[a]) > std::abs(d[axis])) axis = a;
-  }
-  const int face = 2 * axis + (d[axis] < 0.0 ? 1 : 0);  // n · d > 0: the dominant axis
-  const PlanePoint p = onFacePlane(d, face, face_pixels);
-  const auto n = static_cast<double>(face_pixels);
-  return {face, std::clamp(p.x, 0.0, n), std::clamp(p.y, 0.0, n)};
-}
-
-// The direction of the centre of pixel @p p of a width × height lat-long map (latLongMap()).
-Vec3 latLongDirection(std::size_t p, int width, int height) {
-  const auto w = static_cast<std::size_t>(width);
-  const double elevation = -0.5 * kPi + (static_cast<double>(p / w) + 0.5) * kPi / height;
-  const double azimuth = -kPi + (static_cast<double>(p % w) + 0.5) * 2.0 * kPi / width;
-  return {std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
-          std::sin(elevation)};
-}
 
 bool powerOfTwo(int n) { return n > 0 && (n & (n - 1)) == 0; }
 

@@ -51,6 +51,13 @@ struct Worst {
   double share = 0.0;
   Vec3 direction{1.0, 0.0, 0.0};
   std::int64_t evaluations = 0;
+  // Its place in the directions checked: of equal shares (a symmetric target's mirror twins)
+  // the first is the worst, whichever thread or process read it.
+  std::size_t index = std::numeric_limits<std::size_t>::max();
+
+  [[nodiscard]] bool worseThan(const Worst& other) const {
+    return share > other.share || (share == other.share && index < other.index);
+  }
 };
 
 // The intensity at distance @p r_m whose irradiance is the lowest hazardous one (W/sr).
@@ -112,13 +119,19 @@ Worst checkSphere(const FarField& map, const FacetIntegrator& at,
     // hazard's intensity at this distance, whichever is more, and the floor.
     const double allowance =
         spec.tolerance * std::max(brightest_w_sr, hazard_w_sr) + spec.floor_w_sr;
-    double share = std::abs(near_w_sr - d.intensity_w_sr) / allowance;
+    // A located top's intensity is an upper estimate (its error and the rise its last step
+    // allows are added): the near field may fall short of it, never pass it.
+    const double departure_w_sr =
+        d.i < 0 ? near_w_sr - d.intensity_w_sr : std::abs(near_w_sr - d.intensity_w_sr);
+    double share = std::max(0.0, departure_w_sr) / allowance;
     if (!std::isfinite(share)) share = std::numeric_limits<double>::infinity();
     Worst& w = worst.local();
     w.evaluations += o.evaluations;
-    if (share > w.share) {
-      w.share = share;
-      w.direction = d.unit;
+    const Worst here{share, d.unit, 0, first + k * stride};
+    if (here.worseThan(w)) {
+      w.share = here.share;
+      w.direction = here.direction;
+      w.index = here.index;
     }
     if (counter != nullptr)
       counter->evaluations.fetch_add(o.evaluations, std::memory_order_relaxed);
@@ -127,19 +140,27 @@ Worst checkSphere(const FarField& map, const FacetIntegrator& at,
   Worst all;
   for (const Worst& w : worst) {
     all.evaluations += w.evaluations;
-    if (w.share > all.share) {
+    if (w.worseThan(all)) {
       all.share = w.share;
       all.direction = w.direction;
+      all.index = w.index;
     }
   }
   return all;
 }
 
-// Every process's worst, the worst of them first in rank order (so all agree).
+// Every process's worst: the worst of them, of equal ones the first checked (so all agree, and
+// with one process).
 Worst gatherWorst(const Worst& mine, PointExchange* exchange) {
   if (exchange == nullptr) return mine;
-  std::array<double, 5> packed = {mine.share, mine.direction.x, mine.direction.y, mine.direction.z,
-                                  static_cast<double>(mine.evaluations)};
+  // The index as a double, exact below 2⁵³ directions; −1 where a process read none.
+  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  std::array<double, 6> packed = {mine.share,
+                                  mine.direction.x,
+                                  mine.direction.y,
+                                  mine.direction.z,
+                                  static_cast<double>(mine.evaluations),
+                                  mine.index == kNone ? -1.0 : static_cast<double>(mine.index)};
   std::vector<std::byte> bytes(sizeof(packed));
   std::memcpy(bytes.data(), packed.data(), sizeof(packed));
   Worst all;
@@ -147,9 +168,12 @@ Worst gatherWorst(const Worst& mine, PointExchange* exchange) {
   for (const std::vector<std::byte>& theirs : exchange->allGather(bytes)) {
     std::memcpy(packed.data(), theirs.data(), sizeof(packed));
     all.evaluations += static_cast<std::int64_t>(packed[4]);
-    if (first || packed[0] > all.share) {
-      all.share = packed[0];
-      all.direction = Vec3(packed[1], packed[2], packed[3]);
+    const Worst theirs_worst{packed[0], Vec3(packed[1], packed[2], packed[3]), 0,
+                             packed[5] < 0.0 ? kNone : static_cast<std::size_t>(packed[5])};
+    if (first || theirs_worst.worseThan(all)) {
+      all.share = theirs_worst.share;
+      all.direction = theirs_worst.direction;
+      all.index = theirs_worst.index;
       first = false;
     }
   }

@@ -4,6 +4,7 @@
 #include <tbb/info.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -100,9 +101,12 @@ std::string farFieldWhat(const FarFieldSpec& spec) {
   return "the far field (6 × " + std::to_string(spec.face_pixels + 1) + "² directions)";
 }
 
-// The region whose accuracy the shared target is built for: the box, else the first plane.
+// The region whose accuracy the shared target is built for: the box, else the first plane,
+// else the reach's lattices.
 FieldSpec firstRegion(const Scene& scene) {
-  return scene.observers ? fieldSpec(scene) : planeFieldSpec(scene, scene.planes.front());
+  if (scene.observers) return fieldSpec(scene);
+  if (!scene.planes.empty()) return planeFieldSpec(scene, scene.planes.front());
+  return reachAccuracy(scene);
 }
 
 // Every large allocation of a run reckoned before the first is made: one region's field at a
@@ -181,7 +185,9 @@ std::vector<std::string> noteEarlierFiles(const std::filesystem::path& dir,
 FarField sceneFarField(const SceneTarget& target, const Scene& scene, const MemoryWatch& watch,
                        const std::string& what, std::ostream* progress_to, bool terminal,
                        PointExchange* exchange) {
-  const FarFieldSpec spec = farFieldSpec(scene, target.integrator);
+  // The reach hands over to the far field as near as a check lets it speak.
+  const FarFieldSpec spec = scene.wantsReach() ? checkedFarFieldSpec(scene, target.integrator)
+                                               : farFieldSpec(scene, target.integrator);
   requireWithinBudget(farFieldWhat(spec), farFieldMemoryFloorBytes(spec), watch.budgetBytes(),
                       "lower far_field.face_pixels, or raise --memory");
 
@@ -325,6 +331,56 @@ void runPlanes(const RunContext& c, RunSummary& s) {
   s.j["planes"] = planes;
 }
 
+// The hazard reach: the radial lattices out to the far radius, refused before they are
+// allocated if one face's field and the far field would pass the budget; then its files, its
+// entry in the summary and its line on the terminal.
+void runReach(const RunContext& c, const FarResult& far, RunSummary& s) {
+  const ReachSpec spec = reachSpec(c.scene, *far.far);
+  const FieldSpec face = reachFaceSpec(0, spec);
+  const std::uint64_t far_bytes = farFieldMemoryFloorBytes(far.far->spec());
+  const std::uint64_t face_bytes = fieldMemoryFloorBytes(face, false);
+  const int rays = spec.face_cells + 1;
+  const std::string what = "the hazard reach (6 × " + std::to_string(rays) + "² rays × " +
+                           std::to_string(face.radial->layers + 1) + " layers from " +
+                           formatNumber("%.3g", spec.near_m) + " to " +
+                           formatNumber("%.4g", spec.far_m) + " m)";
+  requireWithinBudget(what + " beside the far field", far_bytes + face_bytes, c.watch.budgetBytes(),
+                      "lower reach.face_cells, raise reach.layer_ratio, or raise --memory");
+  if (!c.args.quiet) {
+    c.err << "glint run: " << what << "; memory: at least "
+          << formatBytes(static_cast<double>(far_bytes + face_bytes)) << " of the "
+          << formatBytes(static_cast<double>(c.watch.budgetBytes())) << " budget\n";
+  }
+  const FieldProblem problem = fieldProblem(c.target, c.scene, face);
+  WorkCounter counter;
+  counter.stop = &c.watch.stopFlag();
+  std::unique_ptr<ProgressReporter> progress;
+  if (!c.args.quiet) {
+    progress =
+        std::make_unique<ProgressReporter>(c.err, c.args.terminal, "reach points", 0, counter);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const NearReach near = [&] {
+    try {
+      return computeNearReach(problem.integrator, spec, problem.excluded, &counter, c.exchange);
+    } catch (const WorkStopped&) {
+      if (progress) progress->stop();
+      c.watch.check("the hazard reach");
+      throw;
+    }
+  }();
+  if (progress) progress->stop();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double mu = c.scene.hazard.atmosphere.extinction_per_m;
+  std::vector<ReachSummary> reach;
+  for (std::size_t t = 0; t < spec.thresholds_w_m2.size(); ++t)
+    reach.push_back(summarizeReach(near, *far.far, t, mu));
+  s.j["hazard_reach"] = reachJson(near, reach, seconds);
+  if (!c.args.quiet) printReach(c.err, near, reach, seconds);
+  c.outputs.writeReach({near, *far.far, c.scene.hazard, c.info});
+}
+
 // The meshes' surface model against the alternatives, at the regions' peaks and the far
 // field's (rank 0).
 void checkSurfaces(const RunContext& c, const FarResult& far, RunSummary& s) {
@@ -366,9 +422,15 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   // A mesh is refused before it is decoded, the target before it is built.
   Scene scene = loadScene(args.scene_path, budget);
   overrideAccuracy(scene.accuracy, std::nullopt, args.scheme, scene.source);
-  if (!scene.observers && scene.planes.empty()) {
+  if (!scene.observers && scene.planes.empty() && !scene.wantsReach()) {
     throw InputError(scene.source +
-                     ": /observers: missing (glint run needs an observer box or `planes`)");
+                     ": /reach/enabled: false, and there is neither `observers` nor `planes`: "
+                     "glint run has nothing to compute");
+  }
+  if (scene.wantsReach() && !scene.far_field.enabled) {
+    throw InputError(scene.source +
+                     ": /far_field/enabled: false, but the hazard reach needs the far field "
+                     "beyond its lattice (give `observers` or `planes`, or enable the far field)");
   }
   const std::filesystem::path dir = outputFolder(args);
   InputFiles inputs;
@@ -420,6 +482,7 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     summary.j["far_field"] = farFieldJson(*far.far, far.hazard, outputs.farNames());
     if (!args.quiet) printFarField(err, *far.far, far.hazard);
   }
+  if (scene.wantsReach()) runReach(c, far, summary);
   if (scene.hasMeshes() && writer) checkSurfaces(c, far, summary);
   if (writer) finishRun(c, dir, stale, summary);
 }

@@ -49,6 +49,22 @@ void writeFarVtp(std::ostream& out, const FarResults& r, double threshold_w_m2) 
                                            r.hazard.atmosphere.extinction_per_m));
 }
 
+// The reach per direction on the far field's lat-long map, or finer where the lattice's rays
+// are closer than its pixels.
+void writeReachExr(std::ostream& out, const ReachResults& r) {
+  const double mu = r.hazard.atmosphere.extinction_per_m;
+  const int height = std::max(farMapHeight(r.far.spec().face_pixels), 2 * r.near.spec.face_cells);
+  const std::vector<float> reach = reachLatLong(r.near, r.far, 0, height, mu);
+  std::vector<float> aided;
+  std::vector<ExrChannel> channels = {{"reach_m", &reach}};
+  if (r.near.spec.thresholds_w_m2.size() > 1) {
+    aided = reachLatLong(r.near, r.far, 1, height, mu);
+    channels.push_back({"aided_reach_m", &aided});
+  }
+  writeLatLongExr(out, {2 * height, height, r.near.spec.centre_m, r.far.spec().far_radius_m},
+                  channels, exrInfo(r.info));
+}
+
 void writePlaneExr(std::ostream& out, const PlaneResults& r) {
   writeExr(out, planeMap(r.field, r.hazard), exrInfo(r.info));
 }
@@ -60,13 +76,14 @@ void writePlaneExr(std::ostream& out, const PlaneResults& r) {
 // that takes the field's grids, written last; summary.json lists them in this order, a plane's
 // one a plane.
 struct RunOutputs::Declared {
-  enum class Region { Run, Box, Plane, Far };
+  enum class Region { Run, Box, Plane, Far, Reach };
   const char* name = nullptr;
   std::string (*plane_name)(const std::string&) = nullptr;  // instead of name, a plane's
   Region region = Region::Run;
   void (*box)(std::ostream&, BoxResults&) = nullptr;
   void (*plane)(std::ostream&, const PlaneResults&) = nullptr;
   void (*far)(std::ostream&, const FarResults&) = nullptr;
+  void (*reach)(std::ostream&, const ReachResults&) = nullptr;
   bool takes_field = false;    // the box's VDB moves the grids out of the field
   bool staged_folder = false;  // the AMR data set: a folder staged beside its .vthb
   bool aided_only = false;     // written with an optical aid only
@@ -89,6 +106,8 @@ struct RunOutputs::Declared {
         return !s.planes.empty();
       case Region::Far:
         return s.far_field.enabled && (!aided_only || s.hazard.aid.has_value());
+      case Region::Reach:
+        return s.wantsReach();
     }
     return false;
   }
@@ -96,6 +115,7 @@ struct RunOutputs::Declared {
   void write(std::ostream& out, BoxResults& r) const { box(out, r); }
   void write(std::ostream& out, const PlaneResults& r) const { plane(out, r); }
   void write(std::ostream& out, const FarResults& r) const { far(out, r); }
+  void write(std::ostream& out, const ReachResults& r) const { reach(out, r); }
 };
 
 namespace {
@@ -132,6 +152,13 @@ constexpr Declared kOutputs[] = {
      .far = [](std::ostream& out,
                const FarResults& f) { writeFarVtp(out, f, f.hazard.aidedMpeW_m2()); },
      .aided_only = true},
+    {.name = output_names::kReachExr, .region = Region::Reach, .reach = writeReachExr},
+    {.name = output_names::kReachVtp,
+     .region = Region::Reach,
+     .reach =
+         [](std::ostream& out, const ReachResults& r) {
+           writeReachVtp(out, reachSurface(r.near, r.far, r.hazard.atmosphere.extinction_per_m));
+         }},
     {.plane_name = output_names::planeExr,
      .region = Region::Plane,
      .plane = writePlaneExr,
@@ -228,6 +255,13 @@ void RunOutputs::writeFar(const FarResults& far) {
   if (!writer_) return;
   for (const Declared* d : writingOrder(Region::Far)) {
     if (const std::optional<std::size_t> i = slotOf(*d, 0)) d->write(files_[*i]->stream(), far);
+  }
+}
+
+void RunOutputs::writeReach(const ReachResults& reach) {
+  if (!writer_) return;
+  for (const Declared* d : writingOrder(Region::Reach)) {
+    if (const std::optional<std::size_t> i = slotOf(*d, 0)) d->write(files_[*i]->stream(), reach);
   }
 }
 

@@ -19,6 +19,7 @@
 #include "hazard/hazard.h"
 #include "observers/far_field.h"
 #include "observers/field.h"
+#include "observers/reach.h"
 
 namespace glint {
 
@@ -49,6 +50,14 @@ struct FarResults {
   const RunInfo& info;
 };
 
+/// @brief The hazard reach as its files are written from it.
+struct ReachResults {
+  const NearReach& near;
+  const FarField& far;
+  const HazardSpec& hazard;
+  const RunInfo& info;
+};
+
 /// @brief The outputs of one `glint run` (rank 0 writes; on other ranks nothing is opened): each
 /// is opened before the work (so that an unwritable folder or a path that must not be replaced
 /// stops the run at once), written from its region's results when that region is done (one
@@ -73,6 +82,7 @@ class RunOutputs {
   void writeBox(BoxResults& box);
   void writePlane(std::size_t index, const PlaneResults& plane);
   void writeFar(const FarResults& far);
+  void writeReach(const ReachResults& reach);
   /// @brief Where summary.json is written (none unless a writer).
   [[nodiscard]] std::ostream* summary();
 

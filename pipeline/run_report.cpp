@@ -492,4 +492,83 @@ void printFarField(std::ostream& err, const FarField& field, const FarHazard& fa
   }
 }
 
+namespace {
+
+nlohmann::json reachEntry(const ReachSummary& r) {
+  const Vec3& d = r.direction;
+  nlohmann::json j = {
+      {"threshold_w_m2", r.threshold_w_m2},
+      {"distance_m", std::isfinite(r.distance_m) ? nlohmann::json(r.distance_m) : nlohmann::json()},
+      {"direction", {d.x, d.y, d.z}},
+      {"azimuth_deg", std::atan2(d.y, d.x) * 180.0 / kPi},
+      {"elevation_deg", std::asin(std::clamp(d.z, -1.0, 1.0)) * 180.0 / kPi},
+      {"from",
+       r.distance_m > 0.0 ? (r.from_far_field ? "far field" : "lattice") : "nothing hazardous"},
+      {"closed", r.closed},
+      {"farthest_point_m", {r.farthest_point_m.x, r.farthest_point_m.y, r.farthest_point_m.z}},
+      {"volume_m3", std::isfinite(r.volume_m3) ? nlohmann::json(r.volume_m3) : nlohmann::json()},
+      {"lit_ball_m3", r.lit_ball_m3}};
+  if (!std::isfinite(r.distance_m)) {
+    j["unbounded"] = "a glint narrower than the far field's directions has no finite bound";
+  }
+  return j;
+}
+
+}  // namespace
+
+nlohmann::json reachJson(const NearReach& near, const std::vector<ReachSummary>& reach,
+                         double seconds) {
+  const ReachSpec& spec = near.spec;
+  const RadialLattice& lattice = *near.faces[0].spec.radial;
+  nlohmann::json j = reachEntry(reach.at(0));
+  if (reach.size() > 1) j["aided"] = reachEntry(reach[1]);
+  j["centre_m"] = {spec.centre_m.x, spec.centre_m.y, spec.centre_m.z};
+  j["lattice"] = {{"face_cells", spec.face_cells},
+                  {"layer_ratio", spec.ratio},
+                  {"layers", lattice.layers + 1},
+                  {"near_m", spec.near_m},
+                  {"last_layer_m", lattice.layerDistance(lattice.layers)},
+                  {"far_radius_m", spec.far_m},
+                  {"tolerance", spec.tolerance},
+                  {"evaluated_points", near.evaluatedPoints()},
+                  {"unresolved_points", near.unresolvedPoints()},
+                  {"evaluations", near.evaluations()},
+                  {"seconds", seconds}};
+  j["rule"] =
+      "per direction from the lit centre: the lattice's farthest hazardous point (at (1 - "
+      "tolerance) x the threshold, or unresolved) one layer out, the largest of the rays "
+      "around a direction between them; beyond the far radius the far field's hazard distance. "
+      "Nearer than near_m (the lit ball, lit_ball_m3) nothing is classified";
+  return j;
+}
+
+void printReach(std::ostream& err, const NearReach& near, const std::vector<ReachSummary>& reach,
+                double seconds) {
+  const auto line = [&](const ReachSummary& r, const char* who) {
+    err << who;
+    if (!std::isfinite(r.distance_m)) {
+      err << "unbounded: a glint narrower than the far field's directions has no finite bound\n";
+      return;
+    }
+    if (!(r.distance_m > 0.0)) {
+      err << "nothing is hazardous outside the lit ball (" << formatNumber("%.3g", near.spec.near_m)
+          << " m)" << (r.closed ? ", closed" : ", NOT closed") << "\n";
+      return;
+    }
+    err << formatNumber("%.4g", r.distance_m) << " m from the lit centre toward ("
+        << formatNumber("%.4f", r.direction.x) << ", " << formatNumber("%.4f", r.direction.y)
+        << ", " << formatNumber("%.4f", r.direction.z) << ") ("
+        << (r.from_far_field ? "far field" : "lattice") << "), "
+        << (r.closed ? "closed" : "NOT closed: the far radius is not verified")
+        << "; hazardous volume " << formatNumber("%.3g", r.volume_m3)
+        << " m³ outside the lit ball (its " << formatNumber("%.3g", r.lit_ball_m3)
+        << " m³ not classified)\n";
+  };
+  line(reach.at(0), "hazard reach: ");
+  if (reach.size() > 1) line(reach[1], "  through the optical aid: ");
+  err << "  " << near.evaluatedPoints() << " lattice points evaluated ("
+      << formatNumber("%.3g", static_cast<double>(near.evaluations())) << " evaluations) in "
+      << formatDuration(seconds) << ", " << near.unresolvedPoints() << " unresolved\n";
+}
+
 }  // namespace glint

@@ -12,6 +12,7 @@
 #include "facets/integrator.h"
 #include "observers/far_field.h"
 #include "observers/field.h"
+#include "observers/reach.h"
 #include "pipeline/hazard_report.h"
 #include "pipeline/scene.h"
 #include "pipeline/surface_check.h"
@@ -62,5 +63,15 @@ nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard,
 
 /// @brief The far field's lines on the terminal.
 void printFarField(std::ostream& err, const FarField& field, const FarHazard& hazard);
+
+/// @brief summary.json's `hazard_reach`: per threshold (the MPE, then the aided MPE) the
+/// farthest hazardous point, its direction, whether the boundary is closed and the volume;
+/// the lattice and its cost (@p seconds).
+nlohmann::json reachJson(const NearReach& near, const std::vector<ReachSummary>& reach,
+                         double seconds);
+
+/// @brief The reach's line on the terminal (and the aided reach's).
+void printReach(std::ostream& err, const NearReach& near, const std::vector<ReachSummary>& reach,
+                double seconds);
 
 }  // namespace glint

@@ -15,6 +15,7 @@
 #include "pipeline/input_error.h"
 #include "pipeline/json_reader.h"
 #include "pipeline/memory_budget.h"
+#include "pipeline/output_names.h"
 #include "pipeline/progress.h"
 #include "pipeline/target_builder.h"
 
@@ -461,6 +462,11 @@ PlaneSpec readPlane(ObjectReader r, const std::vector<PlaneSpec>& earlier) {
   for (const PlaneSpec& e : earlier) {
     if (e.name == p.name) r.fail("name", "\"" + p.name + "\" names two planes");
   }
+  // Its map would take the name of the far field's or the reach's.
+  for (const char* taken : {output_names::kFarFieldExr, output_names::kReachExr}) {
+    if (output_names::planeExr(p.name) == taken)
+      r.fail("name", "\"" + p.name + "\" is taken: glint run writes " + taken);
+  }
   p.origin_m = position(r, "origin");
   p.u_axis = r.direction("u_axis");
   p.v_axis = r.direction("v_axis");
@@ -505,6 +511,20 @@ FarFieldSettings readFarField(ObjectReader r) {
   }
   r.finish();
   return f;
+}
+
+ReachSettings readReach(ObjectReader r) {
+  ReachSettings reach;
+  reach.enabled = r.boolean("enabled", true);
+  const std::int64_t cells = r.integer("face_cells", reach.face_cells);
+  if (cells < 16 || cells > 512 || cells % 16 != 0)
+    r.fail("face_cells", "must be a multiple of 16 from 16 to 512");
+  reach.face_cells = static_cast<int>(cells);
+  reach.layer_ratio = r.number("layer_ratio", reach.layer_ratio);
+  if (!(reach.layer_ratio > 1.0 && reach.layer_ratio <= 1.5))
+    r.fail("layer_ratio", "must be in (1, 1.5]");
+  r.finish();
+  return reach;
 }
 
 }  // namespace
@@ -564,6 +584,7 @@ Scene parseScene(std::string_view text, const std::string& source,
     }
   }
   if (r.has("far_field")) scene.far_field = readFarField(r.object("far_field"));
+  if (r.has("reach")) scene.reach = readReach(r.object("reach"));
   r.finish();
   return scene;
 }

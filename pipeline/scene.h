@@ -100,6 +100,15 @@ struct FarFieldSettings {
   std::optional<double> floor_w_sr;  ///< default: HazardSpec::negligibleW_m2() × far radius²
 };
 
+/// @brief The hazard reach without a box (key `reach`, all optional; observers/reach.h).
+struct ReachSettings {
+  /// Given: `reach.enabled` (true when the key is there without it); by default the reach
+  /// runs only where there is no box or plane.
+  std::optional<bool> enabled;
+  int face_cells = 64;        ///< rays per cube-face edge, a multiple of 16 in 16 .. 512
+  double layer_ratio = 1.02;  ///< between the radial layers, in (1, 1.5]
+};
+
 /// @brief A validated scene: every number finite and in range, every reference resolved.
 struct Scene {
   std::string source;  ///< the file name as given, for messages
@@ -119,6 +128,13 @@ struct Scene {
   std::optional<ObserversSpec> observers;  ///< `glint run` needs this or planes
   std::vector<PlaneSpec> planes;
   FarFieldSettings far_field;
+  ReachSettings reach;
+
+  /// @brief Whether `glint run` computes the hazard reach: asked for, or, unless refused,
+  /// where there is no box or plane.
+  [[nodiscard]] bool wantsReach() const {
+    return reach.enabled.value_or(!observers && planes.empty());
+  }
 
   /// @brief Whether any object is a mesh (whose surface is a model, not the shape itself).
   [[nodiscard]] bool hasMeshes() const {

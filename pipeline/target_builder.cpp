@@ -276,6 +276,28 @@ FarFieldSpec checkedFarFieldSpec(const Scene& scene, const FacetIntegrator& inte
   return f;
 }
 
+FieldSpec reachAccuracy(const Scene& scene) {
+  FieldSpec f;  // its default tolerance
+  f.floor_w_m2 = scene.hazard.negligibleW_m2();
+  f.hazard_threshold_w_m2 = scene.hazard.lowestHazardousW_m2();
+  return f;
+}
+
+ReachSpec reachSpec(const Scene& scene, const FarField& far) {
+  const FieldSpec accuracy = reachAccuracy(scene);
+  ReachSpec r;
+  r.centre_m = far.ball().centre_m;
+  r.near_m = std::max(far.ball().radius_m, limits::kMinLengthM);
+  r.far_m = far.spec().far_radius_m;
+  r.ratio = scene.reach.layer_ratio;
+  r.face_cells = scene.reach.face_cells;
+  r.thresholds_w_m2 = {scene.hazard.mpe_w_m2};
+  if (scene.hazard.aid) r.thresholds_w_m2.push_back(scene.hazard.aidedMpeW_m2());
+  r.tolerance = accuracy.tolerance;
+  r.floor_w_m2 = accuracy.floor_w_m2;
+  return r;
+}
+
 IntegratorOptions fieldIntegratorOptions(const Scene& scene, const FieldSpec& field) {
   IntegratorOptions o = scene.accuracy;
   o.tolerance = 0.25 * field.tolerance;

@@ -10,6 +10,7 @@
 #include "facets/tessellate.h"
 #include "observers/far_field.h"
 #include "observers/field.h"
+#include "observers/reach.h"
 #include "pipeline/scene.h"
 
 namespace glint {
@@ -84,6 +85,14 @@ FarFieldSpec farFieldSpec(const Scene& scene, const FacetIntegrator& integrator)
 /// innermost sphere² (16 lit radii), so that the far radius check may come in that far: the far
 /// field that speaks as near as it can (the settling benchmark; the hazard reach).
 FarFieldSpec checkedFarFieldSpec(const Scene& scene, const FacetIntegrator& integrator);
+
+/// @brief The accuracy the hazard reach's lattices are computed to (the tolerance and floor of
+/// reachSpec()), as a field the target is built for when the scene has no box or plane.
+FieldSpec reachAccuracy(const Scene& scene);
+
+/// @brief The hazard reach of the scene's `reach` key about the lit ball of @p far, from its
+/// radius out to the far radius: for the MPE and, with an optical aid, the aided MPE.
+ReachSpec reachSpec(const Scene& scene, const FarField& far);
 
 /// @brief What farFieldSpec() says of the faces' lattices (face_pixels, block_pixels) and the
 /// tolerance, from the scene alone (the narrowest lobe of its materials, which the target

@@ -92,7 +92,7 @@ TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
        "wavelength_nm, exposure_s, pulse, beam)"},
       {[](json& j) { j["extra"] = 1; },
        "scene.json: /extra: unknown key (expected one of: description, laser, atmosphere, "
-       "optical_aid, materials, objects, accuracy, observers, planes, far_field)"},
+       "optical_aid, materials, objects, accuracy, observers, planes, far_field, reach)"},
       {[](json& j) { j["laser"].erase("power_w"); },
        "scene.json: /laser/power_w: missing (required)"},
       {[](json& j) {

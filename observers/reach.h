@@ -1,0 +1,130 @@
+#pragma once
+/// @file
+/// @brief The hazard reach: how far the hazardous region extends in every direction from the
+/// lit centre, from the lit ball out to infinity, without an observer box.
+///
+/// Two pieces close it. From the lit ball's radius out to the far radius, six radial lattices
+/// (RadialLattice, one per cube face: rays from the lit centre, layers growing by a ratio) are
+/// computed by the field's block check, which skips by bound what cannot reach the threshold
+/// and marks Unresolved the points between which a glint narrower than the lattice may pass.
+/// Beyond the far radius, E(c + r ω) r² is I(ω) within the far field's tolerance, so the reach
+/// toward ω is the hazard distance of the map's upper intensity there. A direction's reach is
+/// the larger of the two.
+///
+/// What it reports fails safe: a lattice point counts as hazardous at (1 − tolerance) × the
+/// threshold, and so does an Unresolved one; the reach along a ray is the distance of the layer
+/// beyond its farthest hazardous point; between rays the largest of the surrounding rays; beyond
+/// the lattice the far field's upper intensity. Nearer the centre than the lit ball's radius
+/// nothing is classified: the target is there.
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "observers/field.h"
+
+namespace glint {
+
+class FarField;
+
+/// @brief What the reach is computed for (scene key `reach`).
+struct ReachSpec {
+  Vec3 centre_m{0.0};     ///< the lit centre (LitBall)
+  double near_m = 1.0;    ///< the first layer's distance: the lit ball's radius (m)
+  double far_m = 100.0;   ///< the last layer lies at least this far: the far radius (m)
+  double ratio = 1.02;    ///< between layers: the reach's resolution along a ray
+  int face_cells = 64;    ///< rays per cube-face edge (a multiple of block_voxels)
+  int block_voxels = 16;  ///< coarsest block edge
+  /// The thresholds the reach is given for (W/m²): the MPE, then the aided MPE if any. The
+  /// lattice is refined for the lowest.
+  std::vector<double> thresholds_w_m2;
+  double tolerance = 1e-2;
+  double floor_w_m2 = 0.0;  ///< negligible irradiance (a thousandth of the lowest threshold)
+};
+
+/// @brief The radial lattice of cube face @p face (FarField order) for @p spec.
+FieldSpec reachFaceSpec(int face, const ReachSpec& spec);
+
+/// @brief The radial lattices, read per ray: for ray (i, j) of a face, row j at j (face_cells
+/// + 1), and each threshold t, the distance from the centre to the lattice point one layer
+/// beyond the farthest hazardous one (0 where none is), and whether the last layer is
+/// hazardous (the far field decides beyond it).
+struct NearReach {
+  struct Face {
+    FieldSpec spec;
+    FieldStats stats;
+    std::vector<std::vector<float>> reach_m;        ///< [threshold][ray]
+    std::vector<std::vector<std::uint8_t>> beyond;  ///< [threshold][ray]
+    std::vector<float> peak_w_m2;                   ///< the largest irradiance along each ray
+  };
+  ReachSpec spec;
+  std::array<Face, 6> faces;
+  /// Per threshold: the lattice's hazardous volume (each cell weighted by its hazardous
+  /// corners' share), m³.
+  std::vector<double> volume_m3;
+
+  /// @brief The largest reach of the rays around unit @p direction (the lattice cell that holds
+  /// it) for threshold @p t, m: what the lattice says between its rays.
+  [[nodiscard]] double toward(const Vec3& direction, std::size_t t) const;
+  /// @brief The distance of the last layer along unit @p direction, m: the far field decides
+  /// beyond it.
+  [[nodiscard]] double lastLayerToward(const Vec3& direction) const;
+  /// @brief Sums of the faces' statistics: lattice points evaluated, evaluations.
+  [[nodiscard]] std::int64_t evaluatedPoints() const;
+  [[nodiscard]] std::int64_t evaluations() const;
+  [[nodiscard]] std::int64_t unresolvedPoints() const;
+};
+
+/// @brief Computes the six radial lattices with @p integrator (@p counter, @p exchange as for
+/// computeField()).
+NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& spec,
+                           const ExcludedFn& excluded, WorkCounter* counter = nullptr,
+                           PointExchange* exchange = nullptr);
+
+/// @brief The reach for one threshold, from the lattices and the far field.
+struct ReachSummary {
+  double threshold_w_m2 = 0.0;
+  /// The farthest hazardous point's distance from the lit centre (m; 0: nothing hazardous
+  /// outside the lit ball; +∞ where the far field has a glint it could not bound).
+  double distance_m = 0.0;
+  Vec3 direction{1.0, 0.0, 0.0};  ///< toward it
+  Vec3 farthest_point_m{0.0};     ///< the lit centre + distance_m × direction (where finite)
+  /// Every direction is proven: the lattice reached the far radius on every ray and the far
+  /// field bounds every direction beyond it.
+  bool closed = false;
+  bool from_far_field = false;  ///< distance_m is the far field's (else the lattice's)
+  /// The hazardous volume outside the lit ball: the lattice's, plus beyond the lattice the
+  /// shell out to each far-field direction's hazard distance (m³).
+  double volume_m3 = 0.0;
+  /// The lit ball's volume (m³): not classified, so the hazardous volume may be up to this much
+  /// more than volume_m3 (less the target's own, which the ball holds).
+  double lit_ball_m3 = 0.0;
+};
+
+/// @brief The reach toward unit @p direction for threshold @p t: the lattice's (toward()) or,
+/// beyond the far radius, the far field's hazard distance where that is farther (m).
+double reachToward(const NearReach& near, const FarField& far, std::size_t t, const Vec3& direction,
+                   double extinction_per_m);
+
+/// @brief The reach for threshold @p t over every direction.
+ReachSummary summarizeReach(const NearReach& near, const FarField& far, std::size_t t,
+                            double extinction_per_m);
+
+/// @brief The reach per direction on a width × height map in longitude and latitude (LatLongMap's
+/// layout), for threshold @p t: reachToward() at each pixel's centre, and the far field's
+/// largest hazard distance over the pixel (0 where nothing along a direction is hazardous).
+std::vector<float> reachLatLong(const NearReach& near, const FarField& far, std::size_t t,
+                                int height, double extinction_per_m);
+
+/// @brief The reach's boundary as a closed surface about the lit centre: per cube face a quad
+/// mesh through the lattice's rays, each vertex at its ray's reach for threshold 0 (the far
+/// field's hazard distance where that is farther), with the largest hazard ratio along the ray.
+struct ReachSurface {
+  std::vector<Vec3> points_m;
+  std::vector<std::array<std::int64_t, 4>> quads;
+  std::vector<float> distance_m;    ///< per point
+  std::vector<float> hazard_ratio;  ///< per point: the ray's largest irradiance / threshold
+};
+ReachSurface reachSurface(const NearReach& near, const FarField& far, double extinction_per_m);
+
+}  // namespace glint

@@ -1,0 +1,158 @@
+// glint run's hazard reach: a scene without a box, its summary, terminal line and maps, and the
+// default example's reach against its box.
+#include <gtest/gtest.h>
+#include <vtkDataArray.h>
+#include <vtkPointData.h>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+#include <vtkXMLPolyDataReader.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "export/exr_map.h"
+#include "pipeline/input_error.h"
+#include "pipeline/scene.h"
+#include "support/cli.h"
+#include "support/files.h"
+
+namespace glint {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunResult {
+  test::Outcome outcome;
+  nlohmann::json summary;
+  fs::path out;
+};
+
+RunResult runScene(const fs::path& scene, const std::string& name) {
+  const fs::path out = fs::temp_directory_path() / name;
+  fs::remove_all(out);
+  RunResult r{test::glint({"run", scene.string(), "-o", out.string()}), {}, out};
+  if (r.outcome.status == 0) r.summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  return r;
+}
+
+// tests/data/reach_pencil.json: a thin oblique pencil about 420 m long, and no box or plane.
+TEST(ReachRun, ASceneWithNeitherBoxNorPlanesFindsThePencilAndWritesItsMaps) {
+  const RunResult r =
+      runScene(fs::path(GLINT_TEST_DATA_DIR) / "reach_pencil.json", "glint_reach_pencil_run");
+  ASSERT_EQ(r.outcome.status, 0) << r.outcome.err;
+  const nlohmann::json& reach = r.summary.at("hazard_reach");
+  const double distance = reach.at("distance_m").get<double>();
+  // I = 8.95e6 W/sr along the pencil (glint points at 100 m to 2.7 km: E r² within 1e-3),
+  // √(I / 50 W/m²) = 423.1 m; the far field's map is within its tolerance of I.
+  EXPECT_GT(distance, 423.0) << reach.dump();
+  EXPECT_LT(distance, 423.1 * std::sqrt(1.01)) << reach.dump();
+  EXPECT_TRUE(reach.at("closed").get<bool>()) << reach.dump();
+  EXPECT_EQ(reach.at("from"), "far field");
+  EXPECT_GT(reach.at("volume_m3").get<double>(), 0.0);
+  EXPECT_NE(r.outcome.err.find("hazard reach: 423"), std::string::npos) << r.outcome.err;
+  EXPECT_EQ(r.summary.at("files"), nlohmann::json({"summary.json", "far_field.exr", "far_field.vtp",
+                                                   "reach.exr", "reach.vtp"}));
+
+  // reach.exr: its largest pixel is the reach; the opposite half of the sky (x > 0, behind
+  // the mirror's lit side) reads no farther than the lattice's last layer.
+  int w = 0, h = 0;
+  const std::vector<float> map = readExrChannel((r.out / "reach.exr").string(), "reach_m", w, h);
+  ASSERT_EQ(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), map.size());
+  const float largest = *std::max_element(map.begin(), map.end());
+  EXPECT_NEAR(largest, distance, 1e-3 * distance) << "the map's farthest pixel is the reach";
+  const double last = reach.at("lattice").at("last_layer_m").get<double>();
+  double behind = 0.0;  // azimuth within 45° of +x: columns [3w/8, 5w/8)
+  for (int j = 0; j < h; ++j)
+    for (int i = 3 * w / 8; i < 5 * w / 8; ++i)
+      behind = std::max(behind, static_cast<double>(map[static_cast<std::size_t>(j * w + i)]));
+  EXPECT_LT(behind, std::sqrt(3.0) * last) << "no far-field hazard behind the mirror";
+
+  // reach.vtp: the boundary, its points at their distance from the lit centre.
+  auto reader = vtkSmartPointer<vtkXMLPolyDataReader>::New();
+  reader->SetFileName((r.out / "reach.vtp").string().c_str());
+  reader->Update();
+  vtkPolyData* surface = reader->GetOutput();
+  ASSERT_EQ(surface->GetNumberOfPoints(), 6 * 65 * 65);
+  vtkDataArray* d = surface->GetPointData()->GetArray("distance_m");
+  ASSERT_NE(d, nullptr);
+  ASSERT_NE(surface->GetPointData()->GetArray("hazard_ratio"), nullptr);
+  double range[2];
+  d->GetRange(range);
+  EXPECT_LE(range[1], distance * (1.0 + 1e-6)) << "no vertex beyond the reach";
+  EXPECT_GT(range[1], 0.0);
+  fs::remove_all(r.out);
+}
+
+// The default example (examples/cylinder.json) asks for the reach beside its box: the two
+// agree on the farthest hazardous point from the target's centre within one 0.1 m voxel, and
+// the reach is never the nearer by more than that.
+TEST(ReachRun, TheDefaultExamplesReachIsItsBoxsHazardZoneWithinOneVoxel) {
+  const RunResult r =
+      runScene(fs::path(GLINT_EXAMPLES_DIR) / "cylinder.json", "glint_reach_default");
+  ASSERT_EQ(r.outcome.status, 0) << r.outcome.err;
+  const nlohmann::json& reach = r.summary.at("hazard_reach");
+  ASSERT_TRUE(reach.at("closed").get<bool>()) << reach.dump();
+  const auto p = reach.at("farthest_point_m").get<std::vector<double>>();
+  const double from_centre = std::hypot(p[0], p[1], p[2]);  // the target's centre: the origin
+  const double box =
+      r.summary.at("hazard").at("nominal_hazard_zone").at("farthest_from_target_m").get<double>();
+  const double voxel = 0.1;
+  EXPECT_NEAR(from_centre, box, voxel) << reach.dump();
+  EXPECT_EQ(reach.at("from"), "lattice");
+  std::printf("[ reach ] default example: reach %.4g m from the target centre, box %.4g m\n",
+              from_centre, box);
+  fs::remove_all(r.out);
+}
+
+// Without a box or plane the reach is all a run computes: refusing it, or the far field it
+// ends in, leaves nothing to do, and the run says so before it starts.
+TEST(ReachRun, WithoutBoxOrPlaneTheReachAndItsFarFieldCannotBeTurnedOff) {
+  nlohmann::json scene =
+      nlohmann::json::parse(std::ifstream(fs::path(GLINT_TEST_DATA_DIR) / "reach_pencil.json"));
+  const fs::path dir = fs::temp_directory_path() / "glint_reach_refused";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const auto refusal = [&](const nlohmann::json& edited) {
+    std::ofstream(dir / "scene.json") << edited.dump();
+    return test::glint({"run", (dir / "scene.json").string(), "-o", (dir / "out").string()});
+  };
+  nlohmann::json no_reach = scene;
+  no_reach["reach"] = {{"enabled", false}};
+  const test::Outcome a = refusal(no_reach);
+  EXPECT_EQ(a.status, 2);
+  EXPECT_NE(a.err.find("/reach/enabled: false, and there is neither"), std::string::npos) << a.err;
+  nlohmann::json no_far = scene;
+  no_far["far_field"] = {{"enabled", false}};
+  const test::Outcome b = refusal(no_far);
+  EXPECT_EQ(b.status, 2);
+  EXPECT_NE(b.err.find("the hazard reach needs the far field"), std::string::npos) << b.err;
+  EXPECT_FALSE(fs::exists(dir / "out" / "summary.json")) << "nothing written";
+  fs::remove_all(dir);
+}
+
+TEST(ReachRun, APlaneMayNotTakeTheReachsOrTheFarFieldsMapName) {
+  for (const char* name : {"reach", "far_field"}) {
+    const std::string scene =
+        R"({"laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "power_w": 1.0,
+             "wavelength_nm": 532, "beam": {"profile": "flat_top", "radius_m": 1}},
+            "materials": {"m": {"specular_reflectance": 0.9, "sigma": 0.01}},
+            "objects": [{"shape": "sphere", "center": [0, 0, 0], "radius": 0.5, "material": "m"}],
+            "planes": [{"name": ")" +
+        std::string(name) + R"(", "origin": [-2, -1, 0], "u_axis": [0, 1, 0],
+             "v_axis": [0, 0, 1], "size_m": [2, 2], "pixel_m": 0.5}]})";
+    try {
+      parseScene(scene, "scene.json");
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("is taken: glint run writes"), std::string::npos)
+          << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace glint
