@@ -79,6 +79,11 @@ struct Beam {
   /// may pass through the ball, so that samples inside it cannot be trusted to be smooth.
   [[nodiscard]] bool edgeMayCrossBall(const Vec3& center_m, double radius_m) const;
 
+  /// @brief True when the profile may bend across the ball faster than a rule's few nodes
+  /// can follow: a Gaussian whose width w(z) at the ball's near end is under twice the ball's
+  /// radius (a flat top is uniform inside its edges, which edgeMayCrossBall() reports).
+  [[nodiscard]] bool profileMayBendInBall(const Vec3& center_m, double radius_m) const;
+
   /// @brief An upper bound, in radians, of the angle between ωi at the centre of a ball of
   /// radius @p radius_m and ωi anywhere in it (0 for a collimated beam).
   [[nodiscard]] double directionSpreadInBall(double radius_m) const;
