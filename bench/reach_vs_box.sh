@@ -38,8 +38,7 @@ r = json.load(open(f"{work}/reach/summary.json"))["hazard_reach"]
 zone = b["hazard"]["nominal_hazard_zone"]
 p = r["farthest_point_m"]
 print(f"box:   {float(box[1]):8.1f} s {int(box[2]) / 1024:8.0f} MB  reach "
-      f"{zone['farthest_from_target_m']:.4g} m from the target centre (its voxel "
-      f"{b['lattice']['voxel_m'] if 'lattice' in b else '?'} m)")
+      f"{zone['farthest_from_target_m']:.4g} m from the target centre")
 print(f"reach: {float(reach[1]):8.1f} s {int(reach[2]) / 1024:8.0f} MB  reach "
       f"{r['distance_m']:.5g} m from the lit centre, {math.hypot(*p):.5g} m from the origin, "
       f"closed {r['closed']}, from the {r['from']}")

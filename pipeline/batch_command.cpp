@@ -269,6 +269,12 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
         sceneFarField(target, scene, watch, w.what + ", far field", nullptr, false);
     record["far_field"] = scenarioFarFieldJson(far, scene.hazard);
     tally.evaluations += far.stats().evaluations;
+    if (scene.wantsReach()) {
+      const SceneReach reach =
+          sceneReach(target, scene, far, watch, w.what + ", hazard reach", nullptr, false);
+      record["hazard_reach"] = scenarioReachJson(reach.summaries);
+      tally.evaluations += reach.near.evaluations();
+    }
   }
   record["evaluations"] = tally.evaluations;
   record["unconverged_points"] = tally.unconverged;
@@ -296,6 +302,7 @@ std::optional<nlohmann::json> readScenarioRecord(const Study& study, const Scena
         record.at("scenario").get<std::size_t>() == s.index &&
         record.at("regions").size() == regions &&
         record.contains("far_field") == study.base.far_field.enabled &&
+        record.contains("hazard_reach") == study.base.wantsReach() &&
         // A result from before the scene had an optical aid lacks the aided figures.
         (!study.base.hazard.aid || record.at("regions").at(0).contains("aided_peak_hazard_ratio"));
   } catch (const std::exception&) {
@@ -542,7 +549,7 @@ void writeStudy(const BatchArgs& args, const Study& study,
                 std::ostream& err) {
   AtomicFile csv(out_dir / output_names::kScenariosCsv);
   csv.stream() << scenariosCsv(lattices, results.records, study.base.far_field.enabled,
-                               study.base.hazard.aid.has_value());
+                               study.base.wantsReach(), study.base.hazard.aid.has_value());
   csv.commit();
   for (const StudyLattice& r : lattices)
     writeStudyMap(out_dir / r.studyFile(), r, study, study.scenarios.size());

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <ostream>
 
@@ -22,6 +23,7 @@ double quantile(std::vector<double> v, double q) {
   const double h = q * static_cast<double>(v.size() - 1);
   const auto lo = static_cast<std::size_t>(std::floor(h));
   const std::size_t hi = std::min(lo + 1, v.size() - 1);
+  if (v[lo] == v[hi]) return v[lo];  // +∞ beside +∞ (an unbounded reach) is +∞, not NaN
   return v[lo] + (h - static_cast<double>(lo)) * (v[hi] - v[lo]);
 }
 
@@ -38,11 +40,66 @@ nlohmann::json quantilesJson(const std::vector<double>& v) {
 // %.10g: enough for every parameter a study file can hold, and the same text on every rank.
 std::string csvNumber(double x) { return formatNumber("%.10g", x); }
 
+// One threshold's reach in a scenario's result.json.
+nlohmann::json reachEntryJson(const ReachSummary& r) {
+  const auto finite = [](double x) {
+    return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json();
+  };
+  return {{"distance_m", finite(r.distance_m)},
+          {"direction", {r.direction.x, r.direction.y, r.direction.z}},
+          {"from",
+           r.distance_m > 0.0 ? (r.from_far_field ? "far field" : "lattice") : "nothing hazardous"},
+          {"closed", r.closed},
+          {"volume_m3", finite(r.volume_m3)}};
+}
+
+// A reach as a number for the quantiles: an unbounded one (null) is +∞, never 0.
+double reachDistance(const nlohmann::json& entry) {
+  const nlohmann::json& d = entry.at("distance_m");
+  return d.is_null() ? std::numeric_limits<double>::infinity() : d.get<double>();
+}
+
+// The study's hazard reach: quantiles of the scenarios' distances, how many are closed, and the
+// farthest scenario.
+nlohmann::json studyReachJson(const std::map<std::size_t, nlohmann::json>& records, bool aided) {
+  std::vector<double> distance, aided_distance;
+  std::size_t closed = 0;
+  const nlohmann::json* farthest = nullptr;
+  std::size_t farthest_index = 0;
+  for (const auto& [index, rec] : records) {
+    const nlohmann::json& h = rec.at("hazard_reach");
+    distance.push_back(reachDistance(h));
+    closed += h.at("closed").get<bool>() ? 1 : 0;
+    if (farthest == nullptr || distance.back() > reachDistance(*farthest)) {
+      farthest = &h;
+      farthest_index = index;
+    }
+    if (aided) aided_distance.push_back(reachDistance(h.at("aided")));
+  }
+  nlohmann::json j = {{"distance_m", quantilesJson(distance)},
+                      {"scenarios_closed", closed},
+                      {"scenarios", records.size()}};
+  if (farthest != nullptr) {
+    j["farthest"] = {{"scenario", farthest_index},
+                     {"distance_m", farthest->at("distance_m")},
+                     {"direction", farthest->at("direction")},
+                     {"closed", farthest->at("closed")}};
+  }
+  if (aided) j["aided_distance_m"] = quantilesJson(aided_distance);
+  return j;
+}
+
 }  // namespace
+
+nlohmann::json scenarioReachJson(const std::vector<ReachSummary>& reach) {
+  nlohmann::json j = reachEntryJson(reach.at(0));
+  if (reach.size() > 1) j["aided"] = reachEntryJson(reach[1]);
+  return j;
+}
 
 std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
                          const std::map<std::size_t, nlohmann::json>& records, bool far_field,
-                         bool aided) {
+                         bool reach, bool aided) {
   std::string csv =
       "scenario,time_s,offset_x_m,offset_y_m,offset_z_m,pose_yaw_deg,pose_pitch_deg,"
       "pose_roll_deg,yaw_deg,pitch_deg,roll_deg,sigma,specular_reflectance,jitter_sample,"
@@ -54,6 +111,8 @@ std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
   }
   if (far_field) csv += ",far_max_nohd_m,far_peak_intensity_w_sr";
   if (far_field && aided) csv += ",far_aided_max_nohd_m";
+  if (reach) csv += ",reach_m,reach_closed";
+  if (reach && aided) csv += ",aided_reach_m";
   csv += ",unconverged_points,evaluations,seconds\n";
   for (const auto& [index, rec] : records) {
     const nlohmann::json& p = rec.at("parameters");
@@ -88,6 +147,16 @@ std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
       number(rec.at("far_field").at("max_nohd_m"));
       number(rec.at("far_field").at("peak_intensity_w_sr"));
       if (aided) number(rec.at("far_field").at("aided_max_nohd_m"));
+    }
+    if (reach) {
+      const nlohmann::json& h = rec.at("hazard_reach");
+      // An unbounded reach (null) is written as inf: never an empty cell that reads as 0.
+      cell(h.at("distance_m").is_null() ? "inf" : csvNumber(h.at("distance_m").get<double>()));
+      cell(h.at("closed").get<bool>() ? "1" : "0");
+      if (aided) {
+        const nlohmann::json& a = h.at("aided").at("distance_m");
+        cell(a.is_null() ? "inf" : csvNumber(a.get<double>()));
+      }
     }
     cell(std::to_string(rec.at("unconverged_points").get<std::int64_t>()));
     cell(std::to_string(rec.at("evaluations").get<std::int64_t>()));
@@ -267,6 +336,7 @@ nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLatti
     }
     j["far_field"] = far;
   }
+  if (study.base.wantsReach()) j["hazard_reach"] = studyReachJson(records, h.aid.has_value());
   return j;
 }
 
@@ -352,6 +422,16 @@ void printBatchSummary(std::ostream& err, const nlohmann::json& summary,
           << formatNumber("%.4g", r.at("aided_hazardous_in_any_scenario" + unit).get<double>())
           << " " << symbol << "\n";
     }
+  }
+  if (summary.contains("hazard_reach")) {
+    const nlohmann::json& h = summary.at("hazard_reach");
+    const nlohmann::json& q = h.at("distance_m");
+    const auto metres = [](const nlohmann::json& x) {
+      return x.is_null() ? std::string("unbounded") : formatNumber("%.4g", x.get<double>()) + " m";
+    };
+    err << "  hazard reach: median " << metres(q.at("median")) << ", p95 " << metres(q.at("p95"))
+        << ", max " << metres(q.at("max")) << "; closed in "
+        << h.at("scenarios_closed").get<std::size_t>() << " of " << n << " scenarios\n";
   }
   err << "  wrote " << out_dir.string() << "/{" << output_names::kScenariosCsv << ", "
       << output_names::kSummary;

@@ -14,6 +14,7 @@
 
 #include "observers/far_field.h"
 #include "observers/field.h"
+#include "observers/reach.h"
 #include "pipeline/hazard_report.h"
 #include "pipeline/study.h"
 #include "pipeline/study_maps.h"
@@ -31,11 +32,15 @@ nlohmann::json scenarioRegionJson(const StudyLattice& r, const FieldStats& stats
 /// @brief The far field's entry of a scenario's result.json (with farHazardJson()).
 nlohmann::json scenarioFarFieldJson(const FarField& far, const HazardSpec& h);
 
+/// @brief The hazard reach's entry of a scenario's result.json: per threshold (the MPE, then
+/// the aided MPE) the distance, direction, whether it is closed, and the volume.
+nlohmann::json scenarioReachJson(const std::vector<ReachSummary>& reach);
+
 /// @brief scenarios.csv: one row per scenario record, in index order (docs/batch.md lists the
 /// columns).
 std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
                          const std::map<std::size_t, nlohmann::json>& records, bool far_field,
-                         bool aided);
+                         bool reach, bool aided);
 
 /// @brief Writes one region's aggregated map to @p path (StudyLattice::studyFile()): maximum
 /// irradiance and hazard ratio, coverage probability, and with an optical aid the aided ratio
@@ -46,7 +51,7 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
 
 /// @brief summary.json of a study: the limits, quantiles over the scenarios of each region's
 /// peak ratio and extent, the areas or volumes hazardous in any and in half the scenarios, the
-/// far field's NOHD (aided too, with an aid).
+/// far field's NOHD and the hazard reach (aided too, with an aid).
 nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLattice>& lattices,
                                 const std::map<std::size_t, nlohmann::json>& records,
                                 std::size_t resumed, int ranks, double wall_s);

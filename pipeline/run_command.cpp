@@ -219,6 +219,52 @@ FarField sceneFarField(const SceneTarget& target, const Scene& scene, const Memo
   return far;
 }
 
+SceneReach sceneReach(const SceneTarget& target, const Scene& scene, const FarField& far,
+                      const MemoryWatch& watch, const std::string& what, std::ostream* progress_to,
+                      bool terminal, PointExchange* exchange) {
+  const ReachSpec spec = reachSpec(scene, far);
+  const FieldSpec face = reachFaceSpec(0, spec);
+  const std::uint64_t far_bytes = farFieldMemoryFloorBytes(far.spec());
+  const std::uint64_t face_bytes = fieldMemoryFloorBytes(face, false);
+  const std::string lattice = "6 × " + std::to_string(spec.face_cells + 1) + "² rays × " +
+                              std::to_string(face.radial->layers + 1) + " layers from " +
+                              formatNumber("%.3g", spec.near_m) + " to " +
+                              formatNumber("%.4g", spec.far_m) + " m";
+  requireWithinBudget(what + " (" + lattice + ") beside the far field", far_bytes + face_bytes,
+                      watch.budgetBytes(),
+                      "lower reach.face_cells, raise reach.layer_ratio, or raise --memory");
+  WorkCounter counter;
+  counter.stop = &watch.stopFlag();
+  std::unique_ptr<ProgressReporter> progress;
+  if (progress_to != nullptr) {
+    *progress_to << "glint run: " << what << ", " << lattice << "; memory: at least "
+                 << formatBytes(static_cast<double>(far_bytes + face_bytes)) << " of the "
+                 << formatBytes(static_cast<double>(watch.budgetBytes())) << " budget\n";
+    progress =
+        std::make_unique<ProgressReporter>(*progress_to, terminal, "reach points", 0, counter);
+  }
+  const FieldProblem problem = fieldProblem(target, scene, face);
+  const auto start = std::chrono::steady_clock::now();
+  SceneReach reach{[&] {
+                     try {
+                       return computeNearReach(problem.integrator, spec, problem.excluded, &counter,
+                                               exchange);
+                     } catch (const WorkStopped&) {
+                       if (progress) progress->stop();
+                       watch.check(what);
+                       throw;
+                     }
+                   }(),
+                   {},
+                   0.0};
+  if (progress) progress->stop();
+  reach.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double mu = scene.hazard.atmosphere.extinction_per_m;
+  for (std::size_t t = 0; t < spec.thresholds_w_m2.size(); ++t)
+    reach.summaries.push_back(summarizeReach(reach.near, far, t, mu));
+  return reach;
+}
+
 void requireFinite(const ObserverField& field, const std::string& region) {
   const FieldStats& s = field.stats();
   if (s.non_finite_points > 0) {
@@ -331,54 +377,13 @@ void runPlanes(const RunContext& c, RunSummary& s) {
   s.j["planes"] = planes;
 }
 
-// The hazard reach: the radial lattices out to the far radius, refused before they are
-// allocated if one face's field and the far field would pass the budget; then its files, its
-// entry in the summary and its line on the terminal.
+// The hazard reach, its files, its entry in the summary and its line on the terminal.
 void runReach(const RunContext& c, const FarResult& far, RunSummary& s) {
-  const ReachSpec spec = reachSpec(c.scene, *far.far);
-  const FieldSpec face = reachFaceSpec(0, spec);
-  const std::uint64_t far_bytes = farFieldMemoryFloorBytes(far.far->spec());
-  const std::uint64_t face_bytes = fieldMemoryFloorBytes(face, false);
-  const int rays = spec.face_cells + 1;
-  const std::string what = "the hazard reach (6 × " + std::to_string(rays) + "² rays × " +
-                           std::to_string(face.radial->layers + 1) + " layers from " +
-                           formatNumber("%.3g", spec.near_m) + " to " +
-                           formatNumber("%.4g", spec.far_m) + " m)";
-  requireWithinBudget(what + " beside the far field", far_bytes + face_bytes, c.watch.budgetBytes(),
-                      "lower reach.face_cells, raise reach.layer_ratio, or raise --memory");
-  if (!c.args.quiet) {
-    c.err << "glint run: " << what << "; memory: at least "
-          << formatBytes(static_cast<double>(far_bytes + face_bytes)) << " of the "
-          << formatBytes(static_cast<double>(c.watch.budgetBytes())) << " budget\n";
-  }
-  const FieldProblem problem = fieldProblem(c.target, c.scene, face);
-  WorkCounter counter;
-  counter.stop = &c.watch.stopFlag();
-  std::unique_ptr<ProgressReporter> progress;
-  if (!c.args.quiet) {
-    progress =
-        std::make_unique<ProgressReporter>(c.err, c.args.terminal, "reach points", 0, counter);
-  }
-  const auto start = std::chrono::steady_clock::now();
-  const NearReach near = [&] {
-    try {
-      return computeNearReach(problem.integrator, spec, problem.excluded, &counter, c.exchange);
-    } catch (const WorkStopped&) {
-      if (progress) progress->stop();
-      c.watch.check("the hazard reach");
-      throw;
-    }
-  }();
-  if (progress) progress->stop();
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double mu = c.scene.hazard.atmosphere.extinction_per_m;
-  std::vector<ReachSummary> reach;
-  for (std::size_t t = 0; t < spec.thresholds_w_m2.size(); ++t)
-    reach.push_back(summarizeReach(near, *far.far, t, mu));
-  s.j["hazard_reach"] = reachJson(near, reach, seconds);
-  if (!c.args.quiet) printReach(c.err, near, reach, seconds);
-  c.outputs.writeReach({near, *far.far, c.scene.hazard, c.info});
+  const SceneReach reach = sceneReach(c.target, c.scene, *far.far, c.watch, "the hazard reach",
+                                      c.args.quiet ? nullptr : &c.err, c.args.terminal, c.exchange);
+  s.j["hazard_reach"] = reachJson(reach.near, reach.summaries, reach.seconds);
+  if (!c.args.quiet) printReach(c.err, reach.near, reach.summaries, reach.seconds);
+  c.outputs.writeReach({reach.near, *far.far, c.scene.hazard, c.info});
 }
 
 // The meshes' surface model against the alternatives, at the regions' peaks and the far

@@ -8,11 +8,13 @@
 #include <ostream>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "export/exr_map.h"
 #include "export/field_files.h"
 #include "observers/far_field.h"
 #include "observers/field.h"
+#include "observers/reach.h"
 #include "pipeline/scene.h"
 
 namespace glint {
@@ -58,5 +60,21 @@ class MemoryWatch;
 FarField sceneFarField(const SceneTarget& target, const Scene& scene, const MemoryWatch& watch,
                        const std::string& what, std::ostream* progress_to, bool terminal,
                        PointExchange* exchange = nullptr);
+
+/// @brief The hazard reach of a scene (observers/reach.h): its lattices about the lit ball of
+/// @p far out to its far radius, summarized per threshold (the MPE, then the aided MPE).
+struct SceneReach {
+  NearReach near;
+  std::vector<ReachSummary> summaries;
+  double seconds = 0.0;
+};
+
+/// @brief Computes the scene's hazard reach beside its far field @p far (sceneFarField()):
+/// refused before its lattices are allocated if one face's and the far field's memory would
+/// pass the budget; with progress on @p progress_to ("reach points") unless null.
+/// @throw InputError (the memory budget).
+SceneReach sceneReach(const SceneTarget& target, const Scene& scene, const FarField& far,
+                      const MemoryWatch& watch, const std::string& what, std::ostream* progress_to,
+                      bool terminal, PointExchange* exchange = nullptr);
 
 }  // namespace glint

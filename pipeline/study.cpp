@@ -222,6 +222,9 @@ Study parseStudy(std::string_view text, const std::string& source,
   if (!study.base.observers && study.base.planes.empty()) {
     r.fail("scene", "the scene has no observer box or planes: a study needs one");
   }
+  if (study.base.wantsReach() && !study.base.far_field.enabled) {
+    r.fail("scene", "the scene asks for the hazard reach without the far field it ends in");
+  }
 
   Vec3 sum(0.0);
   for (const ObjectSpec& o : study.base.objects) sum += o.centre_m();

@@ -134,6 +134,37 @@ TEST(ReachRun, WithoutBoxOrPlaneTheReachAndItsFarFieldCannotBeTurnedOff) {
   fs::remove_all(dir);
 }
 
+// A study whose scene asks for the reach: each scenario's result.json and row of scenarios.csv
+// carry its reach, and the study's summary their quantiles and the farthest scenario.
+TEST(ReachRun, AStudyGivesEachScenariosReachAndTheirQuantiles) {
+  const fs::path out = fs::temp_directory_path() / "glint_reach_study";
+  fs::remove_all(out);
+  const test::Outcome run = test::glint(
+      {"batch", (fs::path(GLINT_TEST_DATA_DIR) / "reach_study.json").string(), "-o", out.string()});
+  ASSERT_EQ(run.status, 0) << run.err;
+  std::vector<double> reaches;
+  for (const char* scenario : {"s000000", "s000001"}) {
+    const nlohmann::json result =
+        nlohmann::json::parse(std::ifstream(out / "scenarios" / scenario / "result.json"));
+    const nlohmann::json& reach = result.at("hazard_reach");
+    EXPECT_TRUE(reach.at("closed").get<bool>()) << scenario << ": " << reach.dump();
+    reaches.push_back(reach.at("distance_m").get<double>());
+    // The tilts turn the pencil, not its length: each about 423 m.
+    EXPECT_NEAR(reaches.back(), 423.1, 0.01 * 423.1) << scenario;
+  }
+  const nlohmann::json summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  const nlohmann::json& study = summary.at("hazard_reach");
+  EXPECT_EQ(study.at("scenarios_closed").get<int>(), 2) << study.dump();
+  EXPECT_DOUBLE_EQ(study.at("distance_m").at("max").get<double>(),
+                   std::max(reaches[0], reaches[1]));
+  EXPECT_DOUBLE_EQ(study.at("distance_m").at("min").get<double>(),
+                   std::min(reaches[0], reaches[1]));
+  const std::string csv = test::readFile(out / "scenarios.csv");
+  EXPECT_NE(csv.find(",reach_m,reach_closed,"), std::string::npos) << csv;
+  EXPECT_NE(run.err.find("hazard reach: median"), std::string::npos) << run.err;
+  fs::remove_all(out);
+}
+
 TEST(ReachRun, APlaneMayNotTakeTheReachsOrTheFarFieldsMapName) {
   for (const char* name : {"reach", "far_field"}) {
     const std::string scene =
