@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# `mpirun -np 2 glint run` against `glint run` on one process, on a scene with a box, a plane
-# and the far field: every file must be the same bytes, but for the VDB's grid UUIDs (random
+# `mpirun -np 2 glint run` against `glint run` on one process, on a scene with a box, a plane,
+# the far field and the hazard reach: every file must be the same bytes, but for the VDB's grid UUIDs (random
 # per write) and summary.json's "seconds" (wall-clock times).
 # Usage: run_mpi_test.sh GLINT MPIEXEC SCENE WORKDIR
 set -euo pipefail
