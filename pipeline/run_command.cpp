@@ -251,7 +251,9 @@ SceneReach sceneReach(const SceneTarget& target, const Scene& scene, const FarFi
                                                exchange);
                      } catch (const WorkStopped&) {
                        if (progress) progress->stop();
-                       watch.check(what);
+                       watch.check(what,
+                                   "Raise --memory, or lower reach.face_cells, or raise "
+                                   "reach.layer_ratio");
                        throw;
                      }
                    }(),

@@ -16,7 +16,10 @@
 
 #include "export/exr_map.h"
 #include "pipeline/input_error.h"
+#include "pipeline/memory_budget.h"
+#include "pipeline/run_command.h"
 #include "pipeline/scene.h"
+#include "pipeline/target_builder.h"
 #include "support/cli.h"
 #include "support/files.h"
 
@@ -163,6 +166,55 @@ TEST(ReachRun, AStudyGivesEachScenariosReachAndTheirQuantiles) {
   EXPECT_NE(csv.find(",reach_m,reach_closed,"), std::string::npos) << csv;
   EXPECT_NE(run.err.find("hazard reach: median"), std::string::npos) << run.err;
   fs::remove_all(out);
+}
+
+// The reach's lattices are refused before they are allocated when, beside the far field, they
+// would pass the memory budget: one clear message that says what to lower. (Under glint run the
+// resident memory of the program itself is over such a budget before the far field; the field
+// builders' watch stops a lattice whose grids outgrow a larger one.)
+TEST(ReachRun, ALatticeBeyondTheMemoryBudgetIsRefusedBeforeItIsAllocated) {
+  Scene scene = loadScene(fs::path(GLINT_TEST_DATA_DIR) / "reach_pencil.json");
+  scene.reach.face_cells = 512;  // 6 × 513² rays × 337 layers
+  const SceneTarget target = sceneTarget(scene, reachAccuracy(scene));
+  const FarField far =
+      computeFarField(target.integrator, checkedFarFieldSpec(scene, target.integrator));
+  const std::uint64_t far_bytes = farFieldMemoryFloorBytes(far.spec());
+  const MemoryWatch watch(far_bytes + 1024);  // the far field fits, the lattice does not
+  try {
+    (void)sceneReach(target, scene, far, watch, "the hazard reach", nullptr, false);
+    ADD_FAILURE() << "a lattice beyond the budget was computed";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("the hazard reach (6 × 513² rays × 337 layers"), std::string::npos) << m;
+    EXPECT_NE(m.find("beside the far field"), std::string::npos) << m;
+    EXPECT_NE(m.find("reach.face_cells"), std::string::npos) << "it says what to lower: " << m;
+  }
+}
+
+// With an optical aid the reach is given for the aided eye beside the naked one: the pencil's
+// far-field reach grows as the square root of the aid's gain.
+TEST(ReachRun, AnOpticalAidsReachIsGivenBesideTheNakedEyes) {
+  nlohmann::json scene =
+      nlohmann::json::parse(std::ifstream(fs::path(GLINT_TEST_DATA_DIR) / "reach_pencil.json"));
+  scene["optical_aid"] = {{"gain", 4.0}};
+  const fs::path dir = fs::temp_directory_path() / "glint_reach_aided";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "scene.json") << scene.dump();
+  const RunResult r = runScene(dir / "scene.json", "glint_reach_aided_out");
+  ASSERT_EQ(r.outcome.status, 0) << r.outcome.err;
+  const nlohmann::json& reach = r.summary.at("hazard_reach");
+  const double naked = reach.at("distance_m").get<double>();
+  const double aided = reach.at("aided").at("distance_m").get<double>();
+  EXPECT_NEAR(aided / naked, 2.0, 1e-3) << reach.dump();  // √4, both from the far field
+  EXPECT_TRUE(reach.at("aided").at("closed").get<bool>());
+  EXPECT_NE(r.outcome.err.find("through the optical aid: "), std::string::npos) << r.outcome.err;
+  int w = 0, h = 0;
+  const std::vector<float> map =
+      readExrChannel((r.out / "reach.exr").string(), "aided_reach_m", w, h);
+  EXPECT_NEAR(*std::max_element(map.begin(), map.end()), aided, 1e-3 * aided);
+  fs::remove_all(dir);
+  fs::remove_all(r.out);
 }
 
 TEST(ReachRun, APlaneMayNotTakeTheReachsOrTheFarFieldsMapName) {
