@@ -89,6 +89,30 @@ nlohmann::json studyReachJson(const std::map<std::size_t, nlohmann::json>& recor
   return j;
 }
 
+// What the region's coverage map says with its confidence: each point's interval, and the
+// region hazardous with the study's probability, bounded at that confidence over the whole map.
+nlohmann::json coverageConfidenceJson(const Study& study, const StudyLattice& r, std::size_t n) {
+  const SimultaneousCoverage s =
+      simultaneousCoverage(r.hazardous, n, study.coverage_confidence, study.coverage_probability);
+  const char* unit = r.plane ? "_m2" : "_m3";
+  return {{"confidence", study.coverage_confidence},
+          {"probability", study.coverage_probability},
+          {"pointwise",
+           "coverage_lower and coverage_upper: each point's Clopper-Pearson interval, which "
+           "holds with probability at least the confidence"},
+          {"simultaneous",
+           "Clopper-Pearson at 1 - (1 - confidence) / (2 points) a side (Bonferroni over the "
+           "map's points): with probability at least the confidence, every point counted in "
+           "the first extent is hazardous with at least the probability, and every such point "
+           "is counted in the second"},
+          {"points", s.points},
+          {std::string("hazardous_with_probability_certainly") + unit,
+           static_cast<double>(s.certain) * r.cell()},
+          {std::string("hazardous_with_probability_possibly") + unit,
+           static_cast<double>(s.possible) * r.cell()},
+          {"scenarios_needed_at_a_point", s.certain_from_count}};
+}
+
 }  // namespace
 
 nlohmann::json scenarioReachJson(const std::vector<ReachSummary>& reach) {
@@ -174,13 +198,18 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
   for (std::size_t i = 0; i < max_ratio.size(); ++i)
     max_ratio[i] = static_cast<float>(h.ratio(static_cast<double>(r.max_w_m2[i])));
   const std::vector<float> cover = coverage(r.hazardous, scenarios);
+  // Each point's exact interval at the study's confidence.
+  const double alpha_each_side = 0.5 * (1.0 - study.coverage_confidence);
+  const CoverageBounds bounds = coverageBounds(r.hazardous, scenarios, alpha_each_side);
   // With an optical aid, the same through it.
   std::vector<float> aided_max_ratio, aided_cover;
+  CoverageBounds aided_bounds;
   if (h.aid) {
     aided_max_ratio.resize(r.max_w_m2.size());
     for (std::size_t i = 0; i < aided_max_ratio.size(); ++i)
       aided_max_ratio[i] = static_cast<float>(h.aidedRatio(static_cast<double>(r.max_w_m2[i])));
     aided_cover = coverage(r.aided_hazardous, scenarios);
+    aided_bounds = coverageBounds(r.aided_hazardous, scenarios, alpha_each_side);
   }
   const std::string program = std::string("glint ") + GLINT_VERSION;
   AtomicFile file(path);
@@ -196,10 +225,14 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
     g.pixel_m = r.spec.voxel_m;
     std::vector<ExrChannel> channels = {{"max_irradiance_w_m2", &r.max_w_m2},
                                         {"max_hazard_ratio", &max_ratio},
-                                        {"coverage_probability", &cover}};
+                                        {"coverage_probability", &cover},
+                                        {"coverage_lower", &bounds.lower},
+                                        {"coverage_upper", &bounds.upper}};
     if (h.aid) {
       channels.push_back({"aided_max_hazard_ratio", &aided_max_ratio});
       channels.push_back({"aided_coverage_probability", &aided_cover});
+      channels.push_back({"aided_coverage_lower", &aided_bounds.lower});
+      channels.push_back({"aided_coverage_upper", &aided_bounds.upper});
     }
     writeExr(file.stream(), g, channels, {program, study.base.hazard.wavelength_nm, h.mpe_w_m2});
   } else {
@@ -210,6 +243,7 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
                     {"length_unit", "m"},
                     {"mpe_rule", hazardCitation(h)}};
     meta.numbers = {{"scenarios", static_cast<double>(scenarios)},
+                    {"coverage_confidence", study.coverage_confidence},
                     {"wavelength_nm", study.base.hazard.wavelength_nm},
                     {"exposure_s", h.exposure_s},
                     {"mpe_w_m2", h.mpe_w_m2},
@@ -217,7 +251,10 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
     std::vector<LatticeChannel> channels = {
         {"max_irradiance_w_m2", "W/m^2", &r.max_w_m2},
         {"max_hazard_ratio", "1 (irradiance / MPE)", &max_ratio},
-        {"coverage_probability", "1 (fraction of scenarios at or above the MPE)", &cover}};
+        {"coverage_probability", "1 (fraction of scenarios at or above the MPE)", &cover},
+        {"coverage_lower", "1 (Clopper-Pearson lower bound at coverage_confidence)", &bounds.lower},
+        {"coverage_upper", "1 (Clopper-Pearson upper bound at coverage_confidence)",
+         &bounds.upper}};
     if (h.aid) {
       meta.numbers["optical_aid_gain"] = h.aid->gain;
       channels.push_back(
@@ -225,6 +262,10 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
       channels.push_back({"aided_coverage_probability",
                           "1 (fraction of scenarios at or above the MPE through the aid)",
                           &aided_cover});
+      channels.push_back(
+          {"aided_coverage_lower", "1 (Clopper-Pearson lower bound, aided)", &aided_bounds.lower});
+      channels.push_back(
+          {"aided_coverage_upper", "1 (Clopper-Pearson upper bound, aided)", &aided_bounds.upper});
     }
     writeLatticeVdb(file.stream(), r.spec, channels, meta);
   }
@@ -290,7 +331,8 @@ nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLatti
           n > 0 ? static_cast<double>(with_hazard) / static_cast<double>(n) : 0.0},
          {"max_irradiance_w_m2", max_e},
          {std::string("hazardous_in_any_scenario") + unit, static_cast<double>(ever) * r.cell()},
-         {std::string("hazardous_in_half_or_more") + unit, static_cast<double>(half) * r.cell()}});
+         {std::string("hazardous_in_half_or_more") + unit, static_cast<double>(half) * r.cell()},
+         {"coverage_confidence", coverageConfidenceJson(study, r, n)}});
     if (h.aid) {
       std::int64_t aided_ever = 0;
       for (std::uint32_t c : r.aided_hazardous) aided_ever += c > 0 ? 1 : 0;
@@ -414,6 +456,18 @@ void printBatchSummary(std::ostream& err, const nlohmann::json& summary,
         << " scenarios; hazardous in any scenario "
         << formatNumber("%.4g", r.at("hazardous_in_any_scenario" + unit).get<double>()) << " "
         << symbol << "\n";
+    const nlohmann::json& c = r.at("coverage_confidence");
+    err << "    hazardous with probability ≥ "
+        << formatNumber("%g", c.at("probability").get<double>()) << " at "
+        << formatNumber("%g", 100.0 * c.at("confidence").get<double>())
+        << " % confidence over the whole map: at least "
+        << formatNumber("%.4g", c.at("hazardous_with_probability_certainly" + unit).get<double>())
+        << ", at most "
+        << formatNumber("%.4g", c.at("hazardous_with_probability_possibly" + unit).get<double>())
+        << " " << symbol;
+    if (c.at("scenarios_needed_at_a_point").get<std::size_t>() > n)
+      err << " (" << n << " scenarios cannot prove it anywhere: more are needed)";
+    err << "\n";
     if (r.contains("scenarios_with_aided_hazard")) {
       err << "    through the optical aid: peak ratio max "
           << formatNumber("%.3g", r.at("aided_peak_hazard_ratio").at("max").get<double>())

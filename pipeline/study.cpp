@@ -276,6 +276,17 @@ Study parseStudy(std::string_view text, const std::string& source,
     j.finish();
   }
 
+  if (r.has("coverage")) {
+    ObjectReader c = r.object("coverage");
+    study.coverage_confidence = c.number("confidence", study.coverage_confidence);
+    if (!(study.coverage_confidence >= 0.5 && study.coverage_confidence < 1.0))
+      c.fail("confidence", "must be in [0.5, 1)");
+    study.coverage_probability = c.number("probability", study.coverage_probability);
+    if (!(study.coverage_probability > 0.0 && study.coverage_probability <= 1.0))
+      c.fail("probability", "must be in (0, 1]");
+    c.finish();
+  }
+
   std::vector<Pose> poses{Pose{}};
   if (r.has("trajectory")) poses = readTrajectory(r.object("trajectory"));
   r.finish();

@@ -55,6 +55,10 @@ struct Study {
   std::string material;  ///< the material the σ and reflectance sweeps change ("": all)
   double jitter_sigma_rad = 0.0;
   std::uint64_t jitter_seed = 0;
+  /// Key `coverage`: the confidence of the coverage maps' intervals (each point's, and the
+  /// whole map's at once), and the probability the summary's hazardous region is stated for.
+  double coverage_confidence = 0.95;
+  double coverage_probability = 0.5;
   std::vector<Scenario> scenarios;
   /// FNV-1a of the study's and the base scene's bytes: a resumed study must match it.
   std::string fnv1a64;

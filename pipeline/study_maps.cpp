@@ -1,6 +1,7 @@
 #include "pipeline/study_maps.h"
 
 #include <algorithm>
+#include <boost/math/special_functions/beta.hpp>
 #include <stdexcept>
 
 #include "pipeline/output_names.h"
@@ -64,6 +65,62 @@ std::vector<StudyLattice> studyLattices(const Scene& base) {
         {base.planes[p].name, true, p, planeFieldSpec(base, base.planes[p]), {}, {}, {}, aided});
   }
   return lattices;
+}
+
+ProportionInterval clopperPearson(std::uint64_t k, std::uint64_t n, double alpha_each_side) {
+  ProportionInterval i;
+  if (n == 0) return i;  // nothing observed: the whole of [0, 1]
+  const auto kd = static_cast<double>(k), nd = static_cast<double>(n);
+  if (k > 0) i.lower = boost::math::ibeta_inv(kd, nd - kd + 1.0, alpha_each_side);
+  if (k < n) i.upper = boost::math::ibeta_inv(kd + 1.0, nd - kd, 1.0 - alpha_each_side);
+  return i;
+}
+
+namespace {
+
+// The intervals of 0 .. n successes in n trials: a map has at most n + 1 distinct counts.
+std::vector<ProportionInterval> intervalTable(std::size_t n, double alpha_each_side) {
+  std::vector<ProportionInterval> table(n + 1);
+  for (std::size_t k = 0; k <= n; ++k) table[k] = clopperPearson(k, n, alpha_each_side);
+  return table;
+}
+
+}  // namespace
+
+CoverageBounds coverageBounds(const std::vector<std::uint32_t>& counts, std::size_t scenarios,
+                              double alpha_each_side) {
+  const std::vector<ProportionInterval> table = intervalTable(scenarios, alpha_each_side);
+  CoverageBounds b;
+  b.lower.resize(counts.size());
+  b.upper.resize(counts.size());
+  for (std::size_t i = 0; i < counts.size(); ++i) {
+    const ProportionInterval& p = table.at(counts[i]);
+    b.lower[i] = static_cast<float>(p.lower);
+    b.upper[i] = static_cast<float>(p.upper);
+  }
+  return b;
+}
+
+SimultaneousCoverage simultaneousCoverage(const std::vector<std::uint32_t>& counts,
+                                          std::size_t scenarios, double confidence,
+                                          double probability) {
+  SimultaneousCoverage c;
+  c.points = static_cast<std::int64_t>(counts.size());
+  if (counts.empty()) return c;
+  const double alpha_each_side = (1.0 - confidence) / (2.0 * static_cast<double>(counts.size()));
+  const std::vector<ProportionInterval> table = intervalTable(scenarios, alpha_each_side);
+  c.certain_from_count = scenarios + 1;
+  for (std::size_t k = 0; k <= scenarios; ++k) {
+    if (table[k].lower >= probability) {
+      c.certain_from_count = k;
+      break;
+    }
+  }
+  for (const std::uint32_t k : counts) {
+    c.certain += table.at(k).lower >= probability ? 1 : 0;
+    c.possible += table.at(k).upper >= probability ? 1 : 0;
+  }
+  return c;
 }
 
 std::vector<float> coverage(const std::vector<std::uint32_t>& counts, std::size_t scenarios) {

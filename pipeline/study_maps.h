@@ -61,4 +61,41 @@ std::vector<StudyLattice> studyLattices(const Scene& base);
 /// @brief The coverage probability at each point: @p counts / @p scenarios.
 std::vector<float> coverage(const std::vector<std::uint32_t>& counts, std::size_t scenarios);
 
+/// @brief A confidence interval for a proportion.
+struct ProportionInterval {
+  double lower = 0.0;
+  double upper = 1.0;
+};
+
+/// @brief The exact (Clopper–Pearson) interval for @p k successes in @p n trials: each end
+/// misses the true proportion with probability at most @p alpha_each_side, whatever it is
+/// (lower = 0 at k = 0, upper = 1 at k = n). The ends are quantiles of Beta distributions,
+/// B(α; k, n − k + 1) and B(1 − α; k + 1, n − k), through Boost.Math.
+ProportionInterval clopperPearson(std::uint64_t k, std::uint64_t n, double alpha_each_side);
+
+/// @brief clopperPearson() at each point of a coverage map (@p counts of @p scenarios).
+struct CoverageBounds {
+  std::vector<float> lower, upper;
+};
+CoverageBounds coverageBounds(const std::vector<std::uint32_t>& counts, std::size_t scenarios,
+                              double alpha_each_side);
+
+/// @brief What a study's coverage map says of the region hazardous with probability at least
+/// @p probability, at confidence @p confidence over the whole map at once: each point's
+/// interval at 1 − α/(2m) a side, m the map's points (Bonferroni, which needs nothing of how
+/// the points depend on one another). With probability at least the confidence, every point
+/// counted in `certain` has a true probability of at least @p probability, and every point
+/// with that probability is counted in `possible`.
+struct SimultaneousCoverage {
+  std::int64_t points = 0;    ///< m
+  std::int64_t certain = 0;   ///< lower bound ≥ probability
+  std::int64_t possible = 0;  ///< upper bound ≥ probability
+  /// The coverage a point needs to be counted certain: the fewest hazardous scenarios (of n)
+  /// whose lower bound reaches the probability; n + 1 where none does.
+  std::uint64_t certain_from_count = 0;
+};
+SimultaneousCoverage simultaneousCoverage(const std::vector<std::uint32_t>& counts,
+                                          std::size_t scenarios, double confidence,
+                                          double probability);
+
 }  // namespace glint

@@ -29,9 +29,12 @@ diff <(strip_seconds "$serial/scenarios.csv") <(strip_seconds "$work/mpi/scenari
 /usr/bin/python3 - "$work/mpi/box.vdb" <<'PY'
 import sys, pyopenvdb as vdb
 grids = {g.name: g for g in vdb.readAll(sys.argv[1])[0]}
-assert set(grids) == {"max_irradiance_w_m2", "max_hazard_ratio", "coverage_probability"}, grids
+assert set(grids) == {"max_irradiance_w_m2", "max_hazard_ratio", "coverage_probability",
+                      "coverage_lower", "coverage_upper"}, grids
 lo, hi = grids["coverage_probability"].evalMinMax()
 assert 0.0 <= lo and hi <= 1.0 and hi > 0.0, (lo, hi)
+# The Clopper-Pearson ends lie in [0, 1].
+assert grids["coverage_upper"].evalMinMax()[1] <= 1.0 and grids["coverage_lower"].evalMinMax()[0] >= 0.0
 print("box.vdb: grids", sorted(grids), "coverage in", (lo, hi))
 PY
 

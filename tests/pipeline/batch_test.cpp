@@ -85,10 +85,19 @@ TEST_F(Batch, AggregatesAreTheMaximumAndTheHazardFractionOfTheScenarioMaps) {
       hazardous[i] += static_cast<double>(e[i]) >= mpe ? 1 : 0;
     }
   }
+  // Each pixel's 95 % Clopper–Pearson interval of its count of the four scenarios.
+  const std::vector<float> lower = exrChannel(dir_ / "ground.exr", "coverage_lower");
+  const std::vector<float> upper = exrChannel(dir_ / "ground.exr", "coverage_upper");
   int some = 0, all = 0;
   for (std::size_t i = 0; i < max_e.size(); ++i) {
     ASSERT_EQ(max_e[i], expect_max[i]) << "pixel " << i;
     ASSERT_EQ(cover[i], static_cast<float>(hazardous[i] / 4.0)) << "pixel " << i;
+    const ProportionInterval ci =
+        clopperPearson(static_cast<std::uint64_t>(hazardous[i]), 4, 0.025);
+    ASSERT_EQ(lower[i], static_cast<float>(ci.lower)) << "pixel " << i;
+    ASSERT_EQ(upper[i], static_cast<float>(ci.upper)) << "pixel " << i;
+    ASSERT_LE(lower[i], cover[i]);
+    ASSERT_GE(upper[i], cover[i]);
     ASSERT_EQ(max_ratio[i], static_cast<float>(static_cast<double>(max_e[i]) / mpe)) << i;
     some += hazardous[i] > 0 && hazardous[i] < 4 ? 1 : 0;
     all += hazardous[i] == 4 ? 1 : 0;

@@ -1,0 +1,116 @@
+// The coverage maps' confidence: exact (Clopper–Pearson) intervals per point, and the region
+// hazardous with a given probability bounded over the whole map at once.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "pipeline/study_maps.h"
+
+namespace glint {
+namespace {
+
+// P(X ≥ k) for X ~ Binomial(n, p), summed term by term in logarithms: independent of the Beta
+// quantiles the interval is computed from.
+double upperTail(int k, int n, double p) {
+  double sum = 0.0;
+  for (int j = k; j <= n; ++j) {
+    sum += std::exp(std::lgamma(n + 1.0) - std::lgamma(j + 1.0) - std::lgamma(n - j + 1.0) +
+                    j * std::log(p) + (n - j) * std::log1p(-p));
+  }
+  return sum;
+}
+double lowerTail(int k, int n, double p) { return 1.0 - upperTail(k + 1, n, p); }
+
+TEST(ClopperPearson, EachEndLeavesExactlyAlphaInTheBinomialTailItInverts) {
+  const double alpha = 0.025;
+  for (const auto& [k, n] :
+       std::vector<std::pair<int, int>>{{1, 20}, {7, 20}, {19, 20}, {3, 100}, {50, 100}, {1, 5}}) {
+    const ProportionInterval i = clopperPearson(k, n, alpha);
+    EXPECT_NEAR(upperTail(k, n, i.lower), alpha, 1e-9) << k << " of " << n << ": the lower end";
+    EXPECT_NEAR(lowerTail(k, n, i.upper), alpha, 1e-9) << k << " of " << n << ": the upper end";
+    EXPECT_LT(i.lower, static_cast<double>(k) / n);
+    EXPECT_GT(i.upper, static_cast<double>(k) / n);
+  }
+  // At the ends the tails have one term: (1 − U)^n = α with none seen, L^n = α with all.
+  for (const int n : {1, 20, 1000}) {
+    const ProportionInterval none = clopperPearson(0, n, alpha);
+    EXPECT_EQ(none.lower, 0.0);
+    EXPECT_NEAR(none.upper, 1.0 - std::pow(alpha, 1.0 / n), 1e-12) << n;
+    const ProportionInterval all = clopperPearson(n, n, alpha);
+    EXPECT_EQ(all.upper, 1.0);
+    EXPECT_NEAR(all.lower, std::pow(alpha, 1.0 / n), 1e-12) << n;
+  }
+}
+
+// Over repeated seeds the 95 % intervals hold the true proportion at least 95 % of the time
+// (Clopper–Pearson is exact, so conservative: it never falls short of its rate, whatever p).
+TEST(ClopperPearson, CoversTheTrueProportionAtLeastAtItsNominalRateOverRepeatedSeeds) {
+  const int n = 40, repeats = 2000;
+  const double alpha_each_side = 0.025;
+  // Three standard errors of a 95 % rate over 2000 repeats: 0.0146.
+  const double slack = 3.0 * std::sqrt(0.95 * 0.05 / repeats);
+  for (const double p : {0.02, 0.1, 0.3, 0.5, 0.8}) {
+    int covered = 0;
+    for (int seed = 0; seed < repeats; ++seed) {
+      std::mt19937_64 rng(static_cast<std::uint64_t>(seed) * 7919u + 1u);
+      std::binomial_distribution<int> draw(n, p);
+      const ProportionInterval i = clopperPearson(draw(rng), n, alpha_each_side);
+      covered += i.lower <= p && p <= i.upper ? 1 : 0;
+    }
+    const double rate = static_cast<double>(covered) / repeats;
+    EXPECT_GE(rate, 0.95 - slack) << "p = " << p;
+    std::printf("[ coverage ] p = %.2f: the 95 %% intervals held it in %.4f of %d seeds\n", p, rate,
+                repeats);
+  }
+}
+
+// The simultaneous statement over a map: 200 points, half with a true probability of 0.3 and
+// half of 0.8, each seen in 60 scenarios. At 95 % over the whole map, a map where any 0.3 point
+// is counted certainly hazardous with probability ≥ 0.5, or any 0.8 point is left out of the
+// possible region, happens in at most 5 % of seeds.
+TEST(ClopperPearson, TheWholeMapsStatementFailsInAtMostItsShareOfSeeds) {
+  const int points = 200, n = 60, repeats = 400;
+  int failed = 0;
+  std::int64_t certain_high = 0;
+  for (int seed = 0; seed < repeats; ++seed) {
+    std::mt19937_64 rng(static_cast<std::uint64_t>(seed) + 11u);
+    std::vector<std::uint32_t> counts(points);
+    for (int i = 0; i < points; ++i) {
+      std::binomial_distribution<int> draw(n, i < points / 2 ? 0.3 : 0.8);
+      counts[static_cast<std::size_t>(i)] = static_cast<std::uint32_t>(draw(rng));
+    }
+    const SimultaneousCoverage s = simultaneousCoverage(counts, n, 0.95, 0.5);
+    bool wrong = false;
+    for (int i = 0; i < points; ++i) {
+      const std::uint32_t k = counts[static_cast<std::size_t>(i)];
+      const bool certain = k >= s.certain_from_count;
+      if (i < points / 2 && certain) wrong = true;  // a 0.3 point certified
+    }
+    // The possible region must hold every 0.8 point: each one's upper bound, at the map's α
+    // split over all its points, must reach 0.5.
+    const double alpha_each_side = 0.05 / (2.0 * points);
+    std::int64_t high_possible = 0;
+    for (int i = points / 2; i < points; ++i) {
+      const std::uint32_t k = counts[static_cast<std::size_t>(i)];
+      high_possible += clopperPearson(k, n, alpha_each_side).upper >= 0.5 ? 1 : 0;
+    }
+    if (high_possible < points / 2) wrong = true;
+    EXPECT_GE(s.possible, high_possible);
+    failed += wrong ? 1 : 0;
+    for (int i = points / 2; i < points; ++i)
+      certain_high += counts[static_cast<std::size_t>(i)] >= s.certain_from_count ? 1 : 0;
+  }
+  EXPECT_LE(failed, 0.05 * repeats) << failed << " of " << repeats;
+  EXPECT_GT(certain_high, 0) << "the statement is not empty: some 0.8 points are certified";
+  std::printf(
+      "[ coverage ] the whole map's statement failed in %d of %d seeds; %.3f of the "
+      "0.8 points certified\n",
+      failed, repeats,
+      static_cast<double>(certain_high) / (static_cast<double>(repeats) * points / 2));
+}
+
+}  // namespace
+}  // namespace glint
