@@ -81,7 +81,8 @@ struct Beam {
 
   /// @brief True when the profile may bend across the ball faster than a rule's few nodes
   /// can follow: a Gaussian whose width w(z) at the ball's near end is under twice the ball's
-  /// radius (a flat top is uniform inside its edges, which edgeMayCrossBall() reports).
+  /// radius; a flat top whose edge may cross a ball wider than a tenth of its radius a(z) (a
+  /// rule that clips at the edge draws it straight between its nodes).
   [[nodiscard]] bool profileMayBendInBall(const Vec3& center_m, double radius_m) const;
 
   /// @brief An upper bound, in radians, of the angle between ωi at the centre of a ball of
