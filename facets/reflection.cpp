@@ -80,8 +80,9 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
       material.diffuse_reflectance > 0.0 ? scale * material.diffuse_reflectance / kPi : 0.0;
 
   // Both terms are smooth in a patch that is small against the distance, free of beam edges
-  // and narrow against a Gaussian beam's width; the specular term also varies on the scale of the lobe's width. Where cos θi or cos θr
-  // may change sign the kernel clips the facet, and there the lobe must be nearly flat too.
+  // and narrow against a Gaussian beam's width; the specular term also varies on the scale of the
+  // lobe's width. Where cos θi or cos θr may change sign the kernel clips the facet, and there the
+  // lobe must be nearly flat too.
   const bool smooth = reach <= limits.near_field * d &&
                       (limits.clips_beam_edges || !beam.edgeMayCrossBall(g.centre_m, g.radius_m)) &&
                       !beam.profileMayBendInBall(g.centre_m, g.radius_m);
