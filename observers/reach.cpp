@@ -106,13 +106,16 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
     const int n = r.face_cells;
     const std::size_t rays = rayIndex(n, n, n) + 1;
     out.reach_m.assign(thresholds, std::vector<float>(rays, 0.0f));
-    out.beyond.assign(thresholds, std::vector<std::uint8_t>(rays, 0));
     out.peak_w_m2.assign(rays, 0.0f);
     // Whether lattice point (i, j, k) counts as hazardous for threshold t: an Unresolved point
-    // may have a glint beside it that its lattice cannot see; the target's inside is no place.
+    // may have a glint beside it that its lattice cannot see; an Unconverged one may be short
+    // of its value by its error, which the field keeps only as the largest value plus error
+    // of them all; the target's inside is no place.
+    const double unconverged_upper_w_m2 = out.stats.unconverged_max_upper_w_m2;
     const auto hazardous = [&](int i, int j, int k, std::size_t t) {
       const VoxelStatus s = field.status(i, j, k);
       if (s == VoxelStatus::Excluded) return false;
+      if (s == VoxelStatus::Unconverged && unconverged_upper_w_m2 >= hazardous_w_m2[t]) return true;
       return s == VoxelStatus::Unresolved || field.irradiance(i, j, k) >= hazardous_w_m2[t];
     };
     const double step = 2.0 / n;
@@ -131,7 +134,6 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
         for (std::size_t t = 0; t < thresholds; ++t) {
           for (int k = r.layers; k >= 0; --k) {
             if (!hazardous(i, j, k, t)) continue;
-            out.beyond[t][ray] = k == r.layers ? 1 : 0;
             out.reach_m[t][ray] =
                 static_cast<float>(stretch * r.layerDistance(std::min(k + 1, r.layers)));
             break;

@@ -12,7 +12,8 @@
 /// the larger of the two.
 ///
 /// What it reports fails safe: a lattice point counts as hazardous at (1 − tolerance) × the
-/// threshold, and so does an Unresolved one; the reach along a ray is the distance of the layer
+/// threshold, and so does an Unresolved one (and an Unconverged one where the largest value
+/// plus error of those could reach it); the reach along a ray is the distance of the layer
 /// beyond its farthest hazardous point; between rays the largest of the surrounding rays; beyond
 /// the lattice the far field's upper intensity. Nearer the centre than the lit ball's radius
 /// nothing is classified: the target is there.
@@ -47,15 +48,14 @@ FieldSpec reachFaceSpec(int face, const ReachSpec& spec);
 
 /// @brief The radial lattices, read per ray: for ray (i, j) of a face, row j at j (face_cells
 /// + 1), and each threshold t, the distance from the centre to the lattice point one layer
-/// beyond the farthest hazardous one (0 where none is), and whether the last layer is
-/// hazardous (the far field decides beyond it).
+/// beyond the farthest hazardous one (0 where none is; the last layer's where that one is
+/// hazardous, and the far field decides beyond it).
 struct NearReach {
   struct Face {
     FieldSpec spec;
     FieldStats stats;
-    std::vector<std::vector<float>> reach_m;        ///< [threshold][ray]
-    std::vector<std::vector<std::uint8_t>> beyond;  ///< [threshold][ray]
-    std::vector<float> peak_w_m2;                   ///< the largest irradiance along each ray
+    std::vector<std::vector<float>> reach_m;  ///< [threshold][ray]
+    std::vector<float> peak_w_m2;             ///< the largest irradiance along each ray
   };
   ReachSpec spec;
   std::array<Face, 6> faces;
