@@ -31,6 +31,7 @@
 #include "pipeline/progress.h"
 #include "pipeline/run_command.h"
 #include "pipeline/run_outputs.h"
+#include "pipeline/run_report.h"
 #include "pipeline/study.h"
 #include "pipeline/study_maps.h"
 #include "pipeline/target_builder.h"
@@ -272,7 +273,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
     if (scene.wantsReach()) {
       const SceneReach reach =
           sceneReach(target, scene, far, watch, w.what + ", hazard reach", nullptr, false);
-      record["hazard_reach"] = scenarioReachJson(reach.summaries);
+      record["hazard_reach"] = reachSummaryJson(reach.summaries);
       tally.evaluations += reach.near.evaluations();
     }
   }

@@ -40,19 +40,6 @@ nlohmann::json quantilesJson(const std::vector<double>& v) {
 // %.10g: enough for every parameter a study file can hold, and the same text on every rank.
 std::string csvNumber(double x) { return formatNumber("%.10g", x); }
 
-// One threshold's reach in a scenario's result.json.
-nlohmann::json reachEntryJson(const ReachSummary& r) {
-  const auto finite = [](double x) {
-    return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json();
-  };
-  return {{"distance_m", finite(r.distance_m)},
-          {"direction", {r.direction.x, r.direction.y, r.direction.z}},
-          {"from",
-           r.distance_m > 0.0 ? (r.from_far_field ? "far field" : "lattice") : "nothing hazardous"},
-          {"closed", r.closed},
-          {"volume_m3", finite(r.volume_m3)}};
-}
-
 // A reach as a number for the quantiles: an unbounded one (null) is +∞, never 0.
 double reachDistance(const nlohmann::json& entry) {
   const nlohmann::json& d = entry.at("distance_m");
@@ -114,12 +101,6 @@ nlohmann::json coverageConfidenceJson(const Study& study, const StudyLattice& r,
 }
 
 }  // namespace
-
-nlohmann::json scenarioReachJson(const std::vector<ReachSummary>& reach) {
-  nlohmann::json j = reachEntryJson(reach.at(0));
-  if (reach.size() > 1) j["aided"] = reachEntryJson(reach[1]);
-  return j;
-}
 
 std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
                          const std::map<std::size_t, nlohmann::json>& records, bool far_field,

@@ -14,7 +14,6 @@
 
 #include "observers/far_field.h"
 #include "observers/field.h"
-#include "observers/reach.h"
 #include "pipeline/hazard_report.h"
 #include "pipeline/study.h"
 #include "pipeline/study_maps.h"
@@ -31,10 +30,6 @@ nlohmann::json scenarioRegionJson(const StudyLattice& r, const FieldStats& stats
 
 /// @brief The far field's entry of a scenario's result.json (with farHazardJson()).
 nlohmann::json scenarioFarFieldJson(const FarField& far, const HazardSpec& h);
-
-/// @brief The hazard reach's entry of a scenario's result.json: per threshold (the MPE, then
-/// the aided MPE) the distance, direction, whether it is closed, and the volume.
-nlohmann::json scenarioReachJson(const std::vector<ReachSummary>& reach);
 
 /// @brief scenarios.csv: one row per scenario record, in index order (docs/batch.md lists the
 /// columns).

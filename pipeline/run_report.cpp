@@ -516,12 +516,17 @@ nlohmann::json reachEntry(const ReachSummary& r) {
 
 }  // namespace
 
+nlohmann::json reachSummaryJson(const std::vector<ReachSummary>& reach) {
+  nlohmann::json j = reachEntry(reach.at(0));
+  if (reach.size() > 1) j["aided"] = reachEntry(reach[1]);
+  return j;
+}
+
 nlohmann::json reachJson(const NearReach& near, const std::vector<ReachSummary>& reach,
                          double seconds) {
   const ReachSpec& spec = near.spec;
   const RadialLattice& lattice = *near.faces[0].spec.radial;
-  nlohmann::json j = reachEntry(reach.at(0));
-  if (reach.size() > 1) j["aided"] = reachEntry(reach[1]);
+  nlohmann::json j = reachSummaryJson(reach);
   j["centre_m"] = {spec.centre_m.x, spec.centre_m.y, spec.centre_m.z};
   j["lattice"] = {{"face_cells", spec.face_cells},
                   {"layer_ratio", spec.ratio},

@@ -64,6 +64,11 @@ nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard,
 /// @brief The far field's lines on the terminal.
 void printFarField(std::ostream& err, const FarField& field, const FarHazard& hazard);
 
+/// @brief The reach per threshold: the MPE's entry (distance, direction and its azimuth and
+/// elevation, where it comes from, closed, farthest point, volume, the lit ball's volume), and
+/// the aided MPE's under `aided` (a scenario's result.json holds this).
+nlohmann::json reachSummaryJson(const std::vector<ReachSummary>& reach);
+
 /// @brief summary.json's `hazard_reach`: per threshold (the MPE, then the aided MPE) the
 /// farthest hazardous point, its direction, whether the boundary is closed and the volume;
 /// the lattice and its cost (@p seconds).
