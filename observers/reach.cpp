@@ -107,16 +107,37 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
     const std::size_t rays = rayIndex(n, n, n) + 1;
     out.reach_m.assign(thresholds, std::vector<float>(rays, 0.0f));
     out.peak_w_m2.assign(rays, 0.0f);
-    // Whether lattice point (i, j, k) counts as hazardous for threshold t: an Unresolved point
-    // may have a glint beside it that its lattice cannot see; an Unconverged one may be short
-    // of its value by its error, which the field keeps only as the largest value plus error
-    // of them all; the target's inside is no place.
+    // Each lattice point read once: bit t says whether it counts as hazardous for threshold t.
+    // An Unresolved point may have a glint beside it that its lattice cannot see; an
+    // Unconverged one may be short of its value by its error, which the field keeps only as
+    // the largest value plus error of them all; the target's inside is no place.
     const double unconverged_upper_w_m2 = out.stats.unconverged_max_upper_w_m2;
+    const int layers = r.layers + 1;
+    const auto at = [&](int i, int j, int k) {
+      return (rayIndex(i, j, n) * static_cast<std::size_t>(layers)) + static_cast<std::size_t>(k);
+    };
+    std::vector<std::uint8_t> hazard_bits(rays * static_cast<std::size_t>(layers), 0);
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        double peak = 0.0;
+        for (int k = 0; k <= r.layers; ++k) {
+          const VoxelStatus s = field.status(i, j, k);
+          if (s == VoxelStatus::Excluded) continue;
+          const double e = field.irradiance(i, j, k);
+          peak = std::max(peak, e);
+          std::uint8_t bits = 0;
+          for (std::size_t t = 0; t < thresholds; ++t) {
+            const bool hazardous =
+                s == VoxelStatus::Unresolved || e >= hazardous_w_m2[t] ||
+                (s == VoxelStatus::Unconverged && unconverged_upper_w_m2 >= hazardous_w_m2[t]);
+            bits = static_cast<std::uint8_t>(bits | (hazardous ? 1u << t : 0u));
+          }
+          hazard_bits[at(i, j, k)] = bits;
+        }
+        out.peak_w_m2[rayIndex(i, j, n)] = static_cast<float>(peak);
+      }
     const auto hazardous = [&](int i, int j, int k, std::size_t t) {
-      const VoxelStatus s = field.status(i, j, k);
-      if (s == VoxelStatus::Excluded) return false;
-      if (s == VoxelStatus::Unconverged && unconverged_upper_w_m2 >= hazardous_w_m2[t]) return true;
-      return s == VoxelStatus::Unresolved || field.irradiance(i, j, k) >= hazardous_w_m2[t];
+      return ((hazard_bits[at(i, j, k)] >> t) & 1u) != 0;
     };
     const double step = 2.0 / n;
     std::vector<double> volume(thresholds, 0.0);
@@ -125,12 +146,6 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
         const double u = -1.0 + step * i, v = -1.0 + step * j;
         const double stretch = std::sqrt(1.0 + u * u + v * v);  // distance / ρ along this ray
         const std::size_t ray = rayIndex(i, j, n);
-        double peak = 0.0;
-        for (int k = 0; k <= r.layers; ++k) {
-          if (field.status(i, j, k) != VoxelStatus::Excluded)
-            peak = std::max(peak, field.irradiance(i, j, k));
-        }
-        out.peak_w_m2[ray] = static_cast<float>(peak);
         for (std::size_t t = 0; t < thresholds; ++t) {
           for (int k = r.layers; k >= 0; --k) {
             if (!hazardous(i, j, k, t)) continue;
