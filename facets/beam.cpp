@@ -11,6 +11,15 @@ const double kGaussianReach = std::sqrt(std::log(1e15) / 2.0);
 
 double Beam::reachFactor() const { return profile == BeamProfile::Gaussian ? kGaussianReach : 1.0; }
 
+double Beam::sweptRadius(const Vec3& center_m, double radius_m_ball) const {
+  if (!swept()) return radius_m_ball;
+  // A beam of the sweep is this one turned about its origin by at most α and moved by at most s:
+  // seen from it, a point q sits where this beam has a point within s + 2 sin(α/2)|q − origin|
+  // ≤ s + α (|center − origin| + r) of q.
+  const double lever_m = glm::length(center_m - origin_m) + radius_m_ball;
+  return radius_m_ball + sweep_offset_m + std::min(sweep_angle_rad, kPi) * lever_m;
+}
+
 double Beam::radiusAt(double z_m) const {
   const double spread = 0.5 * divergence_rad * std::max(z_m, 0.0);
   return std::hypot(radius_m, spread);
@@ -67,7 +76,8 @@ Beam::Footprint Beam::footprint(const Vec3& x_m) const {
   return f;
 }
 
-double Beam::maxIrradianceInBall(const Vec3& center_m, double radius_m_ball) const {
+double Beam::maxIrradianceInBall(const Vec3& center_m, double own_radius_m) const {
+  const double radius_m_ball = sweptRadius(center_m, own_radius_m);
   const Vec3 rel = center_m - origin_m;
   const double zc = glm::dot(rel, direction);
   if (zc + radius_m_ball < 0.0) return 0.0;
@@ -86,7 +96,8 @@ double Beam::maxIrradianceInBall(const Vec3& center_m, double radius_m_ball) con
   return power_w / area_near * t;
 }
 
-bool Beam::edgeMayCrossBall(const Vec3& center_m, double radius_m_ball) const {
+bool Beam::edgeMayCrossBall(const Vec3& center_m, double own_radius_m) const {
+  const double radius_m_ball = sweptRadius(center_m, own_radius_m);
   const Vec3 rel = center_m - origin_m;
   const double zc = glm::dot(rel, direction);
   if (zc - radius_m_ball < 0.0 && zc + radius_m_ball >= 0.0) return true;
@@ -97,7 +108,8 @@ bool Beam::edgeMayCrossBall(const Vec3& center_m, double radius_m_ball) const {
   return rho_c - radius_m_ball <= r_far && rho_c + radius_m_ball > r_near;
 }
 
-bool Beam::profileMayBendInBall(const Vec3& center_m, double radius_m_ball) const {
+bool Beam::profileMayBendInBall(const Vec3& center_m, double own_radius_m) const {
+  const double radius_m_ball = sweptRadius(center_m, own_radius_m);
   const double z_near = glm::dot(center_m - origin_m, direction) - radius_m_ball;
   const double width_m = radiusAt(std::max(z_near, 0.0));
   if (profile == BeamProfile::Gaussian) {
@@ -112,15 +124,23 @@ bool Beam::profileMayBendInBall(const Vec3& center_m, double radius_m_ball) cons
   // sagitta, R²/2a, at most a/200) for that line to follow it, and a piece wider than the
   // beam can hold the whole spot between corners that all lie outside it. Before this, a
   // 0.5 m beam on a 3 m mirror facet read 2e-8 W/m² where 110 W/m² fall.
-  return radius_m_ball > 0.1 * width_m && edgeMayCrossBall(center_m, radius_m_ball);
+  return radius_m_ball > 0.1 * width_m && edgeMayCrossBall(center_m, own_radius_m);
 }
 
 double Beam::directionSpreadInBall(double radius_m_ball) const {
-  if (divergence_rad == 0.0) return 0.0;
+  // Every beam of a sweep turns ωi everywhere by at most the sweep's angle (its rigid motion's
+  // rotation).
+  const double swept_rad = std::min(sweep_angle_rad, kPi);
+  if (divergence_rad == 0.0) return swept_rad;
+  const double h = 0.5 * divergence_rad;
+  if (swept()) {
+    // Where the sweep moves the ball is not known here: any two rays of the beam, whose tilt
+    // ρ z h² / r(z)² is at most reach × h (ρ ≤ reach × r, r ≥ z h), differ by at most twice that.
+    return swept_rad + 2.0 * reachFactor() * h;
+  }
   // The ray is dir + ρ⃗ k(z) with k = z h² / r(z)², h = φ/2. Across the ball ρ⃗ moves by at most
   // its radius (k ≤ h / 2r₀) and k by at most |dk/dz| ≤ h² / r(z)² per metre, times ρ ≤ reach·r(z).
   // The chord between the two unnormalised rays bounds the angle up to a factor π/2.
-  const double h = 0.5 * divergence_rad;
   const double tilt_rate = h / (2.0 * radius_m) + reachFactor() * h * h / radius_m;
   return 0.5 * kPi * radius_m_ball * tilt_rate;
 }

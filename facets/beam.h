@@ -39,6 +39,16 @@ struct Beam {
   /// Extinction (1/m, ≥ 0) along each reflected path to the observer, applied by the kernel as
   /// exp(−μ d). 0 where intensity is wanted rather than irradiance at a distance (far field).
   double return_extinction_per_m = 0.0;
+  /// A beam that moves over a time interval (an engagement, observers/motion.h) stands for
+  /// every beam a rigid motion of this one reaches with its origin at most sweep_offset_m away
+  /// and its direction turned at most sweep_angle_rad: the bounds (maxIrradianceInBall(),
+  /// directionSpreadInBall(), edgeMayCrossBall(), profileMayBendInBall()) then hold for all of
+  /// them, while at() and footprint() evaluate this one. Both 0: the beam itself.
+  double sweep_offset_m = 0.0;
+  double sweep_angle_rad = 0.0;
+
+  /// @brief Whether the beam stands for a set of beams (see sweep_offset_m).
+  [[nodiscard]] bool swept() const { return sweep_offset_m > 0.0 || sweep_angle_rad > 0.0; }
 
   /// @brief Irradiance on a plane perpendicular to the beam (W/m²), and the unit vector from
   /// the point toward the laser along the local ray (ωi).
@@ -94,6 +104,9 @@ struct Beam {
 
  private:
   [[nodiscard]] double reachFactor() const;
+  /// The radius of a ball about @p center_m that holds, for every beam of the sweep, the point
+  /// of this beam's frame where a point of the ball (@p center_m, @p radius_m) lies in its own.
+  [[nodiscard]] double sweptRadius(const Vec3& center_m, double radius_m) const;
   /// exp(−μ z) for z ≥ 0 along the axis, exactly 1 in vacuum.
   [[nodiscard]] double transmission(double z_m) const {
     return extinction_per_m > 0.0 ? std::exp(-extinction_per_m * std::max(z_m, 0.0)) : 1.0;

@@ -42,11 +42,16 @@ PatchGeometry enclosing(const PatchGeometry& a, const PatchGeometry& b) {
 
 }  // namespace
 
-void FacetIntegrator::cull() {
+void FacetIntegrator::buildOccluder() {
   if (options_.occlusion && needsOcclusion(*target_)) {
     occluder_ = std::make_shared<const Occluder>(*target_);
-    cull_.occlusion = true;
   }
+}
+
+void FacetIntegrator::cull() {
+  cull_.occlusion = occluder_ != nullptr;
+  // One shadow ray speaks for one beam: under a swept beam nothing is culled as shadowed.
+  const Occluder* shadows = beam_.swept() ? nullptr : occluder_.get();
   cull_.coarse_facets = target_->facetCount();
   for (std::uint32_t i = 0; i < target_->facetCount(); ++i) {
     const std::uint32_t obj = target_->object[i];
@@ -63,12 +68,12 @@ void FacetIntegrator::cull() {
         ++cull_.facing_away;
         break;
       case LightVerdict::MayBeLit:
-        if (occluder_) {
+        if (shadows != nullptr) {
           // The shadow ray runs back along the beam to the laser's plane.
-          const Vec3 from = rayOrigin(*occluder_, *target_, g, obj, i);
-          if (!occluder_->rayClear(from, -beam_.direction,
-                                   glm::dot(from - beam_.origin_m, beam_.direction),
-                                   localSkip(g, -beam_.direction))) {
+          const Vec3 from = rayOrigin(*shadows, *target_, g, obj, i);
+          if (!shadows->rayClear(from, -beam_.direction,
+                                 glm::dot(from - beam_.origin_m, beam_.direction),
+                                 localSkip(g, -beam_.direction))) {
             ++cull_.shadowed;
             break;
           }
@@ -91,7 +96,7 @@ void FacetIntegrator::buildClusters() {
       const Candidate& c = lit_[k];
       node.mixed = node.mixed || c.object != node.object;
       // The lobe scheme bounds a coarse facet by its surface map's geometry.
-      const PatchGeometry own = maps_[c.facet.coarse].geometry(*target_, c.facet);
+      const PatchGeometry own = (*maps_)[c.facet.coarse].geometry(*target_, c.facet);
       node.geometry = enclosing(enclosing(node.geometry, c.geometry), own);
     }
     base.push_back(node);

@@ -61,12 +61,30 @@ FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const Integrat
   for (const TargetObject& obj : target_->objects) {
     object_beams_.push_back(beam_.relativeTo(obj.origin_m));
   }
+  buildOccluder();
   cull();
+  auto maps = std::make_shared<std::vector<SurfaceMap>>();
   if (options_.scheme != IntegrationScheme::Paper) {
-    maps_.reserve(target_->facetCount());
-    for (std::uint32_t i = 0; i < target_->facetCount(); ++i) maps_.emplace_back(*target_, i);
+    maps->reserve(target_->facetCount());
+    for (std::uint32_t i = 0; i < target_->facetCount(); ++i) maps->emplace_back(*target_, i);
   }
+  maps_ = std::move(maps);
   if (options_.scheme == IntegrationScheme::Lobe) buildClusters();
+}
+
+FacetIntegrator FacetIntegrator::withBeam(const Beam& beam) const {
+  FacetIntegrator copy = *this;  // the target, maps and occluder shared: geometry only
+  copy.beam_ = beam;
+  copy.object_beams_.clear();
+  for (const TargetObject& obj : target_->objects) {
+    copy.object_beams_.push_back(beam.relativeTo(obj.origin_m));
+  }
+  copy.lit_.clear();
+  copy.clusters_.reset();
+  copy.cull_ = CullStats{};
+  copy.cull();
+  if (options_.scheme == IntegrationScheme::Lobe) copy.buildClusters();
+  return copy;
 }
 
 detail::ObserverSetting FacetIntegrator::prepareObserver(const Vec3& observer_m,
@@ -76,7 +94,7 @@ detail::ObserverSetting FacetIntegrator::prepareObserver(const Vec3& observer_m,
   for (std::size_t k = 0; k < target_->objects.size(); ++k) {
     ws.observer_local_m[k] = observer_m - target_->objects[k].origin_m;
   }
-  return {*target_,   options_,        object_beams_, maps_,          ws.observer_local_m,
+  return {*target_,   options_,        object_beams_, *maps_,         ws.observer_local_m,
           observer_m, occluder_.get(), lit_,          clusters_.get()};
 }
 

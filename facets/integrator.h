@@ -203,6 +203,13 @@ class FacetIntegrator {
   /// where they are out of range, as the constructor does.
   [[nodiscard]] FacetIntegrator withAccuracy(double tolerance, double floor_w_m2) const;
 
+  /// @brief This integrator under another beam (the same target moved, seen from its own frame:
+  /// an engagement's instant, or with a swept beam an interval of it): culled again, the
+  /// target, its surface maps and its occluder shared. The target's own shadow culls a facet
+  /// only under a beam that is not swept (one shadow ray proves nothing for a set of beams).
+  /// Throws std::invalid_argument as the constructor does.
+  [[nodiscard]] FacetIntegrator withBeam(const Beam& beam) const;
+
   /// @brief This integrator with each reflected path attenuated by exp(−μ d), μ = @p per_m
   /// (Beam::return_extinction_per_m): 0 where intensity is read from a far plane.
   [[nodiscard]] FacetIntegrator withReturnExtinction(double per_m) const;
@@ -210,8 +217,10 @@ class FacetIntegrator {
  private:
   // Readies the workspace for the observer and returns what a scheme sees of both.
   detail::ObserverSetting prepareObserver(const Vec3& observer_m, detail::Workspace& ws) const;
-  // The culling (culling.cpp): the occluder, lit_ and cull_, then the lobe scheme's clusters_.
+  // The culling (culling.cpp): lit_ and cull_ under beam_, then the lobe scheme's clusters_.
   void cull();
+  // Builds occluder_ where the options and the target ask for it.
+  void buildOccluder();
   void buildClusters();
 
   // Shared by the copies withAccuracy() makes; the surface maps point into it.
@@ -222,7 +231,8 @@ class FacetIntegrator {
   std::vector<Candidate> lit_;
   // Bounds over runs of lit_, for the observers that see every lit facet (lobe scheme).
   std::shared_ptr<const LitClusters> clusters_;
-  std::vector<SurfaceMap> maps_;  // per coarse facet, for the cubature and lobe schemes
+  // Per coarse facet, for the cubature and lobe schemes; geometry only, shared by the copies.
+  std::shared_ptr<const std::vector<SurfaceMap>> maps_;
   CullStats cull_;
   std::shared_ptr<const Occluder> occluder_;  // null where the target cannot shadow itself
   // Unique to this integrator: a workspace's geometry memo is kept while it serves the

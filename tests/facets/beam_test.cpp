@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <glm/gtc/quaternion.hpp>
 #include <random>
 
 #include "support/quadrature.h"
@@ -78,6 +79,49 @@ TEST(Beam, BallBoundsHoldForEveryPointInside) {
         ASSERT_LE(s.irradiance_w_m2, e_max * (1 + 1e-12)) << "trial " << trial;
         if (s.irradiance_w_m2 > 0.0 && b.at(c).irradiance_w_m2 > 0.0) {
           ASSERT_LE(angleBetween(s.toward_laser, wi_c), spread + 1e-12) << "trial " << trial;
+        }
+      }
+    }
+  }
+}
+
+// A swept beam's ball bound holds for every beam of its sweep: beams turned and moved within
+// it, at random points of random balls.
+TEST(Beam, ASweptBeamsBallBoundHoldsForEveryBeamOfItsSweep) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (BeamProfile profile : {BeamProfile::Gaussian, BeamProfile::FlatTop}) {
+    Beam swept;
+    swept.origin_m = Vec3(-100.0, 0.0, 0.0);
+    swept.direction = Vec3(1.0, 0.0, 0.0);
+    swept.profile = profile;
+    swept.radius_m = 0.4;
+    swept.divergence_rad = 1e-3;
+    swept.power_w = 100.0;
+    swept.sweep_offset_m = 0.3;
+    swept.sweep_angle_rad = 2e-3;
+    for (int trial = 0; trial < 2000; ++trial) {
+      const Vec3 centre(u(rng) * 2.0, u(rng) * 1.0, u(rng) * 1.0);
+      const double radius = 0.05 + 0.2 * std::abs(u(rng));
+      // A beam of the sweep: turned by at most the angle about a random axis, moved by at most
+      // the offset.
+      Beam b = swept;
+      b.sweep_offset_m = b.sweep_angle_rad = 0.0;
+      const Vec3 axis = glm::normalize(Vec3(u(rng), u(rng), u(rng)));
+      b.direction = glm::angleAxis(swept.sweep_angle_rad * std::abs(u(rng)), axis) * b.direction;
+      b.origin_m +=
+          swept.sweep_offset_m * std::abs(u(rng)) * glm::normalize(Vec3(u(rng), u(rng), u(rng)));
+      const double bound = swept.maxIrradianceInBall(centre, radius);
+      const double spread = swept.directionSpreadInBall(radius);
+      for (int k = 0; k < 8; ++k) {
+        const Vec3 p =
+            centre + radius * std::abs(u(rng)) * glm::normalize(Vec3(u(rng), u(rng), u(rng)));
+        const Beam::Sample s = b.at(p);
+        ASSERT_LE(s.irradiance_w_m2, bound * (1 + 1e-12))
+            << "at a point of the ball, trial " << trial;
+        if (s.irradiance_w_m2 > 0.0) {
+          ASSERT_LE(angleBetween(s.toward_laser, swept.at(centre).toward_laser), spread + 1e-12)
+              << "ωi turned beyond the spread, trial " << trial;
         }
       }
     }
