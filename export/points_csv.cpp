@@ -15,13 +15,18 @@ void appendNumber(std::string& line, double x) {
   line.append(buf, res.ptr);
 }
 
-}  // namespace
+void appendValue(std::string& line, const CsvColumn& c, std::size_t i) {
+  if (c.integer) {
+    line += std::to_string(static_cast<long long>(c.values[i]));
+  } else {
+    appendNumber(line, c.values[i]);
+  }
+}
 
-void writePointsCsv(std::ostream& out, std::span<const Vec3> points_m,
-                    std::span<const ObserverResult> results, std::span<const CsvColumn> extra) {
-  if (points_m.size() != results.size()) throw OutputError("points and results differ in count");
-  for (const CsvColumn& c : extra) {
-    if (c.values.size() != results.size()) throw OutputError(c.name + ": one value per observer");
+// Every column has one finite value per row.
+void requireFiniteColumns(std::span<const CsvColumn> columns, std::size_t rows) {
+  for (const CsvColumn& c : columns) {
+    if (c.values.size() != rows) throw OutputError(c.name + ": one value per observer");
     for (std::size_t i = 0; i < c.values.size(); ++i) {
       if (!std::isfinite(c.values[i])) {
         throw OutputError("observer " + std::to_string(i + 1) + ": " + c.name +
@@ -29,6 +34,37 @@ void writePointsCsv(std::ostream& out, std::span<const Vec3> points_m,
       }
     }
   }
+}
+
+}  // namespace
+
+void writeColumnsCsv(std::ostream& out, std::span<const Vec3> points_m,
+                     std::span<const CsvColumn> columns) {
+  requireFiniteColumns(columns, points_m.size());
+  std::string text = "x,y,z";
+  for (const CsvColumn& c : columns) text += "," + c.name;
+  text += '\n';
+  text.reserve(text.size() + (72 + 24 * columns.size()) * points_m.size());
+  for (std::size_t i = 0; i < points_m.size(); ++i) {
+    const Vec3& p = points_m[i];
+    appendNumber(text, p.x);
+    for (double v : {p.y, p.z}) {
+      text += ',';
+      appendNumber(text, v);
+    }
+    for (const CsvColumn& c : columns) {
+      text += ',';
+      appendValue(text, c, i);
+    }
+    text += '\n';
+  }
+  out << text;
+}
+
+void writePointsCsv(std::ostream& out, std::span<const Vec3> points_m,
+                    std::span<const ObserverResult> results, std::span<const CsvColumn> extra) {
+  if (points_m.size() != results.size()) throw OutputError("points and results differ in count");
+  requireFiniteColumns(extra, results.size());
   for (std::size_t i = 0; i < results.size(); ++i) {
     if (!std::isfinite(results[i].irradiance_w_m2) ||
         !std::isfinite(results[i].error_estimate_w_m2)) {
@@ -51,7 +87,7 @@ void writePointsCsv(std::ostream& out, std::span<const Vec3> points_m,
     text += r.converged ? ",1" : ",0";
     for (const CsvColumn& c : extra) {
       text += ',';
-      appendNumber(text, c.values[i]);
+      appendValue(text, c, i);
     }
     text += '\n';
   }

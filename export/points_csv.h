@@ -16,6 +16,7 @@ namespace glint {
 struct CsvColumn {
   std::string name;
   std::vector<double> values;
+  bool integer = false;  ///< written as a whole number (values exact in a double)
 };
 
 /// @brief Writes the header `x,y,z,irradiance_w_m2,error_estimate_w_m2,evaluations,converged`
@@ -25,5 +26,11 @@ struct CsvColumn {
 /// upstream; nothing is written then).
 void writePointsCsv(std::ostream& out, std::span<const Vec3> points_m,
                     std::span<const ObserverResult> results, std::span<const CsvColumn> extra = {});
+
+/// @brief Writes the header `x,y,z` followed by the names of @p columns, and one row per
+/// point, as writePointsCsv() writes its numbers (an engagement's table: docs/engagement.md).
+/// @throw OutputError as writePointsCsv().
+void writeColumnsCsv(std::ostream& out, std::span<const Vec3> points_m,
+                     std::span<const CsvColumn> columns);
 
 }  // namespace glint

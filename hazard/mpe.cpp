@@ -170,6 +170,13 @@ Mpe ocularMpe(double wavelength_nm, double exposure_s, SafetyStandard standard) 
   return ansi2014PointSourceMpe(wavelength_nm, exposure_s);
 }
 
+const std::vector<double>& mpeRowEdgesS() {
+  // Where the rows above change: the visible and near-infrared retinal rows (5 µs, 13 µs,
+  // 10 s), the photochemical (100 s) and the corneal bands' flat parts (100 ns, 1 ms, 10 s).
+  static const std::vector<double> edges{1e-7, 5e-6, 13e-6, 1e-3, 10.0, 100.0};
+  return edges;
+}
+
 const char* toString(MpeLimit limit) {
   return limit == MpeLimit::Photochemical ? "photochemical" : "thermal";
 }

@@ -4,6 +4,7 @@
 /// Table 5a, harmonised with IEC 60825-1:2014 Table A.1).
 
 #include <string>
+#include <vector>
 
 #include "hazard/standard.h"
 
@@ -35,6 +36,13 @@ struct Mpe {
 /// std::out_of_range naming the range: the table is never extrapolated.
 Mpe ocularMpe(double wavelength_nm, double exposure_s,
               SafetyStandard standard = SafetyStandard::AnsiZ136_1_2014);
+
+/// @brief The durations (s) at which some row of the table begins, at any wavelength, in
+/// increasing order. Between two of them every row is a constant or a power of t with a
+/// non-negative exponent as radiant exposure, so there the MPE in J/m² never falls as the
+/// duration grows; at one of them it may (ANSI Z136.1-2014 Table 5a: 2.0e-3 J/m² to 5 µs,
+/// 18 t^0.75 J/m² = 1.9e-3 J/m² from 5 µs at 400–700 nm).
+const std::vector<double>& mpeRowEdgesS();
 
 /// @brief The table row of @p mpe with the standard's and the table's name, as outputs record
 /// it.

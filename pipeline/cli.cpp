@@ -145,6 +145,11 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
   points_cmd->add_flag("-q,--quiet", points.quiet, "No progress and no summary on standard error");
   std::string points_memory;
   points_cmd->add_option("--memory", points_memory, memoryHelp())->check(byteSize());
+  std::string time_series;
+  CLI::Option* time_series_opt = points_cmd->add_option(
+      "--time-series", time_series,
+      "With an engagement: every observer's irradiance samples to this CSV file "
+      "(observer,time_s,irradiance_w_m2)");
 
   RunArgs run;
   CLI::App* run_cmd = app.add_subcommand(
@@ -198,6 +203,7 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
         points.normals = normals == "flat" ? NormalModel::Flat : NormalModel::Surface;
       if (*scheme_opt) points.scheme = integrationSchemeByName(scheme);
       if (!points_memory.empty()) points.memory_bytes = *parseByteSize(points_memory);
+      if (*time_series_opt) points.time_series_path = time_series;
       points.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
       runPoints(points, out, err);
     }

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "facets/vec3.h"
+#include "observers/motion.h"
 #include "pipeline/input_error.h"
 #include "pipeline/limits.h"
 
@@ -225,6 +226,22 @@ inline double inRange(ObjectReader& r, const std::string& key, double x, double 
 inline Vec3 position(ObjectReader& r, const std::string& key) {
   const Vec3 p = r.vec3(key);
   if (auto v = positionVerdict(p)) r.fail(key, *v);
+  return p;
+}
+
+// A pose of the target at a time (a study's trajectory, an engagement's target): `time_s`, and
+// `offset_m`, `yaw_deg`, `pitch_deg`, `roll_deg`, each 0 unless given.
+inline PoseKey readPoseKey(ObjectReader r) {
+  PoseKey p;
+  p.time_s = r.number("time_s");
+  if (r.has("offset_m")) p.offset_m = r.vec3("offset_m");
+  const char* keys[] = {"yaw_deg", "pitch_deg", "roll_deg"};
+  for (int i = 0; i < 3; ++i) {
+    const double a = r.number(keys[i], 0.0);
+    if (!(std::abs(a) <= 3600.0)) r.fail(keys[i], "must be in [-3600, 3600] degrees");
+    p.angles_deg[i] = a;
+  }
+  r.finish();
   return p;
 }
 

@@ -13,7 +13,10 @@
 
 #include "export/atomic_file.h"
 #include "export/points_csv.h"
+#include "observers/exposure.h"
 #include "observers/point_set.h"
+#include "pipeline/engagement_report.h"
+#include "pipeline/input_error.h"
 #include "pipeline/input_files.h"
 #include "pipeline/memory_budget.h"
 #include "pipeline/points_file.h"
@@ -168,18 +171,38 @@ std::vector<Vec3> loadObserverPoints(const std::string& path, std::uint64_t budg
 // The output file, opened before the work: a missing folder, a device or an input named as the
 // output should stop the run before the work, not after. None for standard output.
 // @throw OutputError for such a path.
-std::unique_ptr<AtomicFile> openOutput(const PointsArgs& args, const Scene& scene) {
-  if (args.out_path == "-") return nullptr;
-  if (const auto kind = nonRegularKind(args.out_path)) {
-    throw OutputError(args.out_path + " is " + *kind +
+std::unique_ptr<AtomicFile> openOutputFile(const std::string& path, const PointsArgs& args,
+                                           const Scene& scene) {
+  if (const auto kind = nonRegularKind(path)) {
+    throw OutputError(path + " is " + *kind +
                       ", not a regular file: glint never replaces one; name a new or regular "
                       "file, or write to standard output with --out -");
   }
   InputFiles inputs;
   inputs.addScene(args.scene_path, scene);
   inputs.add(args.points_path, "points file");
-  inputs.requireNotAnInput(args.out_path);
-  return std::make_unique<AtomicFile>(args.out_path);
+  inputs.requireNotAnInput(path);
+  return std::make_unique<AtomicFile>(path);
+}
+
+std::unique_ptr<AtomicFile> openOutput(const PointsArgs& args, const Scene& scene) {
+  if (args.out_path == "-") return nullptr;
+  return openOutputFile(args.out_path, args, scene);
+}
+
+// The time series' file (with an engagement and --time-series), opened before the work as the
+// table's is; it may not be the table's own file.
+std::unique_ptr<AtomicFile> openTimeSeries(const PointsArgs& args, const Scene& scene) {
+  if (!args.time_series_path) return nullptr;
+  if (!scene.engagement) {
+    throw InputError("--time-series: " + scene.source +
+                     " has no engagement: only an engagement has irradiance over time");
+  }
+  if (args.out_path != "-" && std::filesystem::path(*args.time_series_path).lexically_normal() ==
+                                  std::filesystem::path(args.out_path).lexically_normal()) {
+    throw InputError("--time-series names the table's own file (--out)");
+  }
+  return openOutputFile(*args.time_series_path, args, scene);
 }
 
 // Every observer's result and the seconds they took.
@@ -223,16 +246,22 @@ Evaluated evaluateObservers(const FacetIntegrator& integrator, const std::vector
 }
 
 // The table: to its file, committed, or to standard output.
+// Writes through @p write to @p file, committed, or to @p out.
+template <class Write>
+void writeTo(AtomicFile* file, std::ostream& out, Write write) {
+  if (file != nullptr) {
+    write(file->stream());
+    file->commit();
+  } else {
+    write(out);
+    out.flush();
+  }
+}
+
 void writeTable(AtomicFile* file, std::ostream& out, const std::vector<Vec3>& points,
                 const std::vector<ObserverResult>& results, const HazardSpec& hazard) {
   const std::vector<CsvColumn> columns = hazardColumns(hazard, results);
-  if (file != nullptr) {
-    writePointsCsv(file->stream(), points, results, columns);
-    file->commit();
-  } else {
-    writePointsCsv(out, points, results, columns);
-    out.flush();
-  }
+  writeTo(file, out, [&](std::ostream& s) { writePointsCsv(s, points, results, columns); });
 }
 
 // The summary on the terminal, with the meshes' surface model checked where it matters most:
@@ -250,6 +279,35 @@ void report(std::ostream& err, const PointsArgs& args, const Scene& scene,
                threads, surface_check ? &*surface_check : nullptr);
 }
 
+// An engagement: every observer's irradiance over the span, its exposure and worst window.
+// @throw std::runtime_error when the budget is spent.
+EngagementResults evaluateEngagement(const FacetIntegrator& reference, const Scene& scene,
+                                     const std::vector<Vec3>& points, const PointsArgs& args,
+                                     const MemoryWatch& watch, std::ostream& err) {
+  const Motion motion(scene.engagement->motion, scene.laser);
+  WorkCounter counter;
+  counter.stop = &watch.stopFlag();
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<ExposureHistory> histories;
+  {
+    std::unique_ptr<ProgressReporter> progress;
+    if (!args.quiet) {
+      progress = std::make_unique<ProgressReporter>(err, args.terminal, "time samples", 0, counter);
+    }
+    try {
+      histories = integrateExposures(reference, motion, points, scene.engagement->time, &counter);
+    } catch (const WorkStopped&) {
+      if (progress) progress->stop();
+      watch.check("the engagement's time samples", kAdvice);
+      throw;
+    }
+  }
+  watch.check("the engagement's time samples", kAdvice);
+  EngagementResults results = judgeEngagement(std::move(histories), scene);
+  results.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return results;
+}
+
 }  // namespace
 
 void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
@@ -261,8 +319,13 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   const std::vector<Vec3> points = loadObserverPoints(args.points_path, budget);
   IntegratorOptions options = scene.accuracy;
   if (args.tolerance) options.tolerance = *args.tolerance;
+  if (scene.engagement && args.uniform_level) {
+    throw InputError("--uniform: " + scene.source +
+                     " has an engagement, whose samples are each integrated adaptively");
+  }
   std::unique_ptr<AtomicFile> file = openOutput(args, scene);
-  if (file) pauseForTestsAfterTemporaries(err);
+  std::unique_ptr<AtomicFile> series = openTimeSeries(args, scene);
+  if (file || series) pauseForTestsAfterTemporaries(err);
 
   std::unique_ptr<tbb::global_control> thread_limit;
   if (args.threads > 0) {
@@ -278,6 +341,18 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
       scene, options,
       {budget, pointsBytes(points), std::to_string(points.size()) + " observer points"});
   watch.check("building the target", kAdvice);
+  if (scene.engagement) {
+    const EngagementResults results =
+        evaluateEngagement(integrator, scene, points, args, watch, err);
+    const std::vector<CsvColumn> columns = engagementColumns(results, scene.hazard);
+    // Both are written before either is committed: a value that cannot be written leaves
+    // neither file.
+    if (series) writeTimeSeriesCsv(series->stream(), results);
+    writeTo(file.get(), out, [&](std::ostream& s) { writeColumnsCsv(s, points, columns); });
+    if (series) series->commit();
+    if (!args.quiet) printEngagementSummary(err, scene, points, results, threads);
+    return;
+  }
   const Evaluated evaluated = evaluateObservers(integrator, points, args, watch, err);
   writeTable(file.get(), out, points, evaluated.results, scene.hazard);
   if (!args.quiet) report(err, args, scene, integrator, points, evaluated, threads);

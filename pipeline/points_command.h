@@ -24,6 +24,8 @@ struct PointsArgs {
   bool quiet = false;                       ///< no progress, no summary
   bool terminal = false;                    ///< standard error is a terminal (progress redraws)
   std::uint64_t memory_bytes = 0;           ///< the memory budget; 0: defaultMemoryBudgetBytes()
+  /// With an engagement: every observer's irradiance samples to this CSV file as well.
+  std::optional<std::string> time_series_path;
 };
 
 /// @brief Runs the command. Inputs are validated and the output file opened before any work.

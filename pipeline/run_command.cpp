@@ -429,6 +429,11 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   // A mesh is refused before it is decoded, the target before it is built.
   Scene scene = loadScene(args.scene_path, budget);
   overrideAccuracy(scene.accuracy, std::nullopt, args.scheme, scene.source);
+  if (scene.engagement) {
+    throw InputError(scene.source +
+                     ": /engagement: glint run does not integrate an engagement over its box and "
+                     "planes yet; glint points does, at listed observers (docs/engagement.md)");
+  }
   if (!scene.observers && scene.planes.empty() && !scene.wantsReach()) {
     throw InputError(scene.source +
                      ": /reach/enabled: false, and there is neither `observers` nor `planes`: "

@@ -527,6 +527,118 @@ ReachSettings readReach(ObjectReader r) {
   return reach;
 }
 
+// The target's motion: keyed poses, or a constant velocity (and turn rate) through the scene's
+// pose at t = 0.
+void readTargetMotion(ObjectReader r, MotionSpec& m, std::optional<double>& start,
+                      std::optional<double>& end) {
+  const bool keyed = r.has("poses"), crossing = r.has("velocity_m_s") || r.has("turn_deg_s");
+  if (keyed == crossing) {
+    r.failHere("needs either `poses` or `velocity_m_s` (with, optionally, `turn_deg_s`)");
+  }
+  if (keyed) {
+    const json& list = r.require("poses");
+    if (!list.is_array() || list.empty()) r.fail("poses", "must be a non-empty array of poses");
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      m.poses.push_back(
+          readPoseKey(ObjectReader(list[i], r.at("poses") + "/" + std::to_string(i), r.source())));
+      if (i > 0 && !(m.poses[i].time_s > m.poses[i - 1].time_s))
+        r.fail("poses", "times must increase from pose to pose (pose " + std::to_string(i) + ")");
+    }
+    const std::size_t how = r.choice("interpolation", {"linear", "spline"}, 0);
+    m.interpolation = how == 0 ? PoseInterpolation::Linear : PoseInterpolation::Spline;
+    if (!start) start = m.poses.front().time_s;
+    if (!end) end = m.poses.back().time_s;
+  } else {
+    if (!start || !end) r.failHere("a constant velocity needs the engagement's start_s and end_s");
+    const Vec3 v = r.has("velocity_m_s") ? r.vec3("velocity_m_s") : Vec3(0.0);
+    const Vec3 w = r.has("turn_deg_s") ? r.vec3("turn_deg_s") : Vec3(0.0);
+    if (!(glm::length(v) <= 1e5)) r.fail("velocity_m_s", "must be at most 1e5 m/s");
+    for (int a = 0; a < 3; ++a) {
+      if (!(std::abs(w[a]) <= 1e5)) r.fail("turn_deg_s", "rates must be within ±1e5 deg/s");
+    }
+    for (double t : {*start, *end}) m.poses.push_back({t, v * t, w * t});
+  }
+  r.finish();
+}
+
+// Where the laser points: `fixed` (the default), `track` or `keyed` through `directions`.
+void readLaserPointing(ObjectReader r, MotionSpec& m) {
+  const std::size_t how = r.choice("pointing", {"fixed", "track", "keyed"}, 0);
+  m.pointing = static_cast<LaserPointing>(how);
+  if (m.pointing != LaserPointing::Keyed) {
+    r.finish();
+    return;
+  }
+  const json& list = r.require("directions");
+  if (!list.is_array() || list.empty())
+    r.fail("directions", "must be a non-empty array of {time_s, direction}");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    ObjectReader k(list[i], r.at("directions") + "/" + std::to_string(i), r.source());
+    DirectionKey key{k.number("time_s"), k.direction("direction")};
+    k.finish();
+    if (i > 0) {
+      const DirectionKey& before = m.laser_keys.back();
+      if (!(key.time_s > before.time_s))
+        r.fail("directions", "times must increase (key " + std::to_string(i) + ")");
+      // Beyond a half turn the way between two keys is not unique.
+      if (!(angleBetween(before.direction, key.direction) <= 0.5 * kPi))
+        r.fail("directions", "consecutive directions must be at most 90 degrees apart (key " +
+                                 std::to_string(i) + ")");
+    }
+    m.laser_keys.push_back(key);
+  }
+  r.finish();
+}
+
+EngagementSpec readEngagement(ObjectReader r, const Scene& scene) {
+  EngagementSpec e;
+  MotionSpec& m = e.motion;
+  std::optional<double> start = r.optionalNumber("start_s"), end = r.optionalNumber("end_s");
+  Vec3 centres(0.0);
+  for (const ObjectSpec& o : scene.objects) centres += o.centre_m();
+  m.pivot_m =
+      r.has("pivot") ? position(r, "pivot") : centres / static_cast<double>(scene.objects.size());
+  readTargetMotion(r.object("target"), m, start, end);
+  if (r.has("laser")) readLaserPointing(r.object("laser"), m);
+  if (r.has("observers")) {
+    ObjectReader o = r.object("observers");
+    m.observer_velocity_m_s = o.vec3("velocity_m_s");
+    if (!(glm::length(m.observer_velocity_m_s) <= 1e5))
+      o.fail("velocity_m_s", "must be at most 1e5 m/s");
+    o.finish();
+  }
+  m.start_s = *start;
+  m.end_s = *end;
+  // The MPE table runs from 1 ns to 30 000 s: every window must lie in it.
+  if (!(m.end_s - m.start_s >= 1e-9 && m.end_s - m.start_s <= 3e4))
+    r.fail("end_s", "must follow start_s by 1e-9 to 30000 s");
+  e.time.tolerance = scene.accuracy.tolerance;
+  e.time.floor_w_m2 = scene.hazard.negligibleW_m2();
+  if (r.has("time")) {
+    ObjectReader t = r.object("time");
+    e.time.tolerance = t.number("tolerance", e.time.tolerance);
+    if (!(e.time.tolerance > 0.0 && e.time.tolerance < 1.0))
+      t.fail("tolerance", "must be in (0, 1)");
+    if (auto floor = t.optionalNumber("floor_w_m2"))
+      e.time.floor_w_m2 = positive(t, "floor_w_m2", *floor);
+    const std::int64_t n = t.integer("initial_intervals", e.time.initial_intervals);
+    if (n < 1 || n > 4096) t.fail("initial_intervals", "must be from 1 to 4096");
+    e.time.initial_intervals = static_cast<int>(n);
+    const std::int64_t depth = t.integer("max_depth", e.time.max_depth);
+    if (depth < 0 || depth > 30) t.fail("max_depth", "must be from 0 to 30");
+    e.time.max_depth = static_cast<int>(depth);
+    t.finish();
+  }
+  e.longest_window_s = std::min(m.end_s - m.start_s, scene.hazard.exposure_s);
+  if (scene.hazard.pulse) {
+    r.failHere(
+        "an engagement needs a continuous laser: a pulsed laser's windows follow the "
+        "pulse-train rules, which engagements do not apply yet; remove laser.pulse");
+  }
+  r.finish();
+  return e;
+}
+
 }  // namespace
 
 Scene parseScene(std::string_view text, const std::string& source,
@@ -585,6 +697,7 @@ Scene parseScene(std::string_view text, const std::string& source,
   }
   if (r.has("far_field")) scene.far_field = readFarField(r.object("far_field"));
   if (r.has("reach")) scene.reach = readReach(r.object("reach"));
+  if (r.has("engagement")) scene.engagement = readEngagement(r.object("engagement"), scene);
   r.finish();
   return scene;
 }
@@ -658,13 +771,6 @@ void overrideAccuracy(IntegratorOptions& accuracy, std::optional<NormalModel> no
                      ": flat normals (--normals flat or accuracy.normals) are the paper scheme's "
                      "only; pass --scheme paper");
   }
-}
-
-glm::dquat yawPitchRoll(double yaw_deg, double pitch_deg, double roll_deg) {
-  const double deg = kPi / 180.0;
-  return glm::angleAxis(yaw_deg * deg, Vec3(0.0, 0.0, 1.0)) *
-         glm::angleAxis(pitch_deg * deg, Vec3(0.0, 1.0, 0.0)) *
-         glm::angleAxis(roll_deg * deg, Vec3(1.0, 0.0, 0.0));
 }
 
 }  // namespace glint

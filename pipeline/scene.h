@@ -20,6 +20,8 @@
 #include "facets/tessellate.h"
 #include "facets/vec3.h"
 #include "hazard/hazard.h"
+#include "observers/exposure.h"
+#include "observers/motion.h"
 #include "pipeline/gltf_loader.h"
 
 namespace glint {
@@ -109,6 +111,17 @@ struct ReachSettings {
   double layer_ratio = 1.02;  ///< between the radial layers, in (1, 1.5]
 };
 
+/// @brief An engagement in time (key `engagement`; docs/engagement.md): the motion over its span
+/// and how finely time is sampled.
+struct EngagementSpec {
+  MotionSpec motion;
+  /// Its floor, unless given, HazardSpec::negligibleW_m2(); its tolerance the scene's accuracy's.
+  ExposureOptions time;
+  /// The longest exposure window judged: the span, or `laser.exposure_s` where shorter (the
+  /// aversion response or the exposure the analyst assumes).
+  double longest_window_s = 0.0;
+};
+
 /// @brief A validated scene: every number finite and in range, every reference resolved.
 struct Scene {
   std::string source;  ///< the file name as given, for messages
@@ -129,6 +142,7 @@ struct Scene {
   std::vector<PlaneSpec> planes;
   FarFieldSettings far_field;
   ReachSettings reach;
+  std::optional<EngagementSpec> engagement;
 
   /// @brief Whether `glint run` computes the hazard reach: asked for, or, unless refused,
   /// where there is no box or plane.
@@ -172,9 +186,5 @@ void recheckScene(const Scene& scene);
 /// @throw InputError naming @p source and `--scheme paper`.
 void overrideAccuracy(IntegratorOptions& accuracy, std::optional<NormalModel> normals,
                       std::optional<IntegrationScheme> scheme, const std::string& source);
-
-/// @brief The rotation R = Rz(yaw) Ry(pitch) Rx(roll), angles in degrees (the convention of
-/// studies and of a mesh's `yaw_pitch_roll_deg`).
-glm::dquat yawPitchRoll(double yaw_deg, double pitch_deg, double roll_deg);
 
 }  // namespace glint

@@ -52,19 +52,8 @@ std::vector<double> readAngles(ObjectReader& r, const std::string& key) {
 }
 
 Pose readPose(ObjectReader r) {
-  Pose p;
-  p.time_s = r.number("time_s");
-  if (r.has("offset_m")) p.offset_m = r.vec3("offset_m");
-  auto angle = [&r](const char* key) {
-    const double a = r.number(key, 0.0);
-    if (!(std::abs(a) <= 3600.0)) r.fail(key, "must be in [-3600, 3600] degrees");
-    return a;
-  };
-  p.yaw_deg = angle("yaw_deg");
-  p.pitch_deg = angle("pitch_deg");
-  p.roll_deg = angle("roll_deg");
-  r.finish();
-  return p;
+  const PoseKey key = readPoseKey(std::move(r));
+  return {key.time_s, key.offset_m, key.angles_deg[0], key.angles_deg[1], key.angles_deg[2]};
 }
 
 // The trajectory's poses, and with `step_s` the poses between them every step_s (linear in
@@ -216,6 +205,11 @@ Study parseStudy(std::string_view text, const std::string& source,
   try {
     study.scene_text = readUserFile(study.scene_path, "scene file");
     study.base = parseScene(study.scene_text, study.scene_path.string());
+    if (study.base.engagement) {
+      throw InputError(study.scene_path.string() +
+                       ": /engagement: a study's scenarios are poses judged each alone; an "
+                       "engagement is integrated by glint points (docs/engagement.md)");
+    }
   } catch (const InputError& e) {
     throw InputError(source + ": /scene: " + e.what());
   }

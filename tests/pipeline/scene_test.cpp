@@ -92,7 +92,52 @@ TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
        "wavelength_nm, exposure_s, pulse, beam)"},
       {[](json& j) { j["extra"] = 1; },
        "scene.json: /extra: unknown key (expected one of: description, laser, atmosphere, "
-       "optical_aid, materials, objects, accuracy, observers, planes, far_field, reach)"},
+       "optical_aid, materials, objects, accuracy, observers, planes, far_field, reach, "
+       "engagement)"},
+      {[](json& j) {
+         j["engagement"] = {{"start_s", 0}, {"end_s", 1}};
+       },
+       "scene.json: /engagement/target: missing (required)"},
+      {[](json& j) {
+         j["engagement"] = {{"target", {{"velocity_m_s", {1, 0, 0}}}}};
+       },
+       "scene.json: /engagement/target: a constant velocity needs the engagement's start_s and "
+       "end_s"},
+      {[](json& j) {
+         j["engagement"] = {{"start_s", 0},
+                            {"end_s", 1},
+                            {"target", {{"velocity_m_s", {1, 0, 0}}, {"poses", json::array()}}}};
+       },
+       "scene.json: /engagement/target: needs either `poses` or `velocity_m_s` (with, optionally, "
+       "`turn_deg_s`)"},
+      {[](json& j) {
+         j["engagement"] = {{"target", {{"poses", {{{"time_s", 1}}, {{"time_s", 1}}}}}}};
+       },
+       "scene.json: /engagement/target/poses: times must increase from pose to pose (pose 1)"},
+      {[](json& j) {
+         j["engagement"] = {
+             {"start_s", 0}, {"end_s", 0}, {"target", {{"velocity_m_s", {1, 0, 0}}}}};
+       },
+       "scene.json: /engagement/end_s: must follow start_s by 1e-9 to 30000 s"},
+      {[](json& j) {
+         j["engagement"] = {{"start_s", 0},
+                            {"end_s", 1},
+                            {"target", {{"velocity_m_s", {1, 0, 0}}}},
+                            {"laser",
+                             {{"pointing", "keyed"},
+                              {"directions",
+                               {{{"time_s", 0}, {"direction", {1, 0, 0}}},
+                                {{"time_s", 1}, {"direction", {-1, 1, 0}}}}}}}};
+       },
+       "scene.json: /engagement/laser/directions: consecutive directions must be at most 90 "
+       "degrees apart (key 1)"},
+      {[](json& j) {
+         j["engagement"] = {{"start_s", 0},
+                            {"end_s", 1},
+                            {"target", {{"velocity_m_s", {1, 0, 0}}}},
+                            {"time", {{"initial_intervals", 0}}}};
+       },
+       "scene.json: /engagement/time/initial_intervals: must be from 1 to 4096"},
       {[](json& j) { j["laser"].erase("power_w"); },
        "scene.json: /laser/power_w: missing (required)"},
       {[](json& j) {

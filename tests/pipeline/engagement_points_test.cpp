@@ -1,0 +1,159 @@
+// `glint points` over an engagement: the table's columns, the time series, and the commands
+// that refuse an engagement they cannot integrate.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "support/cli.h"
+#include "support/files.h"
+
+namespace glint {
+namespace {
+
+namespace fs = std::filesystem;
+using test::glint;
+
+// The turning mirror of exposure_test.cpp: a 0.3 m disk turning at 20 deg/s in a 1 kW beam.
+constexpr const char* kScene = R"({
+  "laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "power_w": 1000,
+            "wavelength_nm": 1064, "exposure_s": 10, "beam": {"profile": "gaussian", "w_m": 1.0}},
+  "materials": {"m": {"specular_reflectance": 0.9, "sigma": 0.002}},
+  "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [-1, 0, 0], "radius": 0.3,
+               "material": "m", "segments": 8}],
+  "engagement": {"start_s": -0.5, "end_s": 0.5, "target": {"turn_deg_s": [20, 0, 0]}}
+})";
+
+struct Folder {
+  fs::path dir;
+  explicit Folder(const std::string& name) : dir(fs::temp_directory_path() / name) {
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  ~Folder() { fs::remove_all(dir); }
+  fs::path write(const std::string& name, const std::string& text) const {
+    std::ofstream(dir / name) << text;
+    return dir / name;
+  }
+};
+
+std::vector<std::vector<std::string>> csv(const std::string& text) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    std::vector<std::string> row;
+    std::istringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');) row.push_back(cell);
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// The table holds each observer's exposure, and the time series the samples it was summed
+// from: trapezoids through them give the table's exposure, and the peak is their largest.
+TEST(EngagementPoints, TheTableAndTheTimeSeriesTellTheSameExposure) {
+  const Folder f("glint_engagement_points");
+  const fs::path scene = f.write("scene.json", kScene);
+  const fs::path points = f.write("points.csv", "x,y,z\n-50,-6,0.5\n-50,0,0.5\n30,0,0\n");
+  const test::Outcome o =
+      glint({"points", scene.string(), "--points", points.string(), "--out",
+             (f.dir / "out.csv").string(), "--time-series", (f.dir / "series.csv").string()});
+  ASSERT_EQ(o.status, 0) << o.err;
+  const auto table = csv(test::readFile(f.dir / "out.csv"));
+  ASSERT_EQ(table.size(), 4u);
+  const std::vector<std::string> header = table[0];
+  std::map<std::string, std::size_t> column;
+  for (std::size_t i = 0; i < header.size(); ++i) column[header[i]] = i;
+  for (const char* name : {"exposure_j_m2", "peak_irradiance_w_m2", "time_above_mpe_s",
+                           "hazard_ratio", "worst_window_s", "stare_hazard_ratio", "converged"}) {
+    ASSERT_TRUE(column.count(name)) << "no column " << name;
+  }
+  const auto series = csv(test::readFile(f.dir / "series.csv"));
+  ASSERT_EQ(series[0], (std::vector<std::string>{"observer", "time_s", "irradiance_w_m2"}));
+  for (int observer = 1; observer <= 3; ++observer) {
+    std::vector<double> t, e;
+    for (std::size_t i = 1; i < series.size(); ++i) {
+      if (std::stoi(series[i][0]) != observer) continue;
+      t.push_back(std::stod(series[i][1]));
+      e.push_back(std::stod(series[i][2]));
+    }
+    ASSERT_GE(t.size(), 2u);
+    EXPECT_EQ(t.front(), -0.5);
+    EXPECT_EQ(t.back(), 0.5);
+    double exposure = 0.0, peak = 0.0;
+    for (std::size_t i = 1; i < t.size(); ++i) {
+      ASSERT_GT(t[i], t[i - 1]) << "times increase";
+      exposure += 0.5 * (e[i] + e[i - 1]) * (t[i] - t[i - 1]);
+    }
+    for (double v : e) peak = std::max(peak, v);
+    const std::vector<std::string>& row = table[static_cast<std::size_t>(observer)];
+    EXPECT_NEAR(std::stod(row[column["exposure_j_m2"]]), exposure, 1e-12 + 1e-12 * exposure)
+        << "observer " << observer;
+    EXPECT_EQ(std::stod(row[column["peak_irradiance_w_m2"]]), peak) << "observer " << observer;
+    EXPECT_EQ(std::stoul(row[column["time_samples"]]), t.size());
+  }
+  // The glint crosses the first two in about 13 ms: above the 10 s stare's MPE of 50 W/m² at
+  // its peak, far below the MPE of its own few milliseconds.
+  const std::vector<std::string>& lit = table[1];
+  EXPECT_GT(std::stod(lit[column["stare_hazard_ratio"]]), 1.0);
+  EXPECT_LT(std::stod(lit[column["hazard_ratio"]]), 0.3);
+  EXPECT_LT(std::stod(lit[column["worst_window_s"]]), 0.05);
+  EXPECT_EQ(std::stod(table[3][column["exposure_j_m2"]]), 0.0) << "behind the mirror";
+  EXPECT_NE(o.err.find("judged pose by pose as a 10 s stare"), std::string::npos) << o.err;
+}
+
+// examples/missile_crossing.json: the fin's glint passes an observer under the flight path in
+// about 3.5 ms. Its peak, stared at for 10 s, would be hazardous; the worst window, the glint's
+// own few milliseconds, collects less than the MPE for them.
+TEST(EngagementPoints, TheCrossingMissilesStareAndEngagementVerdictsDiffer) {
+  const Folder f("glint_engagement_missile");
+  const fs::path points = f.write("points.csv", "x,y,z\n0,-2.5,1.7\n100,-2.5,1.7\n");
+  const test::Outcome o =
+      glint({"points", std::string(GLINT_EXAMPLES_DIR) + "/missile_crossing.json", "--points",
+             points.string(), "--out", (f.dir / "out.csv").string()});
+  ASSERT_EQ(o.status, 0) << o.err;
+  const auto table = csv(test::readFile(f.dir / "out.csv"));
+  std::map<std::string, std::size_t> column;
+  for (std::size_t i = 0; i < table[0].size(); ++i) column[table[0][i]] = i;
+  for (std::size_t row = 1; row < table.size(); ++row) {
+    const auto value = [&](const char* name) { return std::stod(table[row][column[name]]); };
+    EXPECT_GT(value("stare_hazard_ratio"), 2.0) << "row " << row;
+    EXPECT_LT(value("hazard_ratio"), 1.0) << "row " << row;
+    EXPECT_LT(value("worst_window_s"), 0.01) << "row " << row;
+    EXPECT_GT(value("time_above_mpe_s"), 0.0) << "row " << row;
+    EXPECT_EQ(value("converged"), 1.0) << "row " << row;
+  }
+}
+
+TEST(EngagementPoints, CommandsThatCannotIntegrateAnEngagementRefuseIt) {
+  const Folder f("glint_engagement_refused");
+  const fs::path scene = f.write("scene.json", kScene);
+  const fs::path points = f.write("points.csv", "x,y,z\n-50,0,0.5\n");
+  const test::Outcome run = glint({"run", scene.string(), "--out", (f.dir / "run").string()});
+  EXPECT_EQ(run.status, 2);
+  EXPECT_NE(run.err.find("/engagement: glint run does not integrate an engagement"),
+            std::string::npos)
+      << run.err;
+  const test::Outcome uniform =
+      glint({"points", scene.string(), "--points", points.string(), "--uniform", "2"});
+  EXPECT_EQ(uniform.status, 2) << uniform.err;
+  const fs::path plain = f.write("plain.json", R"({
+    "laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "power_w": 1000,
+              "wavelength_nm": 1064, "beam": {"profile": "gaussian", "w_m": 1.0}},
+    "materials": {"m": {"specular_reflectance": 0.9, "sigma": 0.002}},
+    "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [-1, 0, 0], "radius": 0.3,
+                 "material": "m"}]})");
+  const test::Outcome series = glint({"points", plain.string(), "--points", points.string(),
+                                      "--time-series", (f.dir / "s.csv").string()});
+  EXPECT_EQ(series.status, 2);
+  EXPECT_NE(series.err.find("has no engagement"), std::string::npos) << series.err;
+  EXPECT_FALSE(fs::exists(f.dir / "s.csv"));
+}
+
+}  // namespace
+}  // namespace glint
