@@ -15,33 +15,16 @@
 #include "pipeline/points_file.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
+#include "support/exposure_compare.h"
 
 using namespace glint;
+using test::exposureErrors;
+using test::sampleCount;
 
 namespace {
 
 double secondsSince(const std::chrono::steady_clock::time_point& t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-std::size_t samples(const std::vector<ExposureHistory>& h) {
-  std::size_t n = 0;
-  for (const ExposureHistory& e : h) n += e.time_s.size();
-  return n;
-}
-
-// The largest relative errors of exposure and peak against @p reference, at every observer
-// above 1 % of the brightest reference peak.
-std::pair<double, double> errors(const std::vector<ExposureHistory>& h,
-                                 const std::vector<ExposureHistory>& reference) {
-  double brightest = 0.0, exposure = 0.0, peak = 0.0;
-  for (const ExposureHistory& r : reference) brightest = std::max(brightest, r.peak_w_m2);
-  for (std::size_t i = 0; i < h.size(); ++i) {
-    if (reference[i].peak_w_m2 < 0.01 * brightest) continue;
-    exposure = std::max(exposure, std::abs(h[i].exposure_j_m2 / reference[i].exposure_j_m2 - 1));
-    peak = std::max(peak, std::abs(h[i].peak_w_m2 / reference[i].peak_w_m2 - 1));
-  }
-  return {exposure, peak};
 }
 
 }  // namespace
@@ -66,31 +49,32 @@ int main(int argc, char** argv) {
   const std::vector<ExposureHistory> adaptive =
       integrateExposures(reference, motion, points, scene.engagement->time);
   const double adaptive_s = secondsSince(t0);
-  const std::size_t adaptive_n = samples(adaptive);
+  const std::size_t adaptive_n = sampleCount(adaptive);
   const double mean_step = motion.durationS() * static_cast<double>(points.size()) /
                            static_cast<double>(adaptive_n - points.size());
   const int fine_steps = static_cast<int>(std::ceil(100.0 * motion.durationS() / mean_step));
   t0 = std::chrono::steady_clock::now();
   const std::vector<ExposureHistory> fine = uniformExposures(reference, motion, points, fine_steps);
   const double fine_s = secondsSince(t0);
-  const auto [e_exposure, e_peak] = errors(adaptive, fine);
+  const test::ExposureErrors e = exposureErrors(adaptive, fine);
   std::printf("%s, %zu observers over %g s\n", scene_path.c_str(), points.size(),
               motion.durationS());
   std::printf(
       "adaptive: %zu samples, %.2f s; against %d uniform steps (%zu samples, %.2f s): "
       "exposure within %.2e, peak within %.2e\n",
-      adaptive_n, adaptive_s, fine_steps, samples(fine), fine_s, e_exposure, e_peak);
+      adaptive_n, adaptive_s, fine_steps, sampleCount(fine), fine_s, e.exposure, e.peak);
   for (int steps = 64; steps <= fine_steps / 2; steps *= 2) {
     t0 = std::chrono::steady_clock::now();
     const std::vector<ExposureHistory> u = uniformExposures(reference, motion, points, steps);
     const double u_s = secondsSince(t0);
-    const auto [u_exposure, u_peak] = errors(u, fine);
+    const test::ExposureErrors ue = exposureErrors(u, fine);
     std::printf(
         "uniform %6d steps: %8zu samples (%.1f x adaptive), %.2f s (%.1f x): exposure "
         "within %.2e, peak within %.2e\n",
-        steps, samples(u), static_cast<double>(samples(u)) / static_cast<double>(adaptive_n), u_s,
-        u_s / adaptive_s, u_exposure, u_peak);
-    if (u_exposure < 0.01 && u_peak < 0.01) break;
+        steps, sampleCount(u),
+        static_cast<double>(sampleCount(u)) / static_cast<double>(adaptive_n), u_s,
+        u_s / adaptive_s, ue.exposure, ue.peak);
+    if (ue.within(0.01)) break;
   }
   return 0;
 }

@@ -64,34 +64,18 @@ void writeColumnsCsv(std::ostream& out, std::span<const Vec3> points_m,
 void writePointsCsv(std::ostream& out, std::span<const Vec3> points_m,
                     std::span<const ObserverResult> results, std::span<const CsvColumn> extra) {
   if (points_m.size() != results.size()) throw OutputError("points and results differ in count");
-  requireFiniteColumns(extra, results.size());
-  for (std::size_t i = 0; i < results.size(); ++i) {
-    if (!std::isfinite(results[i].irradiance_w_m2) ||
-        !std::isfinite(results[i].error_estimate_w_m2)) {
-      throw OutputError("observer " + std::to_string(i + 1) +
-                        " has a non-finite result; nothing was written");
-    }
+  std::vector<CsvColumn> columns{{"irradiance_w_m2", {}},
+                                 {"error_estimate_w_m2", {}},
+                                 {"evaluations", {}, true},
+                                 {"converged", {}, true}};
+  for (const ObserverResult& r : results) {
+    columns[0].values.push_back(r.irradiance_w_m2);
+    columns[1].values.push_back(r.error_estimate_w_m2);
+    columns[2].values.push_back(static_cast<double>(r.evaluations));
+    columns[3].values.push_back(r.converged ? 1.0 : 0.0);
   }
-  std::string text = "x,y,z,irradiance_w_m2,error_estimate_w_m2,evaluations,converged";
-  for (const CsvColumn& c : extra) text += "," + c.name;
-  text += '\n';
-  text.reserve(text.size() + (96 + 24 * extra.size()) * results.size());
-  for (std::size_t i = 0; i < results.size(); ++i) {
-    const Vec3& p = points_m[i];
-    const ObserverResult& r = results[i];
-    for (double v : {p.x, p.y, p.z, r.irradiance_w_m2, r.error_estimate_w_m2}) {
-      appendNumber(text, v);
-      text += ',';
-    }
-    text += std::to_string(r.evaluations);
-    text += r.converged ? ",1" : ",0";
-    for (const CsvColumn& c : extra) {
-      text += ',';
-      appendValue(text, c, i);
-    }
-    text += '\n';
-  }
-  out << text;
+  columns.insert(columns.end(), extra.begin(), extra.end());
+  writeColumnsCsv(out, points_m, columns);
 }
 
 }  // namespace glint

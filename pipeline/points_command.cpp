@@ -323,6 +323,20 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
     throw InputError("--uniform: " + scene.source +
                      " has an engagement, whose samples are each integrated adaptively");
   }
+  // An engagement keeps every observer's samples: at least its first ones, each a time, an
+  // irradiance and their sorting record (the watch covers the rest as they grow).
+  const std::uint64_t held_bytes =
+      pointsBytes(points) +
+      (scene.engagement
+           ? points.size() *
+                 (static_cast<std::uint64_t>(scene.engagement->time.initial_intervals) + 1) * 32
+           : 0);
+  if (scene.engagement) {
+    requireWithinBudget(std::to_string(points.size()) + " observers' first time samples",
+                        held_bytes, budget,
+                        "split the points file, lower engagement.time.initial_intervals or raise "
+                        "--memory");
+  }
   std::unique_ptr<AtomicFile> file = openOutput(args, scene);
   std::unique_ptr<AtomicFile> series = openTimeSeries(args, scene);
   if (file || series) pauseForTestsAfterTemporaries(err);
@@ -338,8 +352,7 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   // them (and whatever the estimate leaves out), stopping the points before their next one.
   const MemoryWatch watch(budget);
   const FacetIntegrator integrator = buildIntegrator(
-      scene, options,
-      {budget, pointsBytes(points), std::to_string(points.size()) + " observer points"});
+      scene, options, {budget, held_bytes, std::to_string(points.size()) + " observer points"});
   watch.check("building the target", kAdvice);
   if (scene.engagement) {
     const EngagementResults results =

@@ -15,36 +15,39 @@
 #include "observers/motion.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
+#include "support/exposure_compare.h"
 
 namespace glint {
 namespace {
 
 // A 0.3 m mirror disk at the origin facing a 1 kW Gaussian beam from −x (1064 nm, 10 s: MPE
-// 50 W/m²), turning about z at @p turn_deg_s over [−0.5, 0.5] s: its reflection sweeps across
-// observers 50 m back at 2 × turn × 50 m per second, a glint of about (disk + lobe) / speed.
-std::string turningMirror(double turn_deg_s, double sigma, const std::string& time = "{}") {
+// 50 W/m²), its lobe σ = @p sigma, moved over [−0.5, 0.5] s by @p target and the laser's
+// @p pointing, time sampled by @p time.
+std::string mirrorEngagement(double sigma, const std::string& target,
+                             const std::string& pointing = "fixed",
+                             const std::string& time = "{}") {
   return R"({"laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "power_w": 1000,
              "wavelength_nm": 1064, "exposure_s": 10, "beam": {"profile": "gaussian", "w_m": 1.0}},
    "materials": {"m": {"specular_reflectance": 0.9, "sigma": )" +
          std::to_string(sigma) + R"(}},
    "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [-1, 0, 0], "radius": 0.3,
                 "material": "m", "segments": 8}],
-   "engagement": {"start_s": -0.5, "end_s": 0.5, "target": {"turn_deg_s": [)" +
-         std::to_string(turn_deg_s) + R"(, 0, 0]}, "time": )" + time + "}}";
+   "engagement": {"start_s": -0.5, "end_s": 0.5, "target": )" +
+         target + R"(, "laser": {"pointing": ")" + pointing + R"("}, "time": )" + time + "}}";
 }
 
-// A 0.3 m mirror disk crossing a tracking 1 kW beam at 300 m/s along y over [−0.5, 0.5] s, the
-// laser 100 m back along −x: its reflection reaches x = −50 at y = 1.5 × the disk's y, so it
-// sweeps past observers there at 450 m/s, a glint of about (0.9 m + 4σ × 50 m) / 450 m/s.
+// The disk turning about z at @p turn_deg_s: its reflection sweeps across observers 50 m back
+// at 2 × turn × 50 m per second, a glint of about (disk + lobe) / speed.
+std::string turningMirror(double turn_deg_s, double sigma, const std::string& time = "{}") {
+  return mirrorEngagement(sigma, R"({"turn_deg_s": [)" + std::to_string(turn_deg_s) + ", 0, 0]}",
+                          "fixed", time);
+}
+
+// The disk crossing a tracking beam at 300 m/s along y: its reflection reaches x = −50 at y =
+// 1.5 × the disk's y, so it sweeps past observers there at 450 m/s, a glint of about
+// (0.9 m + 4σ × 50 m) / 450 m/s.
 std::string crossingMirror(double sigma) {
-  return R"({"laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "power_w": 1000,
-             "wavelength_nm": 1064, "exposure_s": 10, "beam": {"profile": "gaussian", "w_m": 1.0}},
-   "materials": {"m": {"specular_reflectance": 0.9, "sigma": )" +
-         std::to_string(sigma) + R"(}},
-   "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [-1, 0, 0], "radius": 0.3,
-                "material": "m", "segments": 8}],
-   "engagement": {"start_s": -0.5, "end_s": 0.5, "target": {"velocity_m_s": [0, 300, 0]},
-                  "laser": {"pointing": "track"}}})";
+  return mirrorEngagement(sigma, R"({"velocity_m_s": [0, 300, 0]})", "track");
 }
 
 std::vector<Vec3> crossingObservers() {
@@ -140,6 +143,45 @@ TEST(Motion, ATrackingLaserKeepsItsAxisOnTheSamePointOfTheTarget) {
   }
 }
 
+// Keyed directions through a tracking laser's own directions meet it at every key, and turn at
+// a constant rate between: the keyed laser's bound over an interval holds its instants too.
+TEST(Motion, KeyedDirectionsRunAtAConstantRateBetweenTheirKeys) {
+  MotionSpec tracking = splineSpec();
+  const Beam laser = laserFromMinusX();
+  const Motion track(tracking, laser);
+  MotionSpec keyed = tracking;
+  keyed.pointing = LaserPointing::Keyed;
+  for (double t : {0.0, 0.5, 1.0, 2.0, 3.0})
+    keyed.laser_keys.push_back({t, track.laserDirectionAt(t)});
+  const Motion motion(keyed, laser);
+  for (double t : {0.0, 0.5, 1.0, 2.0, 3.0}) {
+    EXPECT_LT(angleBetween(motion.laserDirectionAt(t), track.laserDirectionAt(t)), 1e-12)
+        << "at the key " << t;
+  }
+  // Halfway between two keys the direction is halfway along the great circle.
+  const Vec3 a = keyed.laser_keys[3].direction, b = keyed.laser_keys[4].direction;
+  const Vec3 mid = motion.laserDirectionAt(2.5);
+  EXPECT_NEAR(angleBetween(a, mid), 0.5 * angleBetween(a, b), 1e-12);
+  EXPECT_NEAR(angleBetween(mid, b), 0.5 * angleBetween(a, b), 1e-12);
+  EXPECT_NEAR(motion.ratesOver(2.1, 2.9).laser_turn_rad_s, angleBetween(a, b) / 1.0, 1e-12);
+}
+
+// An observer riding a platform at the target's own velocity (the target not turning) stays
+// where it is in the target's frame.
+TEST(Motion, AnObserverRidingWithTheTargetStandsStillInItsFrame) {
+  MotionSpec m;
+  m.start_s = 0.0;
+  m.end_s = 2.0;
+  m.poses = {{0.0, Vec3(0.0), Vec3(0.0)}, {2.0, Vec3(40.0, -20.0, 6.0), Vec3(0.0)}};
+  m.observer_velocity_m_s = Vec3(20.0, -10.0, 3.0);
+  const Motion motion(m, laserFromMinusX());
+  const Vec3 start(5.0, 50.0, 1.0);
+  for (double t : {0.0, 0.7, 2.0}) {
+    EXPECT_LT(glm::length(motion.toTargetFrame(t, motion.observerAt(t, start)) - start), 1e-12)
+        << "t = " << t;
+  }
+}
+
 // A triangle of height E and half-width a: a centred window of t ≤ 2a collects E t − E t²/(4a),
 // and the irradiance is at or above θ for 2a (1 − θ/E).
 TEST(ExposureWindow, ATrianglesLargestWindowAndTimeAboveAreItsClosedForms) {
@@ -195,23 +237,9 @@ TEST(ExposureWindow, TheMpeAsRadiantExposureGrowsWithDurationWithinEachRow) {
 }
 
 struct Compared {
-  double worst_exposure = 0.0, worst_peak = 0.0;
+  test::ExposureErrors errors;  // of the adaptive samples against the fine steps
   std::size_t adaptive_samples = 0, uniform_samples = 0;
 };
-
-// The largest relative errors of @p h's exposure and peak against @p reference, at every
-// observer whose reference peak is above 1 % of the brightest.
-std::pair<double, double> worstErrors(const std::vector<ExposureHistory>& h,
-                                      const std::vector<ExposureHistory>& reference) {
-  double brightest = 0.0, exposure = 0.0, peak = 0.0;
-  for (const ExposureHistory& r : reference) brightest = std::max(brightest, r.peak_w_m2);
-  for (std::size_t i = 0; i < h.size(); ++i) {
-    if (reference[i].peak_w_m2 < 0.01 * brightest) continue;
-    exposure = std::max(exposure, std::abs(h[i].exposure_j_m2 / reference[i].exposure_j_m2 - 1));
-    peak = std::max(peak, std::abs(h[i].peak_w_m2 / reference[i].peak_w_m2 - 1));
-  }
-  return {exposure, peak};
-}
 
 struct Engagement {
   Scene scene;
@@ -230,16 +258,14 @@ Compared compareWithFineSteps(const Engagement& e, const std::vector<Vec3>& poin
   const std::vector<ExposureHistory> adaptive =
       integrateExposures(e.reference, e.motion, points, e.scene.engagement->time);
   Compared c;
-  for (const ExposureHistory& h : adaptive) {
-    c.adaptive_samples += h.time_s.size();
-    EXPECT_TRUE(h.converged);
-  }
+  c.adaptive_samples = test::sampleCount(adaptive);
+  for (const ExposureHistory& h : adaptive) EXPECT_TRUE(h.converged);
   const double mean_step = e.motion.durationS() * static_cast<double>(points.size()) /
                            static_cast<double>(c.adaptive_samples - points.size());
   const int steps = static_cast<int>(std::ceil(100.0 * e.motion.durationS() / mean_step));
   std::vector<ExposureHistory> fine = uniformExposures(e.reference, e.motion, points, steps);
   c.uniform_samples = static_cast<std::size_t>(steps + 1) * points.size();
-  std::tie(c.worst_exposure, c.worst_peak) = worstErrors(adaptive, fine);
+  c.errors = test::exposureErrors(adaptive, fine);
   if (fine_out != nullptr) *fine_out = std::move(fine);
   return c;
 }
@@ -249,9 +275,9 @@ TEST(Exposure, AGlintSweepingPastMatchesFineUniformStepsWithinOnePercent) {
   std::printf(
       "turning mirror: adaptive, %zu samples: exposure within %.2e, peak within %.2e of "
       "%zu uniform samples\n",
-      c.adaptive_samples, c.worst_exposure, c.worst_peak, c.uniform_samples);
-  EXPECT_LT(c.worst_exposure, 0.01) << "exposure against the fine steps";
-  EXPECT_LT(c.worst_peak, 0.01) << "peak against the fine steps";
+      c.adaptive_samples, c.errors.exposure, c.errors.peak, c.uniform_samples);
+  EXPECT_LT(c.errors.exposure, 0.01) << "exposure against the fine steps";
+  EXPECT_LT(c.errors.peak, 0.01) << "peak against the fine steps";
 }
 
 // With one initial interval, the glint at every observer lies between the first samples, where
@@ -259,8 +285,8 @@ TEST(Exposure, AGlintSweepingPastMatchesFineUniformStepsWithinOnePercent) {
 TEST(Exposure, AGlintBetweenTheFirstSamplesIsFoundByTheBound) {
   const Compared c = compareWithFineSteps(
       Engagement(turningMirror(20.0, 0.002, R"({"initial_intervals": 1})")), observerLine());
-  EXPECT_LT(c.worst_exposure, 0.01) << "every glint found and followed";
-  EXPECT_LT(c.worst_peak, 0.01);
+  EXPECT_LT(c.errors.exposure, 0.01) << "every glint found and followed";
+  EXPECT_LT(c.errors.peak, 0.01);
 }
 
 // On a crossing target, uniform steps need more than ten times the adaptive samples to reach
@@ -271,21 +297,22 @@ TEST(Exposure, ACrossingGlintNeedsTenfoldMoreUniformStepsForOnePercent) {
   const std::vector<Vec3> points = crossingObservers();
   std::vector<ExposureHistory> fine;
   const Compared c = compareWithFineSteps(e, points, &fine);
-  EXPECT_LT(c.worst_exposure, 0.01);
-  EXPECT_LT(c.worst_peak, 0.01);
+  EXPECT_LT(c.errors.exposure, 0.01);
+  EXPECT_LT(c.errors.peak, 0.01);
   // The coarsest uniform steps (by doubling) within 1 % of the fine ones at every observer.
   int steps = 64;
   for (;; steps *= 2) {
-    const auto [exposure, peak] =
-        worstErrors(uniformExposures(e.reference, e.motion, points, steps), fine);
-    if (exposure < 0.01 && peak < 0.01) break;
+    if (test::exposureErrors(uniformExposures(e.reference, e.motion, points, steps), fine)
+            .within(0.01)) {
+      break;
+    }
     ASSERT_LT(steps, 1 << 16) << "uniform steps never reached 1 %";
   }
   const double uniform = static_cast<double>(steps + 1) * static_cast<double>(points.size());
   std::printf(
       "crossing mirror: adaptive %zu samples within %.2e (exposure) and %.2e (peak); "
       "uniform steps need %d steps, %.0f samples, for 1 %%: %.1f x the adaptive\n",
-      c.adaptive_samples, c.worst_exposure, c.worst_peak, steps, uniform,
+      c.adaptive_samples, c.errors.exposure, c.errors.peak, steps, uniform,
       uniform / static_cast<double>(c.adaptive_samples));
   EXPECT_GE(uniform, 10.0 * static_cast<double>(c.adaptive_samples));
 }

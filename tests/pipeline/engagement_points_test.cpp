@@ -130,6 +130,25 @@ TEST(EngagementPoints, TheCrossingMissilesStareAndEngagementVerdictsDiffer) {
   }
 }
 
+// The observers' first samples alone (4 097 each here) would outgrow the budget: refused before
+// the target is built, naming what to change.
+TEST(EngagementPoints, ObserversWhoseFirstSamplesOutgrowTheBudgetAreRefusedBeforeTheWork) {
+  const Folder f("glint_engagement_memory");
+  std::string scene = kScene;
+  scene.replace(scene.find(R"("target": {"turn_deg_s")"), 0,
+                R"("time": {"initial_intervals": 4096}, )");
+  const fs::path scene_path = f.write("scene.json", scene);
+  std::string points = "x,y,z\n";
+  for (int i = 0; i < 20000; ++i) points += "-50," + std::to_string(i * 1e-3) + ",0.5\n";
+  const fs::path points_path = f.write("points.csv", points);
+  const test::Outcome o = glint({"points", scene_path.string(), "--points", points_path.string(),
+                                 "--out", (f.dir / "out.csv").string(), "--memory", "256M"});
+  EXPECT_EQ(o.status, 2) << o.err;
+  EXPECT_NE(o.err.find("20000 observers' first time samples"), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("engagement.time.initial_intervals"), std::string::npos) << o.err;
+  EXPECT_FALSE(fs::exists(f.dir / "out.csv"));
+}
+
 TEST(EngagementPoints, CommandsThatCannotIntegrateAnEngagementRefuseIt) {
   const Folder f("glint_engagement_refused");
   const fs::path scene = f.write("scene.json", kScene);
