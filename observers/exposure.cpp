@@ -5,7 +5,10 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <functional>
+#include <memory>
 #include <utility>
 
 #include "facets/sum.h"
@@ -100,6 +103,34 @@ void totalUp(ExposureHistory& h) {
     }
   }
   h.exposure_j_m2 = exposure.value();
+}
+
+// The bound of what the ball (@p centre_m at t = 0, @p radius_m) riding the motion's platform
+// receives over [t0, t1], under @p swept, the integrator of the interval's swept beam (turned by
+// at most @p sweep_angle_rad), and of the light narrower than what the samples at its ends and
+// middle are apart in it. @p target_radius_m: how far the target reaches from the pivot.
+BallBound boundOverInterval(const FacetIntegrator& swept, double sweep_angle_rad,
+                            const Motion& motion, double t0, double t1, const Vec3& centre_m,
+                            double radius_m, double floor_w_m2, double target_radius_m,
+                            std::vector<Candidate>& kept) {
+  const double mid = 0.5 * (t0 + t1);
+  const Vec3 centre = motion.toTargetFrame(mid, motion.observerAt(mid, centre_m));
+  // Each point of the ball sweeps as its centre does, and further by the target's turn over
+  // the ball's own radius.
+  const double sweep = motion.observerSweepM(t0, t1, centre_m) +
+                       0.5 * (t1 - t0) * motion.ratesOver(t0, t1).target_turn_rad_s * radius_m;
+  BallBoundOptions o;
+  // Between the samples the observer moves through the light by its own sweep and by what the
+  // beam's turn moves the reflection over the distance to the target.
+  const double distance = glm::length(centre - motion.spec().pivot_m) + target_radius_m;
+  o.sample_spacing_m = sweep + distance * sweep_angle_rad;
+  // Only whether the interval is dark, and the narrow light, are asked of the bound: light
+  // within half the floor may go, and a few splits tighten it where a long interval's ball sees
+  // part of a facet's light. Split deeper, a mesh's facets multiply by thousands at every one
+  // of its intervals.
+  o.drop_allowance_w_m2 = 0.5 * floor_w_m2;
+  o.max_split_depth = 3;
+  return swept.boundBall(centre, radius_m + sweep, swept.candidates(), 0.0, o, kept);
 }
 
 class ExposureRun {
@@ -203,28 +234,14 @@ class ExposureRun {
         open, [](const Open& w) { return std::pair(w.k0, w.k1); },
         [&](std::size_t first, std::size_t last) {
           const double t0 = grid_.at(open[first].k0), t1 = grid_.at(open[first].k1);
-          const double mid = 0.5 * (t0 + t1);
           const Beam swept = motion_.sweptBeam(t0, t1);
           const FacetIntegrator integrator = reference_.withBeam(swept);
           std::vector<Candidate>& kept = kept_lists.local();
           for (std::size_t i = first; i < last; ++i) {
             Open& w = open[i];
-            const Vec3 start = observers_[w.observer];
-            const Vec3 centre = motion_.toTargetFrame(mid, motion_.observerAt(mid, start));
-            const double radius = motion_.observerSweepM(t0, t1, start);
-            // Between the samples the observer moves through the light by its own sweep and
-            // by what the beam's turn moves the reflection over the distance to the target.
-            const double distance = glm::length(centre - motion_.spec().pivot_m) + target_radius_m_;
-            BallBoundOptions o;
-            o.sample_spacing_m = radius + distance * swept.sweep_angle_rad;
-            // Only whether the interval is dark, and the narrow light, are asked of the bound:
-            // light within half the floor may go, and a few splits tighten it where a long
-            // interval's ball sees part of a facet's light. Split deeper, a mesh's facets
-            // multiply by thousands at every one of its intervals.
-            o.drop_allowance_w_m2 = 0.5 * options_.floor_w_m2;
-            o.max_split_depth = 3;
-            const BallBound b =
-                integrator.boundBall(centre, radius, integrator.candidates(), 0.0, o, kept);
+            const BallBound b = boundOverInterval(integrator, swept.sweep_angle_rad, motion_, t0,
+                                                  t1, observers_[w.observer], 0.0,
+                                                  options_.floor_w_m2, target_radius_m_, kept);
             w.upper_w_m2 = b.upper_w_m2;
             w.narrow_w_m2 = b.narrow_w_m2;
           }
@@ -332,6 +349,86 @@ class ExposureRun {
 };
 
 }  // namespace
+
+std::vector<std::uint8_t> litByBound(const FacetIntegrator& reference, const Motion& motion,
+                                     const FieldSpec& plane, const ExposureOptions& options) {
+  constexpr int kTimeLevels = 4;  // an initial interval and its halves, to three levels
+  const int first = options.initial_intervals;
+  const double start = motion.spec().start_s, duration = motion.durationS();
+  // The swept integrators of every interval of every level, level l holding first × 2^l.
+  std::vector<std::vector<std::unique_ptr<FacetIntegrator>>> swept(kTimeLevels);
+  const double target_radius_m = targetRadiusM(reference.target(), motion.spec().pivot_m);
+  auto bounds = [&](int level, int index) {
+    const double n = static_cast<double>(first << level);
+    return std::pair(start + duration * (index / n), start + duration * ((index + 1) / n));
+  };
+  for (int level = 0; level < kTimeLevels; ++level) {
+    swept[level].resize(static_cast<std::size_t>(first) << level);
+    tbb::parallel_for(std::size_t{0}, swept[level].size(), [&](std::size_t i) {
+      const auto [t0, t1] = bounds(level, static_cast<int>(i));
+      swept[level][i] =
+          std::make_unique<FacetIntegrator>(reference.withBeam(motion.sweptBeam(t0, t1)));
+    });
+  }
+  tbb::enumerable_thread_specific<std::vector<Candidate>> kept_lists;
+  // Whether some instant of interval (level, index) may light the ball above the floor.
+  std::function<bool(int, int, const Vec3&, double, std::vector<Candidate>&)> mayLight =
+      [&](int level, int index, const Vec3& centre, double radius, std::vector<Candidate>& kept) {
+        const auto [t0, t1] = bounds(level, index);
+        const FacetIntegrator& integrator = *swept[level][static_cast<std::size_t>(index)];
+        const BallBound b =
+            boundOverInterval(integrator, integrator.beam().sweep_angle_rad, motion, t0, t1, centre,
+                              radius, options.floor_w_m2, target_radius_m, kept);
+        if (b.upper_w_m2 <= options.floor_w_m2) return false;
+        if (level + 1 == kTimeLevels) return true;
+        return mayLight(level + 1, 2 * index, centre, radius, kept) ||
+               mayLight(level + 1, 2 * index + 1, centre, radius, kept);
+      };
+
+  const std::array<int, 3> n = plane.nodes();
+  std::vector<std::uint8_t> lit(static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]), 0);
+  struct Block {
+    int i = 0, j = 0, size = 0;  // its lower corner node and its edge in cells
+  };
+  std::vector<Block> blocks;
+  const int top = plane.block_voxels;
+  for (int j = 0; j + 1 < n[1]; j += top)
+    for (int i = 0; i + 1 < n[0]; i += top) blocks.push_back({i, j, top});
+  while (!blocks.empty()) {
+    std::vector<std::uint8_t> lit_block(blocks.size(), 0);
+    tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t b) {
+      const Block& k = blocks[b];
+      const double half = 0.5 * k.size;
+      const Vec3 centre = plane.min_m + plane.voxel_m * ((k.i + half) * plane.axes[0] +
+                                                         (k.j + half) * plane.axes[1]);
+      const double radius = plane.voxel_m * half * std::sqrt(2.0);
+      std::vector<Candidate>& kept = kept_lists.local();
+      for (int index = 0; index < first; ++index) {
+        if (mayLight(0, index, centre, radius, kept)) {
+          lit_block[b] = 1;
+          return;
+        }
+      }
+    });
+    std::vector<Block> next;
+    for (std::size_t b = 0; b < blocks.size(); ++b) {
+      if (lit_block[b] == 0) continue;
+      const Block& k = blocks[b];
+      if (k.size == 1) {
+        for (int dj = 0; dj <= 1; ++dj)
+          for (int di = 0; di <= 1; ++di)
+            lit[static_cast<std::size_t>(k.j + dj) * static_cast<std::size_t>(n[0]) +
+                static_cast<std::size_t>(k.i + di)] = 1;
+        continue;
+      }
+      const int h = k.size / 2;
+      for (int dj = 0; dj <= 1; ++dj)
+        for (int di = 0; di <= 1; ++di) next.push_back({k.i + di * h, k.j + dj * h, h});
+    }
+    blocks = std::move(next);
+  }
+  return lit;
+}
 
 std::vector<ExposureHistory> integrateExposures(const FacetIntegrator& reference,
                                                 const Motion& motion,

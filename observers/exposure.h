@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "facets/integrator.h"
+#include "observers/field.h"
 #include "observers/motion.h"
 #include "observers/point_set.h"
 
@@ -60,6 +61,15 @@ std::vector<ExposureHistory> integrateExposures(const FacetIntegrator& reference
                                                 std::span<const Vec3> observers_m,
                                                 const ExposureOptions& options,
                                                 WorkCounter* counter = nullptr);
+
+/// @brief Which lattice points of the plane @p plane (their places at t = 0; they ride the
+/// motion's platform) the engagement may light above the floor. Blocks of the plane, coarsest
+/// first, are bounded over each initial interval, and over its halves to three levels where
+/// that bound is above the floor, under each interval's swept beam; a block some interval may
+/// light is split, down to single cells, whose corners are then lit. The points of blocks no
+/// bound lets light are dark over the whole span and need no sample. Indexed [j × nodes[0] + i].
+std::vector<std::uint8_t> litByBound(const FacetIntegrator& reference, const Motion& motion,
+                                     const FieldSpec& plane, const ExposureOptions& options);
 
 /// @brief The same observers sampled at @p steps equal steps (steps + 1 samples), each
 /// integrated to the reference's accuracy: the independent twin the adaptive sampling is

@@ -1,15 +1,59 @@
 #include "pipeline/engagement_report.h"
 
 #include <algorithm>
+#include <array>
 #include <charconv>
+#include <chrono>
 #include <cmath>
+#include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 
 #include "export/atomic_file.h"
 #include "pipeline/hazard_report.h"
+#include "pipeline/memory_budget.h"
+#include "pipeline/output_names.h"
 #include "pipeline/progress.h"
 
 namespace glint {
+namespace {
+
+// What to change when an engagement's samples outgrow the memory budget.
+constexpr std::string_view kEngagementAdvice =
+    "Raise --memory, or loosen engagement.time.tolerance, or give fewer observer points";
+
+}  // namespace
+
+EngagementResults sampleEngagement(const FacetIntegrator& reference, const Scene& scene,
+                                   std::span<const Vec3> points, const MemoryWatch& watch,
+                                   std::ostream* progress_to, bool terminal,
+                                   const std::string& what) {
+  const Motion motion(scene.engagement->motion, scene.laser);
+  WorkCounter counter;
+  counter.stop = &watch.stopFlag();
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<ExposureHistory> histories;
+  const std::string stage = what + "' time samples";
+  {
+    std::unique_ptr<ProgressReporter> progress;
+    if (progress_to != nullptr) {
+      progress =
+          std::make_unique<ProgressReporter>(*progress_to, terminal, "time samples", 0, counter);
+    }
+    try {
+      histories = integrateExposures(reference, motion, points, scene.engagement->time, &counter);
+    } catch (const WorkStopped&) {
+      if (progress) progress->stop();
+      watch.check(stage, kEngagementAdvice);
+      throw;
+    }
+  }
+  watch.check(stage, kEngagementAdvice);
+  EngagementResults results = judgeEngagement(std::move(histories), scene);
+  results.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return results;
+}
 
 EngagementResults judgeEngagement(std::vector<ExposureHistory> histories, const Scene& scene) {
   EngagementResults r;
@@ -128,6 +172,159 @@ void printEngagementSummary(std::ostream& err, const Scene& scene, std::span<con
         << " observers did not reach the tolerance in time or in a sample (converged = 0); "
            "raise engagement.time.max_depth or accuracy.max_evaluations, or loosen the "
            "tolerance\n";
+  }
+}
+
+}  // namespace glint
+
+namespace glint {
+namespace {
+
+// The row of @p results with the largest worst-window ratio (0 when empty).
+std::size_t worstRow(const EngagementResults& results) {
+  std::size_t worst = 0;
+  for (std::size_t i = 0; i < results.verdicts.size(); ++i) {
+    if (results.verdicts[i].window.ratio > results.verdicts[worst].window.ratio) worst = i;
+  }
+  return worst;
+}
+
+}  // namespace
+
+std::vector<ExrChannel> EngagementMaps::channels() const {
+  std::vector<ExrChannel> c = {
+      {"exposure_j_m2", &exposure_j_m2},       {"peak_irradiance_w_m2", &peak_irradiance_w_m2},
+      {"time_above_mpe_s", &time_above_mpe_s}, {"hazard_ratio", &hazard_ratio},
+      {"worst_window_s", &worst_window_s},     {"stare_hazard_ratio", &stare_hazard_ratio}};
+  if (!aided_hazard_ratio.empty()) c.push_back({"aided_hazard_ratio", &aided_hazard_ratio});
+  c.push_back({"status", &status});
+  return c;
+}
+
+EngagementMaps engagementMaps(const FieldSpec& spec, std::span<const std::uint8_t> lit,
+                              const EngagementResults& results, const HazardSpec& hazard) {
+  const std::array<int, 3> n = spec.nodes();
+  EngagementMaps m;
+  m.grid = {n[0], n[1], spec.min_m, spec.axes[0], spec.axes[1], spec.voxel_m};
+  const std::size_t count = lit.size();
+  for (auto* channel : {&m.exposure_j_m2, &m.peak_irradiance_w_m2, &m.time_above_mpe_s,
+                        &m.hazard_ratio, &m.stare_hazard_ratio, &m.worst_window_s}) {
+    channel->assign(count, 0.0f);
+  }
+  if (hazard.aid) m.aided_hazard_ratio.assign(count, 0.0f);
+  m.status.assign(count, 3.0f);  // dark over the whole span by the bound
+  std::size_t row = 0;
+  for (std::size_t p = 0; p < count; ++p) {
+    if (lit[p] == 0) continue;
+    const ExposureHistory& h = results.histories[row];
+    const ExposureVerdict& v = results.verdicts[row];
+    ++row;
+    m.exposure_j_m2[p] = static_cast<float>(h.exposure_j_m2);
+    m.peak_irradiance_w_m2[p] = static_cast<float>(h.peak_w_m2);
+    m.time_above_mpe_s[p] = static_cast<float>(v.time_above_mpe_s);
+    m.hazard_ratio[p] = static_cast<float>(v.window.ratio);
+    m.worst_window_s[p] = static_cast<float>(v.window.duration_s);
+    m.stare_hazard_ratio[p] = static_cast<float>(v.stare_ratio);
+    if (hazard.aid) m.aided_hazard_ratio[p] = static_cast<float>(v.aided_ratio);
+    m.status[p] = h.converged ? 1.0f : 5.0f;
+    ++m.integrated;
+    m.hazardous += v.window.ratio >= 1.0 ? 1 : 0;
+    m.stare_hazardous += v.stare_ratio >= 1.0 ? 1 : 0;
+    m.aided_hazardous += hazard.aid && v.aided_ratio >= 1.0 ? 1 : 0;
+    m.unconverged += h.converged ? 0 : 1;
+  }
+  return m;
+}
+
+nlohmann::json engagementPlaneJson(const PlaneSpec& plane, const EngagementMaps& maps,
+                                   const EngagementResults& results, std::span<const Vec3> points,
+                                   const HazardSpec& hazard) {
+  const double pixel_m2 = maps.grid.pixel_m * maps.grid.pixel_m;
+  std::int64_t samples = 0, evaluations = 0;
+  for (const ExposureHistory& h : results.histories) {
+    samples += static_cast<std::int64_t>(h.time_s.size());
+    evaluations += h.evaluations;
+  }
+  const auto total = static_cast<std::int64_t>(maps.status.size());
+  nlohmann::json j = {
+      {"name", plane.name},
+      {"file", output_names::planeExr(plane.name)},
+      {"pixels", {maps.grid.width, maps.grid.height}},
+      {"pixel_m", maps.grid.pixel_m},
+      {"points",
+       {{"integrated", maps.integrated},
+        {"dark_by_bound", total - maps.integrated},
+        {"unconverged", maps.unconverged}}},
+      {"time_samples", samples},
+      {"evaluations", evaluations},
+      {"seconds", results.seconds},
+      {"hazardous_area_m2", static_cast<double>(maps.hazardous) * pixel_m2},
+      {"stare_hazardous_area_m2", static_cast<double>(maps.stare_hazardous) * pixel_m2}};
+  if (hazard.aid)
+    j["aided_hazardous_area_m2"] = static_cast<double>(maps.aided_hazardous) * pixel_m2;
+  if (!results.histories.empty()) {
+    const std::size_t w = worstRow(results);
+    const ExposureHistory& h = results.histories[w];
+    const ExposureVerdict& v = results.verdicts[w];
+    const Vec3& x = points[w];
+    j["worst"] = {{"at_m", {x.x, x.y, x.z}},
+                  {"hazard_ratio", v.window.ratio},
+                  {"window_s", v.window.duration_s},
+                  {"window_start_s", v.window.start_s},
+                  {"window_exposure_j_m2", v.window.exposure_j_m2},
+                  {"window_mpe_j_m2", v.window.mpe_j_m2},
+                  {"exposure_j_m2", h.exposure_j_m2},
+                  {"peak_irradiance_w_m2", h.peak_w_m2},
+                  {"peak_time_s", h.peak_time_s},
+                  {"stare_hazard_ratio", v.stare_ratio}};
+  }
+  return j;
+}
+
+nlohmann::json engagementJson(const EngagementSpec& e) {
+  const MotionSpec& m = e.motion;
+  const char* pointing[] = {"fixed", "track", "keyed"};
+  return {{"start_s", m.start_s},
+          {"end_s", m.end_s},
+          {"pivot_m", {m.pivot_m.x, m.pivot_m.y, m.pivot_m.z}},
+          {"target_poses", m.poses.size()},
+          {"interpolation", m.interpolation == PoseInterpolation::Linear ? "linear" : "spline"},
+          {"laser_pointing", pointing[static_cast<int>(m.pointing)]},
+          {"observer_velocity_m_s",
+           {m.observer_velocity_m_s.x, m.observer_velocity_m_s.y, m.observer_velocity_m_s.z}},
+          {"longest_window_s", e.longest_window_s},
+          {"time",
+           {{"tolerance", e.time.tolerance},
+            {"floor_w_m2", e.time.floor_w_m2},
+            {"initial_intervals", e.time.initial_intervals},
+            {"max_depth", e.time.max_depth}}},
+          {"rule",
+           "for every duration t up to longest_window_s, the largest radiant exposure any window "
+           "of length t collects, against the MPE for t"}};
+}
+
+void printEngagementPlane(std::ostream& err, const PlaneSpec& plane, const EngagementMaps& maps,
+                          const EngagementResults& results, std::span<const Vec3> points) {
+  const double pixel_m2 = maps.grid.pixel_m * maps.grid.pixel_m;
+  err << "plane " << plane.name << ": " << maps.integrated << " of " << maps.status.size()
+      << " points sampled in time (the rest dark by the bound), "
+      << formatDuration(results.seconds);
+  if (results.histories.empty()) {
+    err << "; nothing reaches it\n";
+    return;
+  }
+  const std::size_t w = worstRow(results);
+  const ExposureVerdict& v = results.verdicts[w];
+  const Vec3& x = points[w];
+  err << "\n  worst point (" << x.x << ", " << x.y << ", " << x.z << "): hazard ratio "
+      << formatNumber("%.3g", v.window.ratio) << " over "
+      << formatNumber("%.3g", v.window.duration_s) << " s (stare verdict "
+      << formatNumber("%.3g", v.stare_ratio) << "); hazardous "
+      << formatNumber("%.4g", static_cast<double>(maps.hazardous) * pixel_m2) << " m², as a stare "
+      << formatNumber("%.4g", static_cast<double>(maps.stare_hazardous) * pixel_m2) << " m²\n";
+  if (maps.unconverged > 0) {
+    err << "  warning: " << maps.unconverged
+        << " points did not reach the tolerance in time (status 5)\n";
   }
 }
 

@@ -4,10 +4,14 @@
 /// exposure, peak, time above the MPE and worst window as table columns, the irradiance
 /// histories as a time series, and the summary on the terminal.
 
+#include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <ostream>
 #include <span>
+#include <string>
 #include <vector>
 
+#include "export/exr_map.h"
 #include "export/points_csv.h"
 #include "hazard/exposure_window.h"
 #include "observers/exposure.h"
@@ -21,6 +25,17 @@ struct EngagementResults {
   std::vector<ExposureVerdict> verdicts;
   double seconds = 0.0;
 };
+
+class MemoryWatch;
+
+/// @brief The scene's engagement at @p points (their places at t = 0), sampled in time by
+/// integrateExposures() from @p reference and judged, with progress on @p progress_to (none:
+/// quiet); @p what names the points in a message.
+/// @throw std::runtime_error when the memory watch stops the work.
+EngagementResults sampleEngagement(const FacetIntegrator& reference, const Scene& scene,
+                                   std::span<const Vec3> points, const MemoryWatch& watch,
+                                   std::ostream* progress_to, bool terminal,
+                                   const std::string& what);
 
 /// @brief Judges every history of @p histories under the scene's hazard and engagement.
 EngagementResults judgeEngagement(std::vector<ExposureHistory> histories, const Scene& scene);
@@ -42,5 +57,40 @@ void writeTimeSeriesCsv(std::ostream& out, const EngagementResults& results);
 /// the per-pose stare verdict beside it, and a warning for observers that did not converge.
 void printEngagementSummary(std::ostream& err, const Scene& scene, std::span<const Vec3> points,
                             const EngagementResults& results, int threads);
+
+/// @brief An engagement's maps over one plane of `glint run`, arrays indexed [j × width + i]:
+/// each lattice point's exposure, peak, time above the MPE, worst window and its hazard ratio,
+/// the stare verdict, and its status (1 integrated, 3 dark over the whole span by the bound, 5
+/// integrated but unconverged).
+struct EngagementMaps {
+  PlaneGrid grid;
+  std::vector<float> exposure_j_m2, peak_irradiance_w_m2, time_above_mpe_s, hazard_ratio,
+      aided_hazard_ratio, stare_hazard_ratio, worst_window_s, status;
+  std::int64_t integrated = 0;       ///< lattice points sampled in time
+  std::int64_t hazardous = 0;        ///< hazard_ratio ≥ 1
+  std::int64_t stare_hazardous = 0;  ///< stare_hazard_ratio ≥ 1
+  std::int64_t aided_hazardous = 0;  ///< aided_hazard_ratio ≥ 1 (with an aid)
+  std::int64_t unconverged = 0;
+  /// @brief The EXR channels, in the order the file holds them.
+  [[nodiscard]] std::vector<ExrChannel> channels() const;
+};
+
+/// @brief The maps of the plane @p spec, whose lattice points @p lit (flags indexed [j × width +
+/// i]) were integrated in that order into @p results; the others are dark.
+EngagementMaps engagementMaps(const FieldSpec& spec, std::span<const std::uint8_t> lit,
+                              const EngagementResults& results, const HazardSpec& hazard);
+
+/// @brief The summary's entry of one plane: its lattice, counts, worst point and its window,
+/// the hazardous area by the worst window and by the stare verdict.
+nlohmann::json engagementPlaneJson(const PlaneSpec& plane, const EngagementMaps& maps,
+                                   const EngagementResults& results, std::span<const Vec3> points,
+                                   const HazardSpec& hazard);
+
+/// @brief The summary's `engagement`: the span, the motion's kinds and the time sampling.
+nlohmann::json engagementJson(const EngagementSpec& engagement);
+
+/// @brief One plane's line on the terminal.
+void printEngagementPlane(std::ostream& err, const PlaneSpec& plane, const EngagementMaps& maps,
+                          const EngagementResults& results, std::span<const Vec3> points);
 
 }  // namespace glint

@@ -279,35 +279,6 @@ void report(std::ostream& err, const PointsArgs& args, const Scene& scene,
                threads, surface_check ? &*surface_check : nullptr);
 }
 
-// An engagement: every observer's irradiance over the span, its exposure and worst window.
-// @throw std::runtime_error when the budget is spent.
-EngagementResults evaluateEngagement(const FacetIntegrator& reference, const Scene& scene,
-                                     const std::vector<Vec3>& points, const PointsArgs& args,
-                                     const MemoryWatch& watch, std::ostream& err) {
-  const Motion motion(scene.engagement->motion, scene.laser);
-  WorkCounter counter;
-  counter.stop = &watch.stopFlag();
-  const auto start = std::chrono::steady_clock::now();
-  std::vector<ExposureHistory> histories;
-  {
-    std::unique_ptr<ProgressReporter> progress;
-    if (!args.quiet) {
-      progress = std::make_unique<ProgressReporter>(err, args.terminal, "time samples", 0, counter);
-    }
-    try {
-      histories = integrateExposures(reference, motion, points, scene.engagement->time, &counter);
-    } catch (const WorkStopped&) {
-      if (progress) progress->stop();
-      watch.check("the engagement's time samples", kAdvice);
-      throw;
-    }
-  }
-  watch.check("the engagement's time samples", kAdvice);
-  EngagementResults results = judgeEngagement(std::move(histories), scene);
-  results.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return results;
-}
-
 }  // namespace
 
 void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
@@ -356,7 +327,8 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   watch.check("building the target", kAdvice);
   if (scene.engagement) {
     const EngagementResults results =
-        evaluateEngagement(integrator, scene, points, args, watch, err);
+        sampleEngagement(integrator, scene, points, watch, args.quiet ? nullptr : &err,
+                         args.terminal, "the observers");
     const std::vector<CsvColumn> columns = engagementColumns(results, scene.hazard);
     // Both are written before either is committed: a value that cannot be written leaves
     // neither file.

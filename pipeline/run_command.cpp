@@ -13,6 +13,8 @@
 
 #include "export/field_files.h"
 #include "glint/version.h"
+#include "observers/exposure.h"
+#include "pipeline/engagement_report.h"
 #include "pipeline/input_error.h"
 #include "pipeline/input_files.h"
 #include "pipeline/json_reader.h"
@@ -379,6 +381,60 @@ void runPlanes(const RunContext& c, RunSummary& s) {
   s.j["planes"] = planes;
 }
 
+// An engagement over each plane: the points no bound can prove dark over the span are sampled
+// in time, and each plane's maps, summary entry and lines written.
+void runEngagementPlanes(const RunContext& c, RunSummary& s) {
+  const EngagementSpec& e = *c.scene.engagement;
+  const Motion motion(e.motion, c.scene.laser);
+  // Each sample is integrated to the scene's accuracy, as glint points integrates it: a plane's
+  // map holds at each of its points what the table gives for that point.
+  const FacetIntegrator integrator =
+      c.target.integrator.withAccuracy(c.scene.accuracy.tolerance, c.scene.accuracy.floor_w_m2);
+  if (!c.args.quiet) {
+    c.err << "glint run: an engagement of " << formatNumber("%g", motion.durationS()) << " s over "
+          << c.scene.planes.size() << (c.scene.planes.size() == 1 ? " plane" : " planes")
+          << "; the far field and the reach judge one pose and are left out\n";
+  }
+  nlohmann::json planes = nlohmann::json::array();
+  for (std::size_t p = 0; p < c.scene.planes.size(); ++p) {
+    const PlaneSpec& plane = c.scene.planes[p];
+    const FieldSpec spec = planeFieldSpec(c.scene, plane);
+    const auto start = std::chrono::steady_clock::now();
+    const std::vector<std::uint8_t> lit = litByBound(integrator, motion, spec, e.time);
+    const std::array<int, 3> n = spec.nodes();
+    std::vector<Vec3> points;
+    for (int j = 0; j < n[1]; ++j) {
+      for (int i = 0; i < n[0]; ++i) {
+        if (lit[static_cast<std::size_t>(j) * static_cast<std::size_t>(n[0]) +
+                static_cast<std::size_t>(i)] != 0) {
+          points.push_back(spec.position(i, j, 0));
+        }
+      }
+    }
+    EngagementResults results =
+        sampleEngagement(integrator, c.scene, points, c.watch, c.args.quiet ? nullptr : &c.err,
+                         c.args.terminal, "plane " + plane.name + "'s points");
+    // The bound's culling counts in the plane's time.
+    results.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const EngagementMaps maps = engagementMaps(spec, lit, results, c.scene.hazard);
+    const std::vector<ExrChannel> channels = maps.channels();
+    for (const ExrChannel& channel : channels) {
+      for (float v : *channel.values) {
+        if (!std::isfinite(v)) {
+          throw std::runtime_error("plane " + plane.name + ": " + channel.name +
+                                   " is not a finite number somewhere; nothing was written");
+        }
+      }
+    }
+    c.outputs.writeEngagementPlane(p, {maps.grid, channels, c.info});
+    planes.push_back(engagementPlaneJson(plane, maps, results, points, c.scene.hazard));
+    if (!c.args.quiet) printEngagementPlane(c.err, plane, maps, results, points);
+  }
+  s.j["engagement"] = engagementJson(e);
+  s.j["planes"] = planes;
+}
+
 // The hazard reach, its files, its entry in the summary and its line on the terminal.
 void runReach(const RunContext& c, const FarResult& far, RunSummary& s) {
   const SceneReach reach = sceneReach(c.target, c.scene, *far.far, c.watch, "the hazard reach",
@@ -430,9 +486,20 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   Scene scene = loadScene(args.scene_path, budget);
   overrideAccuracy(scene.accuracy, std::nullopt, args.scheme, scene.source);
   if (scene.engagement) {
-    throw InputError(scene.source +
-                     ": /engagement: glint run does not integrate an engagement over its box and "
-                     "planes yet; glint points does, at listed observers (docs/engagement.md)");
+    // Over an engagement glint run maps its planes; the box, the far field and the reach judge
+    // one pose.
+    if (scene.observers) {
+      throw InputError(scene.source +
+                       ": /observers: glint run integrates an engagement over planes only, not "
+                       "yet over a box; give `planes`, or list the points for glint points");
+    }
+    if (scene.planes.empty()) {
+      throw InputError(scene.source +
+                       ": /engagement: glint run integrates an engagement over `planes`: give "
+                       "some, or list the observers for glint points");
+    }
+    scene.far_field.enabled = false;
+    scene.reach.enabled = false;
   }
   if (!scene.observers && scene.planes.empty() && !scene.wantsReach()) {
     throw InputError(scene.source +
@@ -482,6 +549,13 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     far.hazard = farHazard(*far.far, scene.hazard);
   }
   RunSummary summary;
+  if (scene.engagement) {
+    summary.j = runJson(info);
+    summary.j["hazard"] = hazardJson(scene.hazard, nullptr);
+    runEngagementPlanes(c, summary);
+    if (writer) finishRun(c, dir, stale, summary);
+    return;
+  }
   if (scene.observers) {
     runBox(c, far, summary);
   } else {

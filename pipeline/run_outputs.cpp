@@ -76,7 +76,7 @@ void writePlaneExr(std::ostream& out, const PlaneResults& r) {
 // that takes the field's grids, written last; summary.json lists them in this order, a plane's
 // one a plane.
 struct RunOutputs::Declared {
-  enum class Region { Run, Box, Plane, Far, Reach };
+  enum class Region { Run, Box, Plane, Far, Reach, EngagementPlane };
   const char* name = nullptr;
   std::string (*plane_name)(const std::string&) = nullptr;  // instead of name, a plane's
   Region region = Region::Run;
@@ -84,6 +84,7 @@ struct RunOutputs::Declared {
   void (*plane)(std::ostream&, const PlaneResults&) = nullptr;
   void (*far)(std::ostream&, const FarResults&) = nullptr;
   void (*reach)(std::ostream&, const ReachResults&) = nullptr;
+  void (*engagement_plane)(std::ostream&, const EngagementPlaneResults&) = nullptr;
   bool takes_field = false;    // the box's VDB moves the grids out of the field
   bool staged_folder = false;  // the AMR data set: a folder staged beside its .vthb
   bool aided_only = false;     // written with an optical aid only
@@ -97,17 +98,22 @@ struct RunOutputs::Declared {
   }
 
   [[nodiscard]] bool wanted(const Scene& s) const {
+    // An engagement's run writes its planes' maps over time and its summary only: a box, the
+    // far field and the reach judge one pose.
+    const bool one_pose = !s.engagement.has_value();
     switch (region) {
       case Region::Run:
         return true;
       case Region::Box:
-        return s.observers.has_value();
+        return one_pose && s.observers.has_value();
       case Region::Plane:
-        return !s.planes.empty();
+        return one_pose && !s.planes.empty();
       case Region::Far:
-        return s.far_field.enabled && (!aided_only || s.hazard.aid.has_value());
+        return one_pose && s.far_field.enabled && (!aided_only || s.hazard.aid.has_value());
       case Region::Reach:
-        return s.wantsReach();
+        return one_pose && s.wantsReach();
+      case Region::EngagementPlane:
+        return !one_pose && !s.planes.empty();
     }
     return false;
   }
@@ -116,6 +122,7 @@ struct RunOutputs::Declared {
   void write(std::ostream& out, const PlaneResults& r) const { plane(out, r); }
   void write(std::ostream& out, const FarResults& r) const { far(out, r); }
   void write(std::ostream& out, const ReachResults& r) const { reach(out, r); }
+  void write(std::ostream& out, const EngagementPlaneResults& r) const { engagement_plane(out, r); }
 };
 
 namespace {
@@ -163,6 +170,12 @@ constexpr Declared kOutputs[] = {
      .region = Region::Plane,
      .plane = writePlaneExr,
      .scenario = true},
+    {.plane_name = output_names::planeExr,
+     .region = Region::EngagementPlane,
+     .engagement_plane =
+         [](std::ostream& out, const EngagementPlaneResults& r) {
+           writeExr(out, r.grid, r.channels, exrInfo(r.info));
+         }},
 };
 
 // A scenario writes maps of its box and planes only (its far field is a figure of its
@@ -195,7 +208,8 @@ RunOutputs::RunOutputs(const Scene& scene, const std::filesystem::path& dir,
                        const InputFiles& inputs, bool writer)
     : dir_(dir), writer_(writer) {
   auto declare = [&](const Declared& d, std::size_t plane) {
-    const std::string name = d.fileName(d.region == Region::Plane ? scene.planes[plane].name : "");
+    const bool of_plane = d.region == Region::Plane || d.region == Region::EngagementPlane;
+    const std::string name = d.fileName(of_plane ? scene.planes[plane].name : "");
     names_.push_back(name);
     if (d.region == Region::Far) far_names_.push_back(name);
     declared_.push_back(&d);
@@ -209,7 +223,7 @@ RunOutputs::RunOutputs(const Scene& scene, const std::filesystem::path& dir,
   };
   for (const Declared& d : kOutputs) {
     if (!d.wanted(scene)) continue;
-    if (d.region != Region::Plane) {
+    if (d.region != Region::Plane && d.region != Region::EngagementPlane) {
       declare(d, 0);
       continue;
     }
@@ -246,6 +260,14 @@ void RunOutputs::writeBox(BoxResults& box) {
 void RunOutputs::writePlane(std::size_t index, const PlaneResults& plane) {
   if (!writer_) return;
   for (const Declared* d : writingOrder(Region::Plane)) {
+    if (const std::optional<std::size_t> i = slotOf(*d, index))
+      d->write(files_[*i]->stream(), plane);
+  }
+}
+
+void RunOutputs::writeEngagementPlane(std::size_t index, const EngagementPlaneResults& plane) {
+  if (!writer_) return;
+  for (const Declared* d : writingOrder(Region::EngagementPlane)) {
     if (const std::optional<std::size_t> i = slotOf(*d, index))
       d->write(files_[*i]->stream(), plane);
   }

@@ -43,6 +43,13 @@ struct PlaneResults {
   const RunInfo& info;
 };
 
+/// @brief One plane's maps over an engagement as its file is written from them.
+struct EngagementPlaneResults {
+  const PlaneGrid& grid;
+  const std::vector<ExrChannel>& channels;
+  const RunInfo& info;
+};
+
 /// @brief The far field as its files are written from it.
 struct FarResults {
   const FarField& far;
@@ -81,6 +88,7 @@ class RunOutputs {
 
   void writeBox(BoxResults& box);
   void writePlane(std::size_t index, const PlaneResults& plane);
+  void writeEngagementPlane(std::size_t index, const EngagementPlaneResults& plane);
   void writeFar(const FarResults& far);
   void writeReach(const ReachResults& reach);
   /// @brief Where summary.json is written (none unless a writer).

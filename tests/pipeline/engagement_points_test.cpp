@@ -6,10 +6,12 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "export/exr_map.h"
 #include "support/cli.h"
 #include "support/files.h"
 
@@ -149,15 +151,89 @@ TEST(EngagementPoints, ObserversWhoseFirstSamplesOutgrowTheBudgetAreRefusedBefor
   EXPECT_FALSE(fs::exists(f.dir / "out.csv"));
 }
 
+// glint run over an engagement maps its planes: a point the bound proves dark over the whole
+// span is dark at every instant glint points samples, and an integrated point's map values are
+// the table's for the same point.
+TEST(EngagementRun, APlanesMapsAreWhatGlintPointsGivesAtItsPoints) {
+  const Folder f("glint_engagement_run");
+  std::string scene = kScene;
+  scene.replace(scene.rfind('}'), 1, R"(,
+    "planes": [{"name": "wall", "origin": [-50, -20, -1], "u_axis": [0, 1, 0],
+                "v_axis": [0, 0, 1], "size_m": [40, 2], "pixel_m": 1.0, "block_m": 4}]})");
+  const fs::path scene_path = f.write("scene.json", scene);
+  const test::Outcome run = glint({"run", scene_path.string(), "-o", (f.dir / "out").string()});
+  ASSERT_EQ(run.status, 0) << run.err;
+  const auto summary = nlohmann::json::parse(std::ifstream(f.dir / "out" / "summary.json"));
+  EXPECT_EQ(summary["files"], (nlohmann::json{"summary.json", "wall.exr"}));
+  ASSERT_TRUE(summary.contains("engagement"));
+  const nlohmann::json& wall = summary["planes"][0];
+  EXPECT_GT(wall["points"]["integrated"].get<std::int64_t>(), 0);
+  EXPECT_GT(wall["points"]["dark_by_bound"].get<std::int64_t>(), 0)
+      << "the glint's path is a band of the wall";
+  int width = 0, height = 0;
+  const std::string exr = (f.dir / "out" / "wall.exr").string();
+  const std::vector<float> status = readExrChannel(exr, "status", width, height);
+  const std::vector<float> exposure = readExrChannel(exr, "exposure_j_m2", width, height);
+  const std::vector<float> ratio = readExrChannel(exr, "hazard_ratio", width, height);
+  // Up to 15 points of each kind, through glint points.
+  std::string points = "x,y,z\n";
+  std::vector<std::size_t> chosen;
+  int dark_chosen = 0, lit_chosen = 0;
+  for (std::size_t p = 0; p < status.size(); ++p) {
+    int& kind = status[p] == 3.0f ? dark_chosen : lit_chosen;
+    if (kind == 15) continue;
+    ++kind;
+    chosen.push_back(p);
+    const int i = static_cast<int>(p % static_cast<std::size_t>(width));
+    const int j = static_cast<int>(p / static_cast<std::size_t>(width));
+    points += "-50," + std::to_string(-20.0 + i) + "," + std::to_string(-1.0 + j) + "\n";
+  }
+  EXPECT_GT(dark_chosen, 0);
+  EXPECT_GT(lit_chosen, 0);
+  const fs::path points_path = f.write("points.csv", points);
+  const test::Outcome o = glint({"points", scene_path.string(), "--points", points_path.string(),
+                                 "--out", (f.dir / "table.csv").string()});
+  ASSERT_EQ(o.status, 0) << o.err;
+  const auto table = csv(test::readFile(f.dir / "table.csv"));
+  std::map<std::string, std::size_t> column;
+  for (std::size_t i = 0; i < table[0].size(); ++i) column[table[0][i]] = i;
+  for (std::size_t k = 0; k < chosen.size(); ++k) {
+    const std::size_t p = chosen[k];
+    const double h = std::stod(table[k + 1][column["exposure_j_m2"]]);
+    const double peak = std::stod(table[k + 1][column["peak_irradiance_w_m2"]]);
+    if (status[p] == 3.0f) {
+      // Dark by the bound: below the floor (a thousandth of the 50 W/m² MPE) at every instant.
+      EXPECT_LE(peak, 0.05) << "point " << p;
+      EXPECT_EQ(exposure[p], 0.0f);
+    } else {
+      EXPECT_EQ(status[p], 1.0f) << "point " << p;
+      // The map holds floats of the table's doubles.
+      EXPECT_NEAR(exposure[p], h, 1e-6 * h + 1e-30) << "point " << p;
+      EXPECT_NEAR(ratio[p], std::stod(table[k + 1][column["hazard_ratio"]]), 1e-6) << "point " << p;
+    }
+  }
+  EXPECT_NE(run.err.find("plane wall:"), std::string::npos) << run.err;
+}
+
 TEST(EngagementPoints, CommandsThatCannotIntegrateAnEngagementRefuseIt) {
   const Folder f("glint_engagement_refused");
   const fs::path scene = f.write("scene.json", kScene);
   const fs::path points = f.write("points.csv", "x,y,z\n-50,0,0.5\n");
   const test::Outcome run = glint({"run", scene.string(), "--out", (f.dir / "run").string()});
   EXPECT_EQ(run.status, 2);
-  EXPECT_NE(run.err.find("/engagement: glint run does not integrate an engagement"),
+  EXPECT_NE(run.err.find("/engagement: glint run integrates an engagement over `planes`"),
             std::string::npos)
       << run.err;
+  std::string with_box = kScene;
+  with_box.replace(with_box.rfind('}'), 1,
+                   R"(, "observers": {"min": [-1, -1, -1], "max": [1, 1, 1], "voxel_m": 0.5}})");
+  const test::Outcome box =
+      glint({"run", f.write("box.json", with_box).string(), "-o", (f.dir / "box").string()});
+  EXPECT_EQ(box.status, 2);
+  EXPECT_NE(box.err.find("/observers: glint run integrates an engagement over planes only"),
+            std::string::npos)
+      << box.err;
+  EXPECT_FALSE(fs::exists(f.dir / "box" / "summary.json"));
   const test::Outcome uniform =
       glint({"points", scene.string(), "--points", points.string(), "--uniform", "2"});
   EXPECT_EQ(uniform.status, 2) << uniform.err;
