@@ -106,13 +106,12 @@ void totalUp(ExposureHistory& h) {
 }
 
 // The bound of what the ball (@p centre_m at t = 0, @p radius_m) riding the motion's platform
-// receives over [t0, t1], under @p swept, the integrator of the interval's swept beam (turned by
-// at most @p sweep_angle_rad), and of the light narrower than what the samples at its ends and
-// middle are apart in it. @p target_radius_m: how far the target reaches from the pivot.
-BallBound boundOverInterval(const FacetIntegrator& swept, double sweep_angle_rad,
-                            const Motion& motion, double t0, double t1, const Vec3& centre_m,
-                            double radius_m, double floor_w_m2, double target_radius_m,
-                            std::vector<Candidate>& kept) {
+// receives over [t0, t1], under @p swept, the integrator of the interval's swept beam, and of
+// the light narrower than what the samples at its ends and middle are apart in it.
+// @p target_radius_m: how far the target reaches from the pivot.
+BallBound boundOverInterval(const FacetIntegrator& swept, const Motion& motion, double t0,
+                            double t1, const Vec3& centre_m, double radius_m, double floor_w_m2,
+                            double target_radius_m, std::vector<Candidate>& kept) {
   const double mid = 0.5 * (t0 + t1);
   const Vec3 centre = motion.toTargetFrame(mid, motion.observerAt(mid, centre_m));
   // Each point of the ball sweeps as its centre does, and further by the target's turn over
@@ -123,7 +122,7 @@ BallBound boundOverInterval(const FacetIntegrator& swept, double sweep_angle_rad
   // Between the samples the observer moves through the light by its own sweep and by what the
   // beam's turn moves the reflection over the distance to the target.
   const double distance = glm::length(centre - motion.spec().pivot_m) + target_radius_m;
-  o.sample_spacing_m = sweep + distance * sweep_angle_rad;
+  o.sample_spacing_m = sweep + distance * swept.beam().sweep_angle_rad;
   // Only whether the interval is dark, and the narrow light, are asked of the bound: light
   // within half the floor may go, and a few splits tighten it where a long interval's ball sees
   // part of a facet's light. Split deeper, a mesh's facets multiply by thousands at every one
@@ -234,14 +233,13 @@ class ExposureRun {
         open, [](const Open& w) { return std::pair(w.k0, w.k1); },
         [&](std::size_t first, std::size_t last) {
           const double t0 = grid_.at(open[first].k0), t1 = grid_.at(open[first].k1);
-          const Beam swept = motion_.sweptBeam(t0, t1);
-          const FacetIntegrator integrator = reference_.withBeam(swept);
+          const FacetIntegrator integrator = reference_.withBeam(motion_.sweptBeam(t0, t1));
           std::vector<Candidate>& kept = kept_lists.local();
           for (std::size_t i = first; i < last; ++i) {
             Open& w = open[i];
-            const BallBound b = boundOverInterval(integrator, swept.sweep_angle_rad, motion_, t0,
-                                                  t1, observers_[w.observer], 0.0,
-                                                  options_.floor_w_m2, target_radius_m_, kept);
+            const BallBound b =
+                boundOverInterval(integrator, motion_, t0, t1, observers_[w.observer], 0.0,
+                                  options_.floor_w_m2, target_radius_m_, kept);
             w.upper_w_m2 = b.upper_w_m2;
             w.narrow_w_m2 = b.narrow_w_m2;
           }
@@ -376,9 +374,8 @@ std::vector<std::uint8_t> litByBound(const FacetIntegrator& reference, const Mot
       [&](int level, int index, const Vec3& centre, double radius, std::vector<Candidate>& kept) {
         const auto [t0, t1] = bounds(level, index);
         const FacetIntegrator& integrator = *swept[level][static_cast<std::size_t>(index)];
-        const BallBound b =
-            boundOverInterval(integrator, integrator.beam().sweep_angle_rad, motion, t0, t1, centre,
-                              radius, options.floor_w_m2, target_radius_m, kept);
+        const BallBound b = boundOverInterval(integrator, motion, t0, t1, centre, radius,
+                                              options.floor_w_m2, target_radius_m, kept);
         if (b.upper_w_m2 <= options.floor_w_m2) return false;
         if (level + 1 == kTimeLevels) return true;
         return mayLight(level + 1, 2 * index, centre, radius, kept) ||
