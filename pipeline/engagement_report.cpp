@@ -23,6 +23,15 @@ namespace {
 constexpr std::string_view kEngagementAdvice =
     "Raise --memory, or loosen engagement.time.tolerance, or give fewer observer points";
 
+// The row of @p results with the largest worst-window ratio (0 when empty).
+std::size_t worstRow(const EngagementResults& results) {
+  std::size_t worst = 0;
+  for (std::size_t i = 0; i < results.verdicts.size(); ++i) {
+    if (results.verdicts[i].window.ratio > results.verdicts[worst].window.ratio) worst = i;
+  }
+  return worst;
+}
+
 }  // namespace
 
 EngagementResults sampleEngagement(const FacetIntegrator& reference, const Scene& scene,
@@ -128,14 +137,13 @@ void printEngagementSummary(std::ostream& err, const Scene& scene, std::span<con
                             const EngagementResults& results, int threads) {
   const EngagementSpec& e = *scene.engagement;
   const std::size_t n = results.histories.size();
-  std::size_t samples = 0, lo = 0, hi = 0, unconverged = 0, worst = 0, stare_worst = 0;
+  std::size_t samples = 0, lo = 0, hi = 0, unconverged = 0, stare_worst = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t s = results.histories[i].time_s.size();
     samples += s;
     lo = i == 0 ? s : std::min(lo, s);
     hi = std::max(hi, s);
     unconverged += results.histories[i].converged ? 0 : 1;
-    if (results.verdicts[i].window.ratio > results.verdicts[worst].window.ratio) worst = i;
     if (results.verdicts[i].stare_ratio > results.verdicts[stare_worst].stare_ratio)
       stare_worst = i;
   }
@@ -149,6 +157,7 @@ void printEngagementSummary(std::ostream& err, const Scene& scene, std::span<con
   err << "  time samples: " << samples << " in all; per observer "
       << formatNumber("%.4g", static_cast<double>(samples) / static_cast<double>(n))
       << " on average, " << lo << " to " << hi << "\n";
+  const std::size_t worst = worstRow(results);
   const ExposureHistory& h = results.histories[worst];
   const ExposureVerdict& v = results.verdicts[worst];
   const Vec3& p = points[worst];
@@ -178,18 +187,6 @@ void printEngagementSummary(std::ostream& err, const Scene& scene, std::span<con
 }  // namespace glint
 
 namespace glint {
-namespace {
-
-// The row of @p results with the largest worst-window ratio (0 when empty).
-std::size_t worstRow(const EngagementResults& results) {
-  std::size_t worst = 0;
-  for (std::size_t i = 0; i < results.verdicts.size(); ++i) {
-    if (results.verdicts[i].window.ratio > results.verdicts[worst].window.ratio) worst = i;
-  }
-  return worst;
-}
-
-}  // namespace
 
 std::vector<ExrChannel> EngagementMaps::channels() const {
   std::vector<ExrChannel> c = {
