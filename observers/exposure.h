@@ -55,12 +55,15 @@ struct ExposureHistory {
 /// integrator of the target at the scene's pose (its beam is not used: each instant's comes
 /// from @p motion). Results do not depend on the number of threads.
 /// @param counter optional; items are samples, scheduled as they are learnt.
-/// @throw WorkStopped when the counter's stop flag is raised (between rounds).
+/// @param exchange optional: the processes of an MPI job, each of which samples every size-th
+/// observer from its rank on and receives the others' histories (the same as one process).
+/// @throw WorkStopped when the counter's stop flag is raised (between rounds) on any process.
 std::vector<ExposureHistory> integrateExposures(const FacetIntegrator& reference,
                                                 const Motion& motion,
                                                 std::span<const Vec3> observers_m,
                                                 const ExposureOptions& options,
-                                                WorkCounter* counter = nullptr);
+                                                WorkCounter* counter = nullptr,
+                                                PointExchange* exchange = nullptr);
 
 /// @brief Which lattice points of the plane @p plane (their places at t = 0; they ride the
 /// motion's platform) the engagement may light above the floor. Blocks of the plane, coarsest

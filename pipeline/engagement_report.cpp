@@ -37,7 +37,7 @@ std::size_t worstRow(const EngagementResults& results) {
 EngagementResults sampleEngagement(const FacetIntegrator& reference, const Scene& scene,
                                    std::span<const Vec3> points, const MemoryWatch& watch,
                                    std::ostream* progress_to, bool terminal,
-                                   const std::string& what) {
+                                   const std::string& what, PointExchange* exchange) {
   const Motion motion(scene.engagement->motion, scene.laser);
   WorkCounter counter;
   counter.stop = &watch.stopFlag();
@@ -51,7 +51,8 @@ EngagementResults sampleEngagement(const FacetIntegrator& reference, const Scene
           std::make_unique<ProgressReporter>(*progress_to, terminal, "time samples", 0, counter);
     }
     try {
-      histories = integrateExposures(reference, motion, points, scene.engagement->time, &counter);
+      histories =
+          integrateExposures(reference, motion, points, scene.engagement->time, &counter, exchange);
     } catch (const WorkStopped&) {
       if (progress) progress->stop();
       watch.check(stage, kEngagementAdvice);

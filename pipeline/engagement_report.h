@@ -30,12 +30,13 @@ class MemoryWatch;
 
 /// @brief The scene's engagement at @p points (their places at t = 0), sampled in time by
 /// integrateExposures() from @p reference and judged, with progress on @p progress_to (none:
-/// quiet); @p what names the points in a message.
+/// quiet); @p what names the points in a message. Under MPI (@p exchange) the ranks share the
+/// points, and every rank receives every history.
 /// @throw std::runtime_error when the memory watch stops the work.
 EngagementResults sampleEngagement(const FacetIntegrator& reference, const Scene& scene,
                                    std::span<const Vec3> points, const MemoryWatch& watch,
                                    std::ostream* progress_to, bool terminal,
-                                   const std::string& what);
+                                   const std::string& what, PointExchange* exchange = nullptr);
 
 /// @brief Judges every history of @p histories under the scene's hazard and engagement.
 EngagementResults judgeEngagement(std::vector<ExposureHistory> histories, const Scene& scene);

@@ -413,7 +413,7 @@ void runEngagementPlanes(const RunContext& c, RunSummary& s) {
     }
     EngagementResults results =
         sampleEngagement(integrator, c.scene, points, c.watch, c.args.quiet ? nullptr : &c.err,
-                         c.args.terminal, "plane " + plane.name + "'s points");
+                         c.args.terminal, "plane " + plane.name + "'s points", c.exchange);
     // The bound's culling counts in the plane's time.
     results.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

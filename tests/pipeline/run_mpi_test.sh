@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# `mpirun -np 2 glint run` against `glint run` on one process, on a scene with a box, a plane,
-# the far field and the hazard reach: every file must be the same bytes, but for the VDB's grid UUIDs (random
-# per write) and summary.json's "seconds" (wall-clock times).
+# `mpirun -np 2 glint run` against `glint run` on one process (tests/data/run_mpi.json: a box, a
+# plane, the far field and the hazard reach; engagement_mpi.json: an engagement over a plane):
+# every file must be the same bytes, but for the VDB's grid UUIDs (random per write) and
+# summary.json's "seconds" (wall-clock times).
 # Usage: run_mpi_test.sh GLINT MPIEXEC SCENE WORKDIR
 set -euo pipefail
 export HWLOC_COMPONENTS=-gl,-opencl  # see batch_mpi_test.sh
