@@ -21,6 +21,7 @@
 #include "glint/version.h"
 #include "pipeline/batch_report.h"
 #include "pipeline/cluster.h"
+#include "pipeline/engagement_report.h"
 #include "pipeline/hazard_report.h"
 #include "pipeline/input_error.h"
 #include "pipeline/input_files.h"
@@ -197,14 +198,37 @@ ObserverField scenarioField(const ScenarioWork& w, const FieldProblem& problem,
   return field;
 }
 
+// An engagement's scenario over a plane: its maps over time, as glint run writes them of the
+// scenario's scene, added to the rank's aggregates by each point's worst window.
+void runEngagementRegion(const ScenarioWork& w, StudyLattice& r, ScenarioTally& tally) {
+  const EngagementPlane e = engagementPlane(w.target.integrator, w.scene, r.spec, w.watch, nullptr,
+                                            false, w.what + ", plane " + r.name);
+  const std::vector<ExrChannel> channels = e.maps.channels();
+  for (const std::string& name :
+       w.maps.writeEngagementPlane(r.plane_index, {e.maps.grid, channels, w.info})) {
+    tally.files[name] = fileChecksum(w.dir / name);
+  }
+  const HazardSpec& h = w.scene.hazard;
+  const HazardousPoints n = r.add(engagementValues(e, h), h);
+  tally.regions.push_back(
+      scenarioEngagementRegionJson(r, e, w.scene.planes.at(r.plane_index), h, n));
+  for (const ExposureHistory& history : e.results.histories)
+    tally.evaluations += history.evaluations;
+  tally.unconverged += e.maps.unconverged;
+}
+
 // Computes one region of the scenario, writes its maps (the run's writers, ScenarioMaps) and
 // adds it to the rank's aggregates and to @p tally.
 void runScenarioRegion(const ScenarioWork& w, StudyLattice& r, ScenarioTally& tally) {
+  if (w.scene.engagement) {
+    runEngagementRegion(w, r, tally);
+    return;
+  }
   const FieldProblem problem = fieldProblem(w.target, w.scene, r.spec);
   ObserverField field = scenarioField(w, problem, r);
   const FieldStats st = field.stats();
   // As the maps hold it, and taken before the VDB takes the grids.
-  const std::vector<float> e = r.plane ? planeIrradiance(field) : field.irradianceLattice();
+  const RegionValues e{r.plane ? planeIrradiance(field) : field.irradianceLattice(), {}, {}};
   std::vector<std::string> written;
   if (r.plane) {
     written = w.maps.writePlane(r.plane_index, {field, w.scene.hazard, w.info});
@@ -358,21 +382,33 @@ std::optional<std::string> unvouchedFile(const nlohmann::json& record, const fs:
   return std::nullopt;
 }
 
-// Each region's irradiance read back from the scenario's map of it (StudyLattice::scenarioFile()).
+// Each region's values read back from the scenario's map of it (StudyLattice::scenarioFile()):
+// a pose's irradiance, an engagement's peak irradiance and worst windows' ratios.
 // @throw std::runtime_error when one cannot be read or does not fit its lattice.
-std::vector<std::vector<float>> readScenarioMaps(const std::vector<StudyLattice>& lattices,
-                                                 const fs::path& dir) {
-  std::vector<std::vector<float>> maps;
+std::vector<RegionValues> readScenarioMaps(const std::vector<StudyLattice>& lattices,
+                                           const fs::path& dir) {
+  std::vector<RegionValues> maps;
   for (const StudyLattice& r : lattices) {
     const std::string path = (dir / r.scenarioFile()).string();
-    if (r.plane) {
-      int w = 0, h = 0;
-      maps.push_back(readExrChannel(path, "irradiance_w_m2", w, h));
-      const auto n = r.spec.nodes();
-      if (w != n[0] || h != n[1]) throw std::runtime_error(path + ": not this plane's size");
-    } else {
-      maps.push_back(readLatticeVdb(path, "irradiance_w_m2", r.spec));
+    RegionValues& v = maps.emplace_back();
+    if (!r.plane) {
+      v.irradiance_w_m2 = readLatticeVdb(path, "irradiance_w_m2", r.spec);
+      continue;
     }
+    const auto n = r.spec.nodes();
+    auto channel = [&](const char* name) {
+      int w = 0, h = 0;
+      std::vector<float> values = readExrChannel(path, name, w, h);
+      if (w != n[0] || h != n[1]) throw std::runtime_error(path + ": not this plane's size");
+      return values;
+    };
+    if (!r.engagement) {
+      v.irradiance_w_m2 = channel("irradiance_w_m2");
+      continue;
+    }
+    v.irradiance_w_m2 = channel("peak_irradiance_w_m2");
+    v.hazard_ratio = channel("hazard_ratio");
+    if (r.aided) v.aided_hazard_ratio = channel("aided_hazard_ratio");
   }
   return maps;
 }
@@ -403,7 +439,7 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
     return redo();
   }
   // Maps read in full before any is added, so a damaged file leaves the aggregates untouched.
-  std::vector<std::vector<float>> maps;
+  std::vector<RegionValues> maps;
   try {
     maps = readScenarioMaps(lattices, dir);
   } catch (const std::exception& e) {
@@ -539,6 +575,10 @@ void runScenarios(const BatchArgs& args, const Study& study, std::vector<StudyLa
     cluster.maxToRoot(r.max_w_m2);
     cluster.sumToRoot(r.hazardous);
     if (r.aided) cluster.sumToRoot(r.aided_hazardous);
+    if (r.engagement) {
+      cluster.maxToRoot(r.max_ratio);
+      if (r.aided) cluster.maxToRoot(r.aided_max_ratio);
+    }
   }
 }
 

@@ -10,6 +10,7 @@
 #include "export/exr_map.h"
 #include "export/lattice_vdb.h"
 #include "glint/version.h"
+#include "pipeline/engagement_report.h"
 #include "pipeline/output_names.h"
 #include "pipeline/progress.h"
 
@@ -175,9 +176,14 @@ std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
 void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, const Study& study,
                    std::size_t scenarios) {
   const HazardSpec& h = study.base.hazard;
-  std::vector<float> max_ratio(r.max_w_m2.size());
-  for (std::size_t i = 0; i < max_ratio.size(); ++i)
-    max_ratio[i] = static_cast<float>(h.ratio(static_cast<double>(r.max_w_m2[i])));
+  // A pose's ratio is its irradiance's, so the largest follows from the largest irradiance;
+  // an engagement's worst windows were kept apart (StudyLattice::max_ratio).
+  std::vector<float> max_ratio = r.max_ratio;
+  if (!r.engagement) {
+    max_ratio.resize(r.max_w_m2.size());
+    for (std::size_t i = 0; i < max_ratio.size(); ++i)
+      max_ratio[i] = static_cast<float>(h.ratio(static_cast<double>(r.max_w_m2[i])));
+  }
   const std::vector<float> cover = coverage(r.hazardous, scenarios);
   // Each point's exact interval at the study's confidence.
   const double alpha_each_side = 0.5 * (1.0 - study.coverage_confidence);
@@ -186,9 +192,12 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
   std::vector<float> aided_max_ratio, aided_cover;
   CoverageBounds aided_bounds;
   if (h.aid) {
-    aided_max_ratio.resize(r.max_w_m2.size());
-    for (std::size_t i = 0; i < aided_max_ratio.size(); ++i)
-      aided_max_ratio[i] = static_cast<float>(h.aidedRatio(static_cast<double>(r.max_w_m2[i])));
+    aided_max_ratio = r.aided_max_ratio;
+    if (!r.engagement) {
+      aided_max_ratio.resize(r.max_w_m2.size());
+      for (std::size_t i = 0; i < aided_max_ratio.size(); ++i)
+        aided_max_ratio[i] = static_cast<float>(h.aidedRatio(static_cast<double>(r.max_w_m2[i])));
+    }
     aided_cover = coverage(r.aided_hazardous, scenarios);
     aided_bounds = coverageBounds(r.aided_hazardous, scenarios, alpha_each_side);
   }
@@ -268,6 +277,8 @@ nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLatti
       {"ranks", ranks},
       {"wall_seconds", wall_s},
       {"hazard", hazardLimitsJson(h)}};
+  // Each scenario integrated over the engagement: its regions' ratios are their worst windows'.
+  if (study.base.engagement) j["engagement"] = engagementJson(*study.base.engagement);
   std::vector<double> evaluations, seconds;
   for (const auto& [index, rec] : records) {
     evaluations.push_back(static_cast<double>(rec.at("evaluations").get<std::int64_t>()));
@@ -403,6 +414,34 @@ nlohmann::json scenarioRegionJson(const StudyLattice& r, const FieldStats& st, c
     region[std::string("aided_") + extent] = static_cast<double>(hazardous.aided) * r.cell();
   }
   return region;
+}
+
+nlohmann::json scenarioEngagementRegionJson(const StudyLattice& r, const EngagementPlane& plane,
+                                            const PlaneSpec& spec, const HazardSpec& h,
+                                            const HazardousPoints& hazardous) {
+  nlohmann::json region = engagementPlaneJson(spec, plane.maps, plane.results, plane.points, h);
+  // The scenario's record has its own time and names its files apart.
+  region.erase("seconds");
+  region.erase("file");
+  double peak = 0.0, aided_peak = 0.0;
+  for (const ExposureVerdict& v : plane.results.verdicts) {
+    peak = std::max(peak, v.window.ratio);
+    aided_peak = std::max(aided_peak, v.aided_ratio);
+  }
+  region["peak_hazard_ratio"] = peak;
+  region["hazardous_points"] = hazardous.unaided;
+  region["hazardous_area_m2"] = static_cast<double>(hazardous.unaided) * r.cell();
+  if (h.aid) {
+    region["aided_peak_hazard_ratio"] = aided_peak;
+    region["aided_hazardous_points"] = hazardous.aided;
+    region["aided_hazardous_area_m2"] = static_cast<double>(hazardous.aided) * r.cell();
+  }
+  return region;
+}
+
+RegionValues engagementValues(const EngagementPlane& plane, const HazardSpec& h) {
+  return {plane.maps.peak_irradiance_w_m2, plane.maps.hazard_ratio,
+          h.aid ? plane.maps.aided_hazard_ratio : std::vector<float>{}};
 }
 
 nlohmann::json scenarioFarFieldJson(const FarField& far, const HazardSpec& h) {

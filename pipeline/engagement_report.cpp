@@ -234,6 +234,44 @@ EngagementMaps engagementMaps(const FieldSpec& spec, std::span<const std::uint8_
   return m;
 }
 
+EngagementPlane engagementPlane(const FacetIntegrator& target, const Scene& scene,
+                                const FieldSpec& spec, const MemoryWatch& watch,
+                                std::ostream* progress_to, bool terminal, const std::string& what,
+                                PointExchange* exchange) {
+  const auto start = std::chrono::steady_clock::now();
+  const Motion motion(scene.engagement->motion, scene.laser);
+  // Each sample is integrated to the scene's accuracy, as glint points integrates it: a plane's
+  // map holds at each of its points what the table gives for that point.
+  const FacetIntegrator integrator =
+      target.withAccuracy(scene.accuracy.tolerance, scene.accuracy.floor_w_m2);
+  const std::vector<std::uint8_t> lit =
+      litByBound(integrator, motion, spec, scene.engagement->time);
+  const std::array<int, 3> n = spec.nodes();
+  EngagementPlane plane;
+  for (int j = 0; j < n[1]; ++j) {
+    for (int i = 0; i < n[0]; ++i) {
+      if (lit[static_cast<std::size_t>(j) * static_cast<std::size_t>(n[0]) +
+              static_cast<std::size_t>(i)] != 0) {
+        plane.points.push_back(spec.position(i, j, 0));
+      }
+    }
+  }
+  plane.results = sampleEngagement(integrator, scene, plane.points, watch, progress_to, terminal,
+                                   what + "'s points", exchange);
+  plane.results.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  plane.maps = engagementMaps(spec, lit, plane.results, scene.hazard);
+  for (const ExrChannel& channel : plane.maps.channels()) {
+    for (float v : *channel.values) {
+      if (!std::isfinite(v)) {
+        throw std::runtime_error(what + ": " + channel.name +
+                                 " is not a finite number somewhere; nothing was written");
+      }
+    }
+  }
+  return plane;
+}
+
 nlohmann::json engagementPlaneJson(const PlaneSpec& plane, const EngagementMaps& maps,
                                    const EngagementResults& results, std::span<const Vec3> points,
                                    const HazardSpec& hazard) {

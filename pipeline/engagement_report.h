@@ -81,6 +81,24 @@ struct EngagementMaps {
 EngagementMaps engagementMaps(const FieldSpec& spec, std::span<const std::uint8_t> lit,
                               const EngagementResults& results, const HazardSpec& hazard);
 
+/// @brief One plane of an engagement as glint run and a study's scenario compute it: the
+/// lattice points no bound can prove dark (in row order), their histories and the maps.
+struct EngagementPlane {
+  std::vector<Vec3> points;
+  EngagementResults results;
+  EngagementMaps maps;
+};
+
+/// @brief Maps the engagement of @p scene over the plane lattice @p spec: culled by
+/// litByBound(), the rest sampled by sampleEngagement() (with the arguments it takes) from the
+/// integrator of @p target at the scene's accuracy; results.seconds counts the culling too.
+/// @throw std::runtime_error when the memory watch stops the work or a map value is not finite
+/// (nothing may then be written).
+EngagementPlane engagementPlane(const FacetIntegrator& target, const Scene& scene,
+                                const FieldSpec& spec, const MemoryWatch& watch,
+                                std::ostream* progress_to, bool terminal, const std::string& what,
+                                PointExchange* exchange = nullptr);
+
 /// @brief The summary's entry of one plane: its lattice, counts, worst point and its window,
 /// the hazardous area by the worst window and by the stare verdict.
 nlohmann::json engagementPlaneJson(const PlaneSpec& plane, const EngagementMaps& maps,

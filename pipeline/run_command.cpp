@@ -386,10 +386,6 @@ void runPlanes(const RunContext& c, RunSummary& s) {
 void runEngagementPlanes(const RunContext& c, RunSummary& s) {
   const EngagementSpec& e = *c.scene.engagement;
   const Motion motion(e.motion, c.scene.laser);
-  // Each sample is integrated to the scene's accuracy, as glint points integrates it: a plane's
-  // map holds at each of its points what the table gives for that point.
-  const FacetIntegrator integrator =
-      c.target.integrator.withAccuracy(c.scene.accuracy.tolerance, c.scene.accuracy.floor_w_m2);
   if (!c.args.quiet) {
     c.err << "glint run: an engagement of " << formatNumber("%g", motion.durationS()) << " s over "
           << c.scene.planes.size() << (c.scene.planes.size() == 1 ? " plane" : " planes")
@@ -398,38 +394,13 @@ void runEngagementPlanes(const RunContext& c, RunSummary& s) {
   nlohmann::json planes = nlohmann::json::array();
   for (std::size_t p = 0; p < c.scene.planes.size(); ++p) {
     const PlaneSpec& plane = c.scene.planes[p];
-    const FieldSpec spec = planeFieldSpec(c.scene, plane);
-    const auto start = std::chrono::steady_clock::now();
-    const std::vector<std::uint8_t> lit = litByBound(integrator, motion, spec, e.time);
-    const std::array<int, 3> n = spec.nodes();
-    std::vector<Vec3> points;
-    for (int j = 0; j < n[1]; ++j) {
-      for (int i = 0; i < n[0]; ++i) {
-        if (lit[static_cast<std::size_t>(j) * static_cast<std::size_t>(n[0]) +
-                static_cast<std::size_t>(i)] != 0) {
-          points.push_back(spec.position(i, j, 0));
-        }
-      }
-    }
-    EngagementResults results =
-        sampleEngagement(integrator, c.scene, points, c.watch, c.args.quiet ? nullptr : &c.err,
-                         c.args.terminal, "plane " + plane.name + "'s points", c.exchange);
-    // The bound's culling counts in the plane's time.
-    results.seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const EngagementMaps maps = engagementMaps(spec, lit, results, c.scene.hazard);
-    const std::vector<ExrChannel> channels = maps.channels();
-    for (const ExrChannel& channel : channels) {
-      for (float v : *channel.values) {
-        if (!std::isfinite(v)) {
-          throw std::runtime_error("plane " + plane.name + ": " + channel.name +
-                                   " is not a finite number somewhere; nothing was written");
-        }
-      }
-    }
-    c.outputs.writeEngagementPlane(p, {maps.grid, channels, c.info});
-    planes.push_back(engagementPlaneJson(plane, maps, results, points, c.scene.hazard));
-    if (!c.args.quiet) printEngagementPlane(c.err, plane, maps, results, points);
+    const EngagementPlane m = engagementPlane(
+        c.target.integrator, c.scene, planeFieldSpec(c.scene, plane), c.watch,
+        c.args.quiet ? nullptr : &c.err, c.args.terminal, "plane " + plane.name, c.exchange);
+    const std::vector<ExrChannel> channels = m.maps.channels();
+    c.outputs.writeEngagementPlane(p, {m.maps.grid, channels, c.info});
+    planes.push_back(engagementPlaneJson(plane, m.maps, m.results, m.points, c.scene.hazard));
+    if (!c.args.quiet) printEngagementPlane(c.err, plane, m.maps, m.results, m.points);
   }
   s.j["engagement"] = engagementJson(e);
   s.j["planes"] = planes;

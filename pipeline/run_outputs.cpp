@@ -175,14 +175,16 @@ constexpr Declared kOutputs[] = {
      .engagement_plane =
          [](std::ostream& out, const EngagementPlaneResults& r) {
            writeExr(out, r.grid, r.channels, exrInfo(r.info));
-         }},
+         },
+     .scenario = true},
 };
 
 // A scenario writes maps of its box and planes only (its far field is a figure of its
 // result.json), and commits each as it is written: none is a folder to stage.
 static_assert(std::all_of(std::begin(kOutputs), std::end(kOutputs), [](const Declared& d) {
-  return !d.scenario ||
-         ((d.region == Region::Box || d.region == Region::Plane) && !d.staged_folder);
+  return !d.scenario || ((d.region == Region::Box || d.region == Region::Plane ||
+                          d.region == Region::EngagementPlane) &&
+                         !d.staged_folder);
 }));
 
 // The outputs of @p region in the order they are written: the list's, but the one that takes
@@ -326,7 +328,10 @@ std::vector<std::string> ScenarioMaps::names() const {
     }
   };
   add(Region::Box, "");
-  for (const PlaneSpec& plane : scene_.planes) add(Region::Plane, plane.name);
+  for (const PlaneSpec& plane : scene_.planes) {
+    add(Region::Plane, plane.name);
+    add(Region::EngagementPlane, plane.name);
+  }
   return names;
 }
 
@@ -339,6 +344,12 @@ std::vector<std::string> ScenarioMaps::writePlane(std::size_t index,
   return writeScenarioMaps(scene_, dir_, Region::Plane, scene_.planes.at(index).name, plane);
 }
 
+std::vector<std::string> ScenarioMaps::writeEngagementPlane(
+    std::size_t index, const EngagementPlaneResults& plane) const {
+  return writeScenarioMaps(scene_, dir_, Region::EngagementPlane, scene_.planes.at(index).name,
+                           plane);
+}
+
 std::vector<std::string> ScenarioMaps::folderNames(const Scene& base) {
   std::vector<std::string> names = {output_names::kScenarioScene, output_names::kScenarioResult};
   for (const Declared& d : kOutputs) {
@@ -347,7 +358,12 @@ std::vector<std::string> ScenarioMaps::folderNames(const Scene& base) {
       names.emplace_back(d.name);
       continue;
     }
-    for (const PlaneSpec& plane : base.planes) names.push_back(d.plane_name(plane.name));
+    for (const PlaneSpec& plane : base.planes) {
+      // A pose's plane map and an engagement's share their name.
+      std::string name = d.plane_name(plane.name);
+      if (std::find(names.begin(), names.end(), name) == names.end())
+        names.push_back(std::move(name));
+    }
   }
   return names;
 }

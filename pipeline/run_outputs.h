@@ -136,6 +136,11 @@ class ScenarioMaps {
   /// @brief Writes the maps of the scene's plane @p index; returns their names.
   /// @throw OutputError when one cannot be written.
   std::vector<std::string> writePlane(std::size_t index, const PlaneResults& plane) const;
+  /// @brief Writes the maps over time of the scene's plane @p index (an engagement's); returns
+  /// their names.
+  /// @throw OutputError when one cannot be written.
+  std::vector<std::string> writeEngagementPlane(std::size_t index,
+                                                const EngagementPlaneResults& plane) const;
 
   /// @brief Every name glint writes in a scenario folder of a study of @p base: scene.json,
   /// result.json and the maps, a box's whether or not @p base has one (another study's

@@ -206,15 +206,33 @@ Study parseStudy(std::string_view text, const std::string& source,
     study.scene_text = readUserFile(study.scene_path, "scene file");
     study.base = parseScene(study.scene_text, study.scene_path.string());
     if (study.base.engagement) {
-      throw InputError(study.scene_path.string() +
-                       ": /engagement: a study's scenarios are poses judged each alone; an "
-                       "engagement is integrated by glint points (docs/engagement.md)");
+      // Each scenario is the engagement integrated over the scene's planes, as glint run
+      // integrates it: the box, the far field and the reach judge one pose.
+      if (study.base.observers) {
+        throw InputError(study.scene_path.string() +
+                         ": /observers: an engagement is integrated over planes only, not yet "
+                         "over a box; give the scene `planes`");
+      }
+      study.base.far_field.enabled = false;
+      study.base.reach.enabled = false;
     }
   } catch (const InputError& e) {
     throw InputError(source + ": /scene: " + e.what());
   }
   if (!study.base.observers && study.base.planes.empty()) {
     r.fail("scene", "the scene has no observer box or planes: a study needs one");
+  }
+  const bool engagement = study.base.engagement.has_value();
+  if (engagement && r.has("trajectory")) {
+    r.fail("trajectory",
+           "the scene is an engagement, which moves the target itself: give its poses in the "
+           "scene's engagement.target.poses");
+  }
+  if (engagement && r.has("pointing_jitter") &&
+      study.base.engagement->motion.pointing == LaserPointing::Keyed) {
+    r.fail("pointing_jitter",
+           "the engagement's laser follows keyed directions, which the jitter of the scene's "
+           "laser.direction would not move: give jitter with pointing fixed or track");
   }
   if (study.base.wantsReach() && !study.base.far_field.enabled) {
     r.fail("scene", "the scene asks for the hazard reach without the far field it ends in");
@@ -359,6 +377,11 @@ std::string scenarioSceneJson(const Study& study, const Scenario& s) {
   }
   if (s.jitter_sample >= 0) {
     scene["laser"]["direction"] = vecJson(jitteredDirection(study.base.laser.direction, s));
+  }
+  if (study.base.engagement) {
+    // The engagement turns the target about the base scene's pivot: stated, since its default
+    // (the mean of the objects' centres) moves when the scenario turns them about another.
+    scene["engagement"]["pivot"] = vecJson(study.base.engagement->motion.pivot_m);
   }
   scene["description"] = scenarioDescription(study, s);
   return scene.dump(2) + "\n";

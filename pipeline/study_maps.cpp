@@ -21,18 +21,28 @@ double StudyLattice::cell() const {
   return plane ? spec.voxel_m * spec.voxel_m : spec.voxel_m * spec.voxel_m * spec.voxel_m;
 }
 
-HazardousPoints StudyLattice::add(const std::vector<float>& e_w_m2, const HazardSpec& h) {
-  if (e_w_m2.size() != max_w_m2.size())
-    throw std::logic_error("batch: a scenario's map does not fit its region's lattice");
+HazardousPoints StudyLattice::add(const RegionValues& v, const HazardSpec& h) {
+  const std::vector<float>& e_w_m2 = v.irradiance_w_m2;
+  const bool fits = e_w_m2.size() == max_w_m2.size() &&
+                    (engagement ? v.hazard_ratio.size() == e_w_m2.size() &&
+                                      (!aided || v.aided_hazard_ratio.size() == e_w_m2.size())
+                                : v.hazard_ratio.empty() && v.aided_hazard_ratio.empty());
+  if (!fits) throw std::logic_error("batch: a scenario's map does not fit its region's lattice");
   HazardousPoints n;
   for (std::size_t i = 0; i < e_w_m2.size(); ++i) {
     max_w_m2[i] = std::max(max_w_m2[i], e_w_m2[i]);
     const double e = static_cast<double>(e_w_m2[i]);
-    if (h.ratio(e) >= 1.0) {
+    const double ratio = engagement ? static_cast<double>(v.hazard_ratio[i]) : h.ratio(e);
+    if (engagement) max_ratio[i] = std::max(max_ratio[i], v.hazard_ratio[i]);
+    if (ratio >= 1.0) {
       ++hazardous[i];
       ++n.unaided;
     }
-    if (aided && h.aidedRatio(e) >= 1.0) {
+    if (!aided) continue;
+    const double aided_ratio =
+        engagement ? static_cast<double>(v.aided_hazard_ratio[i]) : h.aidedRatio(e);
+    if (engagement) aided_max_ratio[i] = std::max(aided_max_ratio[i], v.aided_hazard_ratio[i]);
+    if (aided_ratio >= 1.0) {
       ++aided_hazardous[i];
       ++n.aided;
     }
@@ -44,7 +54,8 @@ std::uint64_t StudyLattice::mapBytes() const {
   const auto n = spec.nodes();
   const std::uint64_t points = static_cast<std::uint64_t>(n[0]) * static_cast<std::uint64_t>(n[1]) *
                                static_cast<std::uint64_t>(n[2]);
-  return points * (sizeof(float) + sizeof(std::uint32_t) * (aided ? 2 : 1));
+  const std::uint64_t ratios = engagement ? sizeof(float) * (aided ? 2 : 1) : 0;
+  return points * (sizeof(float) + sizeof(std::uint32_t) * (aided ? 2 : 1) + ratios);
 }
 
 void StudyLattice::allocate() {
@@ -54,15 +65,28 @@ void StudyLattice::allocate() {
   max_w_m2.assign(points, 0.0f);
   hazardous.assign(points, 0u);
   if (aided) aided_hazardous.assign(points, 0u);
+  if (engagement) {
+    max_ratio.assign(points, 0.0f);
+    if (aided) aided_max_ratio.assign(points, 0.0f);
+  }
 }
 
 std::vector<StudyLattice> studyLattices(const Scene& base) {
   std::vector<StudyLattice> lattices;
-  const bool aided = base.hazard.aid.has_value();
-  if (base.observers) lattices.push_back({"box", false, 0, fieldSpec(base), {}, {}, {}, aided});
+  StudyLattice kind;
+  kind.aided = base.hazard.aid.has_value();
+  kind.engagement = base.engagement.has_value();
+  if (base.observers) {
+    StudyLattice& box = lattices.emplace_back(kind);
+    box.name = "box";
+    box.spec = fieldSpec(base);
+  }
   for (std::size_t p = 0; p < base.planes.size(); ++p) {
-    lattices.push_back(
-        {base.planes[p].name, true, p, planeFieldSpec(base, base.planes[p]), {}, {}, {}, aided});
+    StudyLattice& plane = lattices.emplace_back(kind);
+    plane.name = base.planes[p].name;
+    plane.plane = true;
+    plane.plane_index = p;
+    plane.spec = planeFieldSpec(base, base.planes[p]);
   }
   return lattices;
 }

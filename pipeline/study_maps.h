@@ -22,6 +22,15 @@ struct HazardousPoints {
   std::int64_t aided = 0;
 };
 
+/// @brief One scenario's values over a region, as a study adds them.
+struct RegionValues {
+  /// A pose's irradiance, or an engagement's peak irradiance over its span (W/m²).
+  std::vector<float> irradiance_w_m2;
+  /// An engagement's hazard ratio of the worst window, and through the aid (empty without
+  /// one). Both empty for a pose, whose ratios are its irradiance's against the MPE.
+  std::vector<float> hazard_ratio, aided_hazard_ratio;
+};
+
 /// @brief One observer lattice of a study (the box or a plane): the same in every scenario,
 /// since poses move the target, never the observers.
 struct StudyLattice {
@@ -31,9 +40,13 @@ struct StudyLattice {
   FieldSpec spec;
   // Over the scenarios this rank has added (rank 0, after the reduction: all of them).
   std::vector<float> max_w_m2;
-  std::vector<std::uint32_t> hazardous;        ///< scenarios with E ≥ MPE at the point
-  std::vector<std::uint32_t> aided_hazardous;  ///< with E × gain ≥ MPE; empty without an aid
+  std::vector<std::uint32_t> hazardous;        ///< scenarios with hazard ratio ≥ 1 at the point
+  std::vector<std::uint32_t> aided_hazardous;  ///< with aided ratio ≥ 1; empty without an aid
   bool aided = false;                          ///< the scene has an optical aid
+  /// The scene is an engagement: a point's ratio is its worst window's, not E / MPE, so the
+  /// largest ratio is kept beside the largest irradiance (which no longer gives it).
+  bool engagement = false;
+  std::vector<float> max_ratio, aided_max_ratio;  ///< engagement only (aided: with an aid)
 
   /// @brief Bytes of the maps allocate() makes.
   [[nodiscard]] std::uint64_t mapBytes() const;
@@ -48,11 +61,12 @@ struct StudyLattice {
   /// @brief m² of a plane's pixel, m³ of a box's voxel.
   [[nodiscard]] double cell() const;
 
-  /// @brief Adds one scenario's irradiance to the maximum and the counts. Each point is judged
-  /// by the stored float, so that a scenario read back from its file counts as it did when
+  /// @brief Adds one scenario's values to the maxima and the counts. Each point is judged by
+  /// the stored floats, so that a scenario read back from its file counts as it did when
   /// fresh.
-  /// @throw std::logic_error when the map does not fit the lattice (a programming error).
-  HazardousPoints add(const std::vector<float>& e_w_m2, const HazardSpec& h);
+  /// @throw std::logic_error when the values do not fit the lattice or the scene's kind (a
+  /// programming error).
+  HazardousPoints add(const RegionValues& values, const HazardSpec& h);
 };
 
 /// @brief The lattices of @p base (its box, then its planes), their maps not yet allocated.

@@ -2,6 +2,7 @@
 // that refuse an engagement they cannot integrate.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -248,6 +249,108 @@ TEST(EngagementPoints, CommandsThatCannotIntegrateAnEngagementRefuseIt) {
   EXPECT_EQ(series.status, 2);
   EXPECT_NE(series.err.find("has no engagement"), std::string::npos) << series.err;
   EXPECT_FALSE(fs::exists(f.dir / "s.csv"));
+}
+
+// A study of an engagement: each scenario's map is what glint run writes of its scene, the study
+// keeps each point's largest worst-window ratio and counts the scenarios whose worst window
+// reaches the MPE there, and a second run resumes every scenario to the same bytes.
+TEST(EngagementStudy, ItsMapsAddUpTheScenariosWorstWindowsAsGlintRunGivesThem) {
+  const Folder f("glint_engagement_study");
+  std::string scene = kScene;
+  scene.replace(scene.rfind('}'), 1, R"(,
+    "planes": [{"name": "wall", "origin": [-50, -20, -1], "u_axis": [0, 1, 0],
+                "v_axis": [0, 0, 1], "size_m": [40, 2], "pixel_m": 1.0, "block_m": 4}]})");
+  f.write("scene.json", scene);
+  // 3 mrad of jitter moves the glint's path across the wall by about 0.3 m at 50 m: some
+  // scenarios' worst windows reach the MPE somewhere, others nowhere.
+  constexpr int kScenarios = 4;
+  const fs::path study = f.write("study.json", R"({"scene": "scene.json",
+    "pointing_jitter": {"sigma_rad": 0.003, "samples": 4, "seed": 3}})");
+  const fs::path out = f.dir / "out";
+  const test::Outcome batch = glint({"batch", study.string(), "-o", out.string()});
+  ASSERT_EQ(batch.status, 0) << batch.err;
+  int width = 0, height = 0;
+  const std::string map = (out / "wall.exr").string();
+  const std::vector<float> max_ratio = readExrChannel(map, "max_hazard_ratio", width, height);
+  const std::vector<float> cover = readExrChannel(map, "coverage_probability", width, height);
+  const std::vector<float> max_e = readExrChannel(map, "max_irradiance_w_m2", width, height);
+  std::vector<float> want_ratio(max_ratio.size(), 0.0f), want_e(max_ratio.size(), 0.0f);
+  std::vector<int> hazardous(max_ratio.size(), 0);
+  int scenarios_with_hazard = 0;
+  for (int k = 0; k < kScenarios; ++k) {
+    const fs::path dir = out / "scenarios" / ("s00000" + std::to_string(k));
+    int w = 0, h = 0;
+    const std::vector<float> ratio =
+        readExrChannel((dir / "wall.exr").string(), "hazard_ratio", w, h);
+    const std::vector<float> peak =
+        readExrChannel((dir / "wall.exr").string(), "peak_irradiance_w_m2", w, h);
+    ASSERT_EQ(ratio.size(), max_ratio.size()) << dir;
+    bool any = false;
+    for (std::size_t p = 0; p < ratio.size(); ++p) {
+      want_ratio[p] = std::max(want_ratio[p], ratio[p]);
+      want_e[p] = std::max(want_e[p], peak[p]);
+      hazardous[p] += ratio[p] >= 1.0f ? 1 : 0;
+      any = any || ratio[p] >= 1.0f;
+    }
+    scenarios_with_hazard += any ? 1 : 0;
+  }
+  EXPECT_GT(scenarios_with_hazard, 0) << "the jitter must give a hazard somewhere";
+  EXPECT_LT(scenarios_with_hazard, kScenarios) << "and leave some scenarios safe";
+  for (std::size_t p = 0; p < max_ratio.size(); ++p) {
+    EXPECT_EQ(max_ratio[p], want_ratio[p]) << "pixel " << p;
+    EXPECT_EQ(max_e[p], want_e[p]) << "pixel " << p;
+    EXPECT_EQ(cover[p], static_cast<float>(hazardous[p] / static_cast<double>(kScenarios)))
+        << "pixel " << p;
+  }
+  // A scenario's map is glint run's of its scene.json, to the byte.
+  const fs::path one = out / "scenarios" / "s000001";
+  const test::Outcome run =
+      glint({"run", (one / "scene.json").string(), "-o", (f.dir / "run").string(), "-q"});
+  ASSERT_EQ(run.status, 0) << run.err;
+  EXPECT_EQ(test::readFile(f.dir / "run" / "wall.exr"), test::readFile(one / "wall.exr"));
+  // Resumed, every scenario is read back into the same study map.
+  const std::string first = test::readFile(out / "wall.exr");
+  const test::Outcome again = glint({"batch", study.string(), "-o", out.string()});
+  ASSERT_EQ(again.status, 0) << again.err;
+  EXPECT_NE(again.err.find("(4 done before, 0 to run)"), std::string::npos) << again.err;
+  EXPECT_EQ(test::readFile(out / "wall.exr"), first);
+}
+
+TEST(EngagementStudy, SweepsAnEngagementCannotTakeAreRefused) {
+  const Folder f("glint_engagement_study_refused");
+  std::string scene = kScene;
+  scene.replace(scene.rfind('}'), 1, R"(,
+    "planes": [{"name": "wall", "origin": [-50, -20, -1], "u_axis": [0, 1, 0],
+                "v_axis": [0, 0, 1], "size_m": [40, 2], "pixel_m": 1.0}]})");
+  f.write("scene.json", scene);
+  const fs::path trajectory = f.write("trajectory.json", R"({"scene": "scene.json",
+    "trajectory": {"poses": [{"time_s": 0}, {"time_s": 1, "offset_m": [0, 1, 0]}]}})");
+  const test::Outcome t = glint({"batch", trajectory.string(), "-o", (f.dir / "t").string()});
+  EXPECT_EQ(t.status, 2);
+  EXPECT_NE(t.err.find("/trajectory: the scene is an engagement"), std::string::npos) << t.err;
+  std::string keyed = scene;
+  keyed.replace(keyed.find(R"("target": {"turn_deg_s")"), 0,
+                R"("laser": {"pointing": "keyed", "directions": [{"time_s": 0,
+                   "direction": [1, 0, 0]}]}, )");
+  f.write("keyed.json", keyed);
+  const fs::path jitter = f.write("jitter.json", R"({"scene": "keyed.json",
+    "pointing_jitter": {"sigma_rad": 0.001, "samples": 2}})");
+  const test::Outcome j = glint({"batch", jitter.string(), "-o", (f.dir / "j").string()});
+  EXPECT_EQ(j.status, 2);
+  EXPECT_NE(j.err.find("/pointing_jitter: the engagement's laser follows keyed directions"),
+            std::string::npos)
+      << j.err;
+  std::string with_box = scene;
+  with_box.replace(with_box.rfind('}'), 1,
+                   R"(, "observers": {"min": [-1, -1, -1], "max": [1, 1, 1], "voxel_m": 0.5}})");
+  f.write("box.json", with_box);
+  const fs::path box = f.write("box_study.json", R"({"scene": "box.json"})");
+  const test::Outcome b = glint({"batch", box.string(), "-o", (f.dir / "b").string()});
+  EXPECT_EQ(b.status, 2);
+  EXPECT_NE(b.err.find("/observers: an engagement is integrated over planes only"),
+            std::string::npos)
+      << b.err;
+  for (const char* folder : {"t", "j", "b"}) EXPECT_FALSE(fs::exists(f.dir / folder)) << folder;
 }
 
 }  // namespace
