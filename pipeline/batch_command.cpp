@@ -479,37 +479,49 @@ struct StudyResults {
   std::size_t resumed = 0;
 };
 
-// Readies the study's folder on rank 0 (--fresh's clearing, scenarios/) and takes up the
-// scenarios finished before. Returns them, and the scenarios still to run.
-StudyResults startStudy(const BatchArgs& args, const Study& study,
-                        std::vector<StudyLattice>& lattices, OutputFolder& out,
+// Readies the study's folder on rank 0: --fresh's clearing, scenarios/.
+void prepareStudyFolder(const BatchArgs& args, OutputFolder& out,
                         const std::vector<std::string>& own_files, std::ostream& err) {
-  const bool talk = !args.quiet;
   const fs::path scenarios = out.path() / output_names::kScenariosFolder;
   if (args.fresh) {
     const std::vector<fs::path> kept = removeScenarioFolders(scenarios, own_files);
-    if (talk && !kept.empty()) {
+    if (!args.quiet && !kept.empty()) {
       err << "glint batch: --fresh kept " << kept.size() << " file(s) or folder(s) glint did "
           << "not write (and the scenario folders holding them): " << listed(kept) << "\n";
     }
   }
   out.create(scenarios);
-  StudyResults results;
-  for (const Scenario& s : study.scenarios) {
-    if (auto rec = resumeScenario(study, s, lattices, out.path(), args.fresh, err, args.quiet)) {
+}
+
+// Takes up the scenarios [begin, end) finished before (rank 0), into @p results; the others
+// become its todo.
+void resumeRound(const BatchArgs& args, const Study& study, std::vector<StudyLattice>& lattices,
+                 const fs::path& out_dir, std::size_t begin, std::size_t end, StudyResults& results,
+                 std::ostream& err) {
+  results.todo.clear();
+  for (std::size_t i = begin; i < end; ++i) {
+    const Scenario& s = study.scenarios[i];
+    if (auto rec = resumeScenario(study, s, lattices, out_dir, args.fresh, err, args.quiet)) {
       results.records[s.index] = std::move(*rec);
       ++results.resumed;
     } else {
       results.todo.push_back(s.index);
     }
   }
-  return results;
 }
 
-// The line that says the batch has begun.
+// The line that says the batch has begun (after its first round's scenarios are taken up).
 void printStart(std::ostream& err, const Study& study, const StudyResults& results,
                 const fs::path& out_dir, int ranks) {
-  err << "glint batch: " << study.scenarios.size() << " scenarios of " << study.source;
+  err << "glint batch: ";
+  if (study.precision_half_width) {
+    err << "up to " << study.scenarios.size() << " scenarios (jitter samples from "
+        << study.first_round_samples << ", doubling until every point's interval is within ±"
+        << formatNumber("%g", *study.precision_half_width) << ")";
+  } else {
+    err << study.scenarios.size() << " scenarios";
+  }
+  err << " of " << study.source;
   if (results.resumed > 0)
     err << " (" << results.resumed << " done before, " << results.todo.size() << " to run)";
   err << " on " << ranks << (ranks == 1 ? " process" : " MPI ranks") << "; scenario folders in "
@@ -579,7 +591,31 @@ void runScenarios(const BatchArgs& args, const Study& study, std::vector<StudyLa
       cluster.maxToRoot(r.max_ratio);
       if (r.aided) cluster.maxToRoot(r.aided_max_ratio);
     }
+    // Rank 0 holds them all now: the others start the next round from nothing, or they would
+    // add their share again.
+    if (cluster.rank() != 0) r.allocate();
   }
+}
+
+// Whether the study may stop after @p scenarios: every round's the same on every rank, rank 0's
+// word (it alone holds the aggregates) sent to all.
+bool studyMayStop(const Study& study, const std::vector<StudyLattice>& lattices,
+                  std::size_t scenarios, Cluster& cluster, bool talk, std::ostream& err) {
+  std::vector<std::byte> word;
+  if (cluster.rank() == 0) {
+    const double widest = widestCoverageHalfWidth(lattices, scenarios, study.coverage_confidence);
+    const bool reached = widest <= *study.precision_half_width;
+    if (talk) {
+      err << "glint batch: " << scenarios / study.scenarios_per_sample
+          << " jitter samples: the widest interval is ±" << formatNumber("%.3g", widest)
+          << (reached ? ", within" : ", beyond") << " the ±"
+          << formatNumber("%g", *study.precision_half_width) << " asked"
+          << (reached ? "" : "; more samples") << "\n";
+    }
+    word.push_back(std::byte{reached ? std::uint8_t{1} : std::uint8_t{0}});
+  }
+  const std::vector<std::vector<std::byte>> all = cluster.allGather(word);
+  return !all.empty() && !all[0].empty() && all[0][0] == std::byte{1};
 }
 
 // The study's own files (rank 0): scenarios.csv, each region's aggregated map and summary.json
@@ -593,7 +629,7 @@ void writeStudy(const BatchArgs& args, const Study& study,
                                study.base.wantsReach(), study.base.hazard.aid.has_value());
   csv.commit();
   for (const StudyLattice& r : lattices)
-    writeStudyMap(out_dir / r.studyFile(), r, study, study.scenarios.size());
+    writeStudyMap(out_dir / r.studyFile(), r, study, results.records.size());
   const double wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
   const nlohmann::json summary =
       batchSummaryJson(study, lattices, results.records, results.resumed, ranks, wall_s);
@@ -637,10 +673,21 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
     inputs.addScene(study.scene_path, study.base);
     out.emplace(out_dir, inputs, "glint batch",
                 [&](const OutputFolder& f) { removeFailedRun(f, own_files); });
-    results = startStudy(args, study, lattices, *out, own_files, err);
-    if (talk) printStart(err, study, results, out_dir, cluster.size());
+    prepareStudyFolder(args, *out, own_files, err);
   }
-  runScenarios(args, study, lattices, out_dir, watch, cluster, results, talk, err);
+  // One round, or with a precision rounds of doubling jitter samples until it is reached.
+  const std::vector<std::size_t> rounds = studyRounds(study);
+  std::size_t begin = 0;
+  for (std::size_t round = 0; round < rounds.size(); ++round) {
+    if (root) {
+      resumeRound(args, study, lattices, out_dir, begin, rounds[round], results, err);
+      if (talk && round == 0) printStart(err, study, results, out_dir, cluster.size());
+    }
+    runScenarios(args, study, lattices, out_dir, watch, cluster, results, talk, err);
+    begin = rounds[round];
+    if (round + 1 < rounds.size() && studyMayStop(study, lattices, begin, cluster, talk, err))
+      break;
+  }
   if (!root) return;
   writeStudy(args, study, lattices, results, out_dir, cluster.size(), wall_start, err);
 }

@@ -277,6 +277,15 @@ nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLatti
       {"ranks", ranks},
       {"wall_seconds", wall_s},
       {"hazard", hazardLimitsJson(h)}};
+  if (study.precision_half_width) {
+    const double widest = widestCoverageHalfWidth(lattices, n, study.coverage_confidence);
+    j["precision"] = {{"half_width", *study.precision_half_width},
+                      {"widest_half_width", widest},
+                      {"reached", widest <= *study.precision_half_width},
+                      {"confidence", study.coverage_confidence},
+                      {"jitter_samples", n / study.scenarios_per_sample},
+                      {"max_samples", study.max_samples}};
+  }
   // Each scenario integrated over the engagement: its regions' ratios are their worst windows'.
   if (study.base.engagement) j["engagement"] = engagementJson(*study.base.engagement);
   std::vector<double> evaluations, seconds;
@@ -463,6 +472,17 @@ void printBatchSummary(std::ostream& err, const nlohmann::json& summary,
                        const std::vector<StudyLattice>& lattices,
                        const std::filesystem::path& out_dir, double wall_s) {
   const std::size_t n = summary.at("scenarios").at("count").get<std::size_t>();
+  if (summary.contains("precision")) {
+    const nlohmann::json& p = summary.at("precision");
+    const bool reached = p.at("reached").get<bool>();
+    err << "  " << (reached ? "precision" : "warning: precision not reached") << ": after "
+        << p.at("jitter_samples").get<std::size_t>()
+        << " jitter samples every point's interval is within ±"
+        << formatNumber("%.3g", p.at("widest_half_width").get<double>()) << " (asked ±"
+        << formatNumber("%g", p.at("half_width").get<double>()) << ")"
+        << (reached ? "" : "; max_samples stopped the study: raise it for the precision asked")
+        << "\n";
+  }
   for (const nlohmann::json& r : summary.at("regions")) {
     const bool plane = r.at("kind") == "plane";
     const std::string unit = plane ? "_m2" : "_m3";

@@ -279,9 +279,23 @@ Study parseStudy(std::string_view text, const std::string& source,
     study.jitter_sigma_rad = j.number("sigma_rad");
     if (!(study.jitter_sigma_rad >= 0.0 && study.jitter_sigma_rad <= 0.1))
       j.fail("sigma_rad", "must be in [0, 0.1] rad (a pointing error, not a new direction)");
-    const std::int64_t n = j.integer("samples", 0);
-    if (n < 1 || n > 100000) j.fail("samples", "must be an integer in [1, 100000]");
-    jitter_samples = static_cast<int>(n);
+    if (j.has("precision") == j.has("samples"))
+      j.fail("samples", "give either `samples` or a `precision` to stop at");
+    if (j.has("samples")) {
+      const std::int64_t n = j.integer("samples", 0);
+      if (n < 1 || n > 100000) j.fail("samples", "must be an integer in [1, 100000]");
+      jitter_samples = static_cast<int>(n);
+    } else {
+      const double h = j.number("precision");
+      if (!(h >= 0.005 && h <= 0.5))
+        j.fail("precision", "must be in [0.005, 0.5]: the half-width of a point's interval");
+      study.precision_half_width = h;
+      const std::int64_t n = j.integer("max_samples", 4096);
+      if (n < 1 || n > 100000) j.fail("max_samples", "must be an integer in [1, 100000]");
+      jitter_samples = static_cast<int>(n);
+      study.first_round_samples = std::min(study.first_round_samples, jitter_samples);
+    }
+    study.max_samples = jitter_samples;
     const std::int64_t seed = j.integer("seed", 1);
     if (seed < 0) j.fail("seed", "must be an integer ≥ 0");
     study.jitter_seed = static_cast<std::uint64_t>(seed);
@@ -312,33 +326,58 @@ Study parseStudy(std::string_view text, const std::string& source,
                      " scenarios: at most 1 000 000 (split the study)");
   }
   // Nested in this order, the jitter innermost; without jitter one pass with sample −1.
-  const int first_sample = jitter_samples > 0 ? 0 : -1;
-  const int end_sample = jitter_samples > 0 ? jitter_samples : 0;
+  std::vector<Scenario> combinations;
   for (const Pose& pose : poses)
     for (double y : yaw)
       for (double p : pitch)
         for (double ro : roll)
           for (const auto& sg : sigma)
-            for (const auto& re : reflectance)
-              for (int k = first_sample; k < end_sample; ++k) {
-                Scenario s;
-                s.index = study.scenarios.size();
-                s.pose = pose;
-                s.yaw_deg = y;
-                s.pitch_deg = p;
-                s.roll_deg = ro;
-                s.sigma = sg;
-                s.specular_reflectance = re;
-                s.jitter_sample = k;
-                if (k >= 0) {
-                  std::tie(s.jitter_u_rad, s.jitter_v_rad) =
-                      jitterAngles(study.jitter_seed, k, study.jitter_sigma_rad);
-                }
-                study.scenarios.push_back(s);
-              }
+            for (const auto& re : reflectance) {
+              Scenario& s = combinations.emplace_back();
+              s.pose = pose;
+              s.yaw_deg = y;
+              s.pitch_deg = p;
+              s.roll_deg = ro;
+              s.sigma = sg;
+              s.specular_reflectance = re;
+            }
+  study.scenarios_per_sample = combinations.size();
+  // The intervals count every scenario as a trial of its own; with a sweep beside the jitter,
+  // the scenarios of one jitter sample are not independent, and a stop on those intervals
+  // would come too soon.
+  if (study.precision_half_width && combinations.size() > 1) {
+    throw InputError(source +
+                     ": /pointing_jitter/precision: a precision is for a study whose only "
+                     "variation is the jitter; this one has " +
+                     std::to_string(combinations.size()) +
+                     " combinations of poses, orientations and materials beside it (give "
+                     "`samples`, or a study per combination)");
+  }
+  const int first_sample = jitter_samples > 0 ? 0 : -1;
+  const int end_sample = jitter_samples > 0 ? jitter_samples : 0;
+  auto add = [&](const Scenario& combination, int k) {
+    Scenario& s = study.scenarios.emplace_back(combination);
+    s.index = study.scenarios.size() - 1;
+    s.jitter_sample = k;
+    if (k >= 0) {
+      std::tie(s.jitter_u_rad, s.jitter_v_rad) =
+          jitterAngles(study.jitter_seed, k, study.jitter_sigma_rad);
+    }
+  };
+  for (const Scenario& c : combinations)
+    for (int k = first_sample; k < end_sample; ++k) add(c, k);
   study.fnv1a64 = fnv1a64Hex(std::string(text) + '\0' + study.scene_text);
   for (const Scenario& s : study.scenarios) (void)applyScenario(study, s, false);
   return study;
+}
+
+std::vector<std::size_t> studyRounds(const Study& study) {
+  if (!study.precision_half_width) return {study.scenarios.size()};
+  std::vector<std::size_t> rounds;
+  for (int k = study.first_round_samples;; k = std::min(2 * k, study.max_samples)) {
+    rounds.push_back(static_cast<std::size_t>(k) * study.scenarios_per_sample);
+    if (k == study.max_samples) return rounds;
+  }
 }
 
 Study loadStudy(const std::filesystem::path& path) {

@@ -55,6 +55,16 @@ struct Study {
   std::string material;  ///< the material the σ and reflectance sweeps change ("": all)
   double jitter_sigma_rad = 0.0;
   std::uint64_t jitter_seed = 0;
+  /// Key `pointing_jitter.precision`: instead of a sample count, run jitter samples in rounds
+  /// until every point's coverage interval (at coverage_confidence) is at most twice this wide,
+  /// or max_samples are run. Unset: `samples`, all at once.
+  std::optional<double> precision_half_width;
+  int first_round_samples = 32;  ///< the first round's jitter samples; each next doubles them
+  int max_samples = 0;           ///< the jitter samples scenarios are made for
+  /// Scenarios per jitter sample (the other parameters' combinations): 1 with a precision, so
+  /// that the first k samples are the first k scenarios and a round adds scenarios after those
+  /// already run.
+  std::size_t scenarios_per_sample = 1;
   /// Key `coverage`: the confidence of the coverage maps' intervals (each point's, and the
   /// whole map's at once), and the probability the summary's hazardous region is stated for.
   double coverage_confidence = 0.95;
@@ -63,6 +73,10 @@ struct Study {
   /// FNV-1a of the study's and the base scene's bytes: a resumed study must match it.
   std::string fnv1a64;
 };
+
+/// @brief The number of scenarios each round of @p study runs up to (cumulative): all of them
+/// at once without a precision, else the first round's samples doubling up to max_samples.
+std::vector<std::size_t> studyRounds(const Study& study);
 
 /// @brief Reads a study file and its base scene, expands its scenarios and validates every
 /// scenario's scene, so that a bad value stops the study before any work.

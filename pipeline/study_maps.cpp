@@ -125,6 +125,19 @@ CoverageBounds coverageBounds(const std::vector<std::uint32_t>& counts, std::siz
   return b;
 }
 
+double widestCoverageHalfWidth(const std::vector<StudyLattice>& lattices, std::size_t scenarios,
+                               double confidence) {
+  const std::vector<ProportionInterval> table = intervalTable(scenarios, 0.5 * (1.0 - confidence));
+  double widest = 0.0;
+  for (const StudyLattice& r : lattices) {
+    for (const std::vector<std::uint32_t>* counts : {&r.hazardous, &r.aided_hazardous}) {
+      for (const std::uint32_t k : *counts)
+        widest = std::max(widest, 0.5 * (table.at(k).upper - table.at(k).lower));
+    }
+  }
+  return widest;
+}
+
 SimultaneousCoverage simultaneousCoverage(const std::vector<std::uint32_t>& counts,
                                           std::size_t scenarios, double confidence,
                                           double probability) {

@@ -94,6 +94,12 @@ struct CoverageBounds {
 CoverageBounds coverageBounds(const std::vector<std::uint32_t>& counts, std::size_t scenarios,
                               double alpha_each_side);
 
+/// @brief Half the width of the widest coverage interval of any point of @p lattices after
+/// @p scenarios (clopperPearson() at @p confidence, half the rest a side), aided counts
+/// included: what a study asking for a precision compares with it.
+double widestCoverageHalfWidth(const std::vector<StudyLattice>& lattices, std::size_t scenarios,
+                               double confidence);
+
 /// @brief What a study's coverage map says of the region hazardous with probability at least
 /// @p probability, at confidence @p confidence over the whole map at once: each point's
 /// interval at 1 − α/(2m) a side, m the map's points (Bonferroni, which needs nothing of how

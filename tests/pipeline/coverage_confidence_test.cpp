@@ -2,16 +2,19 @@
 // hazardous with a given probability bounded over the whole map at once.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <vector>
 
 #include "export/exr_map.h"
 #include "pipeline/study_maps.h"
 #include "support/cli.h"
+#include "support/files.h"
 
 namespace glint {
 namespace {
@@ -161,6 +164,104 @@ TEST(ClopperPearson, AStudysIntervalsHoldAKnownProbabilityAtTheirRateOverSeeds) 
       "[ coverage ] jittered mirror: true probability %.4f, mean fraction %.4f; the 95 %% "
       "intervals held it in %d of %d seeds\n",
       truth, mean_fraction, held, seeds);
+}
+
+// A study asking for a precision runs jitter samples in rounds of 32, 64, 128, ... and stops at
+// the first whose every interval is within it: on the jittered mirror (its eye at p = 0.4757,
+// where ±0.1 needs about 100 samples) it stops at 128 samples, 64 having left the eye's interval
+// wider. Its map is that of a study of as many samples (common random numbers: sample k is the
+// same however many are drawn), and over 100 seeds the stopped intervals still hold the true
+// probability at their rate (the stop depends on the data, and the intervals do not allow for
+// it: this measures what that costs).
+TEST(StudyPrecision, StopsAtTheFirstRoundWithinItAndHoldsItsConfidence) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "glint_study_precision";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  fs::copy_file(fs::path(GLINT_TEST_DATA_DIR) / "jitter_mirror.json", dir / "jitter_mirror.json");
+  const double sigma = 0.004, edge = 0.5 / 110.0;
+  const double truth = 1.0 - std::exp(-edge * edge / (2.0 * sigma * sigma));
+  auto study = [&](const std::string& name, const std::string& jitter) {
+    std::ofstream(dir / (name + ".json"))
+        << R"({"scene": "jitter_mirror.json", "pointing_jitter": {"sigma_rad": 0.004, )" << jitter
+        << "}}";
+    const fs::path out = dir / name;
+    fs::remove_all(out);
+    const test::Outcome run =
+        test::glint({"batch", (dir / (name + ".json")).string(), "-o", out.string(), "-q"});
+    EXPECT_EQ(run.status, 0) << run.err;
+    return out;
+  };
+  auto widest = [](const fs::path& out) {
+    int w = 0, h = 0;
+    const std::vector<float> lo =
+        readExrChannel((out / "eye.exr").string(), "coverage_lower", w, h);
+    const std::vector<float> hi =
+        readExrChannel((out / "eye.exr").string(), "coverage_upper", w, h);
+    double widest_half = 0.0;
+    for (std::size_t i = 0; i < lo.size(); ++i)
+      widest_half =
+          std::max(widest_half, 0.5 * (static_cast<double>(hi[i]) - static_cast<double>(lo[i])));
+    return widest_half;
+  };
+  const fs::path stopped = study("stopped", R"("precision": 0.1, "seed": 5)");
+  const auto summary = nlohmann::json::parse(std::ifstream(stopped / "summary.json"));
+  const nlohmann::json& p = summary.at("precision");
+  EXPECT_TRUE(p.at("reached").get<bool>()) << p;
+  EXPECT_EQ(p.at("jitter_samples"), 128) << p;
+  EXPECT_EQ(summary.at("scenarios").at("count"), 128) << summary.at("scenarios");
+  EXPECT_LE(widest(stopped), 0.1) << "the map's own intervals";
+  EXPECT_NEAR(widest(stopped), p.at("widest_half_width").get<double>(), 1e-6);
+  EXPECT_GT(widest(study("fewer", R"("samples": 64, "seed": 5)")), 0.1)
+      << "64 samples must not have been enough, or the study stopped late";
+  const fs::path fixed = study("fixed", R"("samples": 128, "seed": 5)");
+  EXPECT_EQ(test::readFile(stopped / "eye.exr"), test::readFile(fixed / "eye.exr"))
+      << "the stopped study's map is the map of as many samples";
+
+  const int seeds = 100;
+  int held = 0, samples = 0;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    const fs::path out = study("seed", R"("precision": 0.1, "seed": )" + std::to_string(seed));
+    int w = 0, h = 0;
+    const float lower = readExrChannel((out / "eye.exr").string(), "coverage_lower", w, h)[0];
+    const float upper = readExrChannel((out / "eye.exr").string(), "coverage_upper", w, h)[0];
+    ASSERT_LE(0.5 * (static_cast<double>(upper) - static_cast<double>(lower)), 0.1)
+        << "seed " << seed;
+    held += static_cast<double>(lower) <= truth && truth <= static_cast<double>(upper) ? 1 : 0;
+    samples += nlohmann::json::parse(std::ifstream(out / "summary.json"))
+                   .at("precision")
+                   .at("jitter_samples")
+                   .get<int>();
+  }
+  fs::remove_all(dir);
+  const double rate = static_cast<double>(held) / seeds;
+  EXPECT_GE(rate, 0.95 - 3.0 * std::sqrt(0.95 * 0.05 / seeds)) << held << " of " << seeds;
+  std::printf(
+      "[ coverage ] jittered mirror, stopping at ±0.1: the 95 %% intervals held p = %.4f in %d "
+      "of %d seeds, after %.1f jitter samples on average\n",
+      truth, held, seeds, static_cast<double>(samples) / seeds);
+}
+
+// With a sweep beside the jitter, the scenarios of one jitter sample are not independent trials:
+// the intervals would be too narrow and a precision reached too soon, so it is refused.
+TEST(StudyPrecision, IsRefusedBesideASweepWhoseScenariosShareTheirJitter) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "glint_study_precision_sweep";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  fs::copy_file(fs::path(GLINT_TEST_DATA_DIR) / "jitter_mirror.json", dir / "jitter_mirror.json");
+  std::ofstream(dir / "study.json")
+      << R"({"scene": "jitter_mirror.json", "sweep": {"specular_reflectance": [0.9, 1.0]},
+             "pointing_jitter": {"sigma_rad": 0.004, "precision": 0.1}})";
+  const test::Outcome run =
+      test::glint({"batch", (dir / "study.json").string(), "-o", (dir / "out").string()});
+  EXPECT_EQ(run.status, 2) << run.err;
+  EXPECT_NE(run.err.find("/pointing_jitter/precision: a precision is for a study whose only "
+                         "variation is the jitter; this one has 2 combinations"),
+            std::string::npos)
+      << run.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -253,7 +253,13 @@ TEST(Study, RefusesBadStudiesNamingThePlace) {
                 "/sweep/yaw_deg/count: must be an integer in [1, 100000]");
   expectRefused(R"("sweep": {"sigma": [0.1, -1]})", "/sweep/sigma: values must be > 0");
   expectRefused(R"("pointing_jitter": {"sigma_rad": 1e-3})",
+                "/pointing_jitter/samples: give either `samples` or a `precision` to stop at");
+  expectRefused(R"("pointing_jitter": {"sigma_rad": 1e-3, "samples": 0})",
                 "/pointing_jitter/samples: must be an integer in [1, 100000]");
+  expectRefused(R"("pointing_jitter": {"sigma_rad": 1e-3, "samples": 8, "precision": 0.1})",
+                "/pointing_jitter/samples: give either `samples` or a `precision` to stop at");
+  expectRefused(R"("pointing_jitter": {"sigma_rad": 1e-3, "precision": 0.001})",
+                "/pointing_jitter/precision: must be in [0.005, 0.5]");
   expectRefused(R"("trajectory": {"poses": [{"time_s": 1}, {"time_s": 1}]})",
                 "/trajectory/poses: times must increase");
   expectRefused(R"("sweep": {"yaw_deg": {"from": 0, "to": 1, "count": 100000},
