@@ -405,7 +405,7 @@ class ExposureRun {
 }  // namespace
 
 std::vector<std::uint8_t> litByBound(const FacetIntegrator& reference, const Motion& motion,
-                                     const FieldSpec& plane, const ExposureOptions& options) {
+                                     const FieldSpec& lattice, const ExposureOptions& options) {
   constexpr int kTimeLevels = 4;  // an initial interval and its halves, to three levels
   const int first = options.initial_intervals;
   const double start = motion.spec().start_s, duration = motion.durationS();
@@ -438,23 +438,32 @@ std::vector<std::uint8_t> litByBound(const FacetIntegrator& reference, const Mot
                mayLight(level + 1, 2 * index + 1, centre, radius, kept);
       };
 
-  const std::array<int, 3> n = plane.nodes();
-  std::vector<std::uint8_t> lit(static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]), 0);
+  const std::array<int, 3> n = lattice.nodes();
+  const auto at = [&](int i, int j, int k) {
+    return (static_cast<std::size_t>(k) * static_cast<std::size_t>(n[1]) +
+            static_cast<std::size_t>(j)) *
+               static_cast<std::size_t>(n[0]) +
+           static_cast<std::size_t>(i);
+  };
+  std::vector<std::uint8_t> lit(at(0, 0, n[2]), 0);
+  // A plane's blocks are squares (its one layer of nodes), a box's cubes.
+  const int depth = lattice.plane ? 0 : 1;
   struct Block {
-    int i = 0, j = 0, size = 0;  // its lower corner node and its edge in cells
+    int i = 0, j = 0, k = 0, size = 0;  // its lower corner node and its edge in cells
   };
   std::vector<Block> blocks;
-  const int top = plane.block_voxels;
-  for (int j = 0; j + 1 < n[1]; j += top)
-    for (int i = 0; i + 1 < n[0]; i += top) blocks.push_back({i, j, top});
+  const int top = lattice.block_voxels;
+  for (int k = 0; k == 0 || k + 1 < n[2]; k += top)
+    for (int j = 0; j + 1 < n[1]; j += top)
+      for (int i = 0; i + 1 < n[0]; i += top) blocks.push_back({i, j, k, top});
   while (!blocks.empty()) {
     std::vector<std::uint8_t> lit_block(blocks.size(), 0);
     tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t b) {
-      const Block& k = blocks[b];
-      const double half = 0.5 * k.size;
-      const Vec3 centre = plane.min_m + plane.voxel_m * ((k.i + half) * plane.axes[0] +
-                                                         (k.j + half) * plane.axes[1]);
-      const double radius = plane.voxel_m * half * std::sqrt(2.0);
+      const Block& c = blocks[b];
+      const int far = c.size * depth;
+      const Vec3 centre = 0.5 * (lattice.position(c.i, c.j, c.k) +
+                                 lattice.position(c.i + c.size, c.j + c.size, c.k + far));
+      const double radius = lattice.voxel_m * 0.5 * c.size * std::sqrt(2.0 + depth);
       std::vector<Candidate>& kept = kept_lists.local();
       for (int index = 0; index < first; ++index) {
         if (mayLight(0, index, centre, radius, kept)) {
@@ -466,17 +475,18 @@ std::vector<std::uint8_t> litByBound(const FacetIntegrator& reference, const Mot
     std::vector<Block> next;
     for (std::size_t b = 0; b < blocks.size(); ++b) {
       if (lit_block[b] == 0) continue;
-      const Block& k = blocks[b];
-      if (k.size == 1) {
-        for (int dj = 0; dj <= 1; ++dj)
-          for (int di = 0; di <= 1; ++di)
-            lit[static_cast<std::size_t>(k.j + dj) * static_cast<std::size_t>(n[0]) +
-                static_cast<std::size_t>(k.i + di)] = 1;
+      const Block& c = blocks[b];
+      if (c.size == 1) {
+        for (int dk = 0; dk <= depth; ++dk)
+          for (int dj = 0; dj <= 1; ++dj)
+            for (int di = 0; di <= 1; ++di) lit[at(c.i + di, c.j + dj, c.k + dk)] = 1;
         continue;
       }
-      const int h = k.size / 2;
-      for (int dj = 0; dj <= 1; ++dj)
-        for (int di = 0; di <= 1; ++di) next.push_back({k.i + di * h, k.j + dj * h, h});
+      const int h = c.size / 2;
+      for (int dk = 0; dk <= depth; ++dk)
+        for (int dj = 0; dj <= 1; ++dj)
+          for (int di = 0; di <= 1; ++di)
+            next.push_back({c.i + di * h, c.j + dj * h, c.k + dk * h, h});
     }
     blocks = std::move(next);
   }

@@ -65,14 +65,15 @@ std::vector<ExposureHistory> integrateExposures(const FacetIntegrator& reference
                                                 WorkCounter* counter = nullptr,
                                                 PointExchange* exchange = nullptr);
 
-/// @brief Which lattice points of the plane @p plane (their places at t = 0; they ride the
-/// motion's platform) the engagement may light above the floor. Blocks of the plane, coarsest
-/// first, are bounded over each initial interval, and over its halves to three levels where
-/// that bound is above the floor, under each interval's swept beam; a block some interval may
-/// light is split, down to single cells, whose corners are then lit. The points of blocks no
-/// bound lets light are dark over the whole span and need no sample. Indexed [j × nodes[0] + i].
+/// @brief Which points of the lattice @p lattice (a plane's or a box's; their places at t = 0,
+/// riding the motion's platform) the engagement may light above the floor. Blocks of the
+/// lattice (squares of a plane, cubes of a box), coarsest first, are bounded over each initial
+/// interval, and over its halves to three levels where that bound is above the floor, under
+/// each interval's swept beam; a block some interval may light is split, down to single cells,
+/// whose corners are then lit. The points of blocks no bound lets light are dark over the whole
+/// span and need no sample. Indexed [(k × nodes[1] + j) × nodes[0] + i].
 std::vector<std::uint8_t> litByBound(const FacetIntegrator& reference, const Motion& motion,
-                                     const FieldSpec& plane, const ExposureOptions& options);
+                                     const FieldSpec& lattice, const ExposureOptions& options);
 
 /// @brief The same observers sampled at @p steps equal steps (steps + 1 samples), each
 /// integrated to the reference's accuracy: the independent twin the adaptive sampling is

@@ -198,20 +198,23 @@ ObserverField scenarioField(const ScenarioWork& w, const FieldProblem& problem,
   return field;
 }
 
-// An engagement's scenario over a plane: its maps over time, as glint run writes them of the
+// An engagement's scenario over a region: its maps over time, as glint run writes them of the
 // scenario's scene, added to the rank's aggregates by each point's worst window.
 void runEngagementRegion(const ScenarioWork& w, StudyLattice& r, ScenarioTally& tally) {
-  const EngagementPlane e = engagementPlane(w.target.integrator, w.scene, r.spec, w.watch, nullptr,
-                                            false, w.what + ", plane " + r.name);
-  const std::vector<ExrChannel> channels = e.maps.channels();
-  for (const std::string& name :
-       w.maps.writeEngagementPlane(r.plane_index, {e.maps.grid, channels, w.info})) {
-    tally.files[name] = fileChecksum(w.dir / name);
+  const EngagementRegion e = engagementRegion(w.target.integrator, w.scene, r.spec, w.watch,
+                                              nullptr, false, w.what + ", region " + r.name);
+  std::vector<std::string> written;
+  if (r.plane) {
+    const std::vector<ExrChannel> channels = e.maps.channels();
+    written = w.maps.writeEngagementPlane(r.plane_index, {e.maps.grid, channels, w.info});
+  } else {
+    const std::vector<LatticeChannel> channels = e.maps.latticeChannels();
+    written = w.maps.writeEngagementBox({r.spec, channels, w.info});
   }
+  for (const std::string& name : written) tally.files[name] = fileChecksum(w.dir / name);
   const HazardSpec& h = w.scene.hazard;
   const HazardousPoints n = r.add(engagementValues(e, h), h);
-  tally.regions.push_back(
-      scenarioEngagementRegionJson(r, e, w.scene.planes.at(r.plane_index), h, n));
+  tally.regions.push_back(scenarioEngagementRegionJson(r, e, h, n));
   for (const ExposureHistory& history : e.results.histories)
     tally.evaluations += history.evaluations;
   tally.unconverged += e.maps.unconverged;
@@ -391,12 +394,9 @@ std::vector<RegionValues> readScenarioMaps(const std::vector<StudyLattice>& latt
   for (const StudyLattice& r : lattices) {
     const std::string path = (dir / r.scenarioFile()).string();
     RegionValues& v = maps.emplace_back();
-    if (!r.plane) {
-      v.irradiance_w_m2 = readLatticeVdb(path, "irradiance_w_m2", r.spec);
-      continue;
-    }
     const auto n = r.spec.nodes();
     auto channel = [&](const char* name) {
+      if (!r.plane) return readLatticeVdb(path, name, r.spec);
       int w = 0, h = 0;
       std::vector<float> values = readExrChannel(path, name, w, h);
       if (w != n[0] || h != n[1]) throw std::runtime_error(path + ": not this plane's size");
@@ -457,7 +457,8 @@ void checkStudyMemory(const Study& study, const std::vector<StudyLattice>& latti
   // Each region keeps its dense maps over the scenarios besides one scenario's field at a time.
   std::uint64_t floor_bytes = 0;
   for (const StudyLattice& r : lattices) {
-    floor_bytes += r.mapBytes() + fieldMemoryFloorBytes(r.spec, false);
+    // An engagement's maps are arrays over the whole lattice, as the dense twin's grids are.
+    floor_bytes += r.mapBytes() + fieldMemoryFloorBytes(r.spec, r.engagement);
   }
   requireWithinBudget("the study's regions (" + std::to_string(lattices.size()) + ")", floor_bytes,
                       budget,

@@ -240,7 +240,9 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
                     {"voxel_m", r.spec.voxel_m}};
     std::vector<LatticeChannel> channels = {
         {"max_irradiance_w_m2", "W/m^2", &r.max_w_m2},
-        {"max_hazard_ratio", "1 (irradiance / MPE)", &max_ratio},
+        {"max_hazard_ratio",
+         r.engagement ? "1 (worst window's exposure / its MPE)" : "1 (irradiance / MPE)",
+         &max_ratio},
         {"coverage_probability", "1 (fraction of scenarios at or above the MPE)", &cover},
         {"coverage_lower", "1 (Clopper-Pearson lower bound at coverage_confidence)", &bounds.lower},
         {"coverage_upper", "1 (Clopper-Pearson upper bound at coverage_confidence)",
@@ -425,32 +427,32 @@ nlohmann::json scenarioRegionJson(const StudyLattice& r, const FieldStats& st, c
   return region;
 }
 
-nlohmann::json scenarioEngagementRegionJson(const StudyLattice& r, const EngagementPlane& plane,
-                                            const PlaneSpec& spec, const HazardSpec& h,
-                                            const HazardousPoints& hazardous) {
-  nlohmann::json region = engagementPlaneJson(spec, plane.maps, plane.results, plane.points, h);
+nlohmann::json scenarioEngagementRegionJson(const StudyLattice& r, const EngagementRegion& region,
+                                            const HazardSpec& h, const HazardousPoints& hazardous) {
+  nlohmann::json j = engagementRegionJson(r.name, r.scenarioFile(), r.spec, region, h);
   // The scenario's record has its own time and names its files apart.
-  region.erase("seconds");
-  region.erase("file");
+  j.erase("seconds");
+  j.erase("file");
   double peak = 0.0, aided_peak = 0.0;
-  for (const ExposureVerdict& v : plane.results.verdicts) {
+  for (const ExposureVerdict& v : region.results.verdicts) {
     peak = std::max(peak, v.window.ratio);
     aided_peak = std::max(aided_peak, v.aided_ratio);
   }
-  region["peak_hazard_ratio"] = peak;
-  region["hazardous_points"] = hazardous.unaided;
-  region["hazardous_area_m2"] = static_cast<double>(hazardous.unaided) * r.cell();
+  const std::string extent = r.plane ? "hazardous_area_m2" : "hazard_volume_m3";
+  j["peak_hazard_ratio"] = peak;
+  j["hazardous_points"] = hazardous.unaided;
+  j[extent] = static_cast<double>(hazardous.unaided) * r.cell();
   if (h.aid) {
-    region["aided_peak_hazard_ratio"] = aided_peak;
-    region["aided_hazardous_points"] = hazardous.aided;
-    region["aided_hazardous_area_m2"] = static_cast<double>(hazardous.aided) * r.cell();
+    j["aided_peak_hazard_ratio"] = aided_peak;
+    j["aided_hazardous_points"] = hazardous.aided;
+    j["aided_" + extent] = static_cast<double>(hazardous.aided) * r.cell();
   }
-  return region;
+  return j;
 }
 
-RegionValues engagementValues(const EngagementPlane& plane, const HazardSpec& h) {
-  return {plane.maps.peak_irradiance_w_m2, plane.maps.hazard_ratio,
-          h.aid ? plane.maps.aided_hazard_ratio : std::vector<float>{}};
+RegionValues engagementValues(const EngagementRegion& region, const HazardSpec& h) {
+  return {region.maps.peak_irradiance_w_m2, region.maps.hazard_ratio,
+          h.aid ? region.maps.aided_hazard_ratio : std::vector<float>{}};
 }
 
 nlohmann::json scenarioFarFieldJson(const FarField& far, const HazardSpec& h) {

@@ -28,19 +28,18 @@ nlohmann::json scenarioParametersJson(const Scenario& s);
 nlohmann::json scenarioRegionJson(const StudyLattice& r, const FieldStats& stats,
                                   const HazardSpec& h, const HazardousPoints& hazardous);
 
-struct EngagementPlane;
+struct EngagementRegion;
 
-/// @brief One plane's entry of an engagement scenario's result.json: the plane's summary entry
-/// as glint run gives it (engagementPlaneJson()), with the figures every region's entry has,
+/// @brief One region's entry of an engagement scenario's result.json: the region's summary
+/// entry as glint run gives it (engagementRegionJson()), with the figures every region's entry has,
 /// judged by the worst window: its peak ratio, and the hazardous points and area as the study
-/// counted them (@p hazardous).
-nlohmann::json scenarioEngagementRegionJson(const StudyLattice& r, const EngagementPlane& plane,
-                                            const PlaneSpec& spec, const HazardSpec& h,
-                                            const HazardousPoints& hazardous);
+/// counted them (@p hazardous) as its area or volume.
+nlohmann::json scenarioEngagementRegionJson(const StudyLattice& r, const EngagementRegion& region,
+                                            const HazardSpec& h, const HazardousPoints& hazardous);
 
-/// @brief One scenario's values over an engagement's plane, as the study adds them: its peak
+/// @brief One scenario's values over an engagement's region, as the study adds them: its peak
 /// irradiance and worst windows' ratios (aided, with an aid).
-RegionValues engagementValues(const EngagementPlane& plane, const HazardSpec& h);
+RegionValues engagementValues(const EngagementRegion& region, const HazardSpec& h);
 
 /// @brief The far field's entry of a scenario's result.json (with farHazardJson()).
 nlohmann::json scenarioFarFieldJson(const FarField& far, const HazardSpec& h);

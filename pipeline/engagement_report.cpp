@@ -189,6 +189,29 @@ void printEngagementSummary(std::ostream& err, const Scene& scene, std::span<con
 
 namespace glint {
 
+namespace {
+
+// A region's hazardous extent: a plane's area, a box's volume, and the keys that name it.
+class Extent {
+ public:
+  explicit Extent(const FieldSpec& spec)
+      : plane_(spec.plane),
+        cell_(spec.plane ? spec.voxel_m * spec.voxel_m
+                         : spec.voxel_m * spec.voxel_m * spec.voxel_m) {}
+  [[nodiscard]] double of(std::int64_t points) const { return static_cast<double>(points) * cell_; }
+  // "hazardous_area_m2" or "hazard_volume_m3", after @p prefix.
+  [[nodiscard]] std::string key(const std::string& prefix) const {
+    return prefix + (plane_ ? "hazardous_area_m2" : "hazard_volume_m3");
+  }
+  [[nodiscard]] const char* unit() const { return plane_ ? "m²" : "m³"; }
+
+ private:
+  bool plane_;
+  double cell_;
+};
+
+}  // namespace
+
 std::vector<ExrChannel> EngagementMaps::channels() const {
   std::vector<ExrChannel> c = {
       {"exposure_j_m2", &exposure_j_m2},       {"peak_irradiance_w_m2", &peak_irradiance_w_m2},
@@ -196,6 +219,22 @@ std::vector<ExrChannel> EngagementMaps::channels() const {
       {"worst_window_s", &worst_window_s},     {"stare_hazard_ratio", &stare_hazard_ratio}};
   if (!aided_hazard_ratio.empty()) c.push_back({"aided_hazard_ratio", &aided_hazard_ratio});
   c.push_back({"status", &status});
+  return c;
+}
+
+std::vector<LatticeChannel> EngagementMaps::latticeChannels() const {
+  std::vector<LatticeChannel> c = {
+      {"exposure_j_m2", "J/m^2", &exposure_j_m2},
+      {"peak_irradiance_w_m2", "W/m^2", &peak_irradiance_w_m2},
+      {"time_above_mpe_s", "s", &time_above_mpe_s},
+      {"hazard_ratio", "1 (worst window's exposure / its MPE)", &hazard_ratio},
+      {"worst_window_s", "s", &worst_window_s},
+      {"stare_hazard_ratio", "1 (peak irradiance / MPE for exposure_s)", &stare_hazard_ratio}};
+  if (!aided_hazard_ratio.empty()) {
+    c.push_back(
+        {"aided_hazard_ratio", "1 (worst window through the optical aid)", &aided_hazard_ratio});
+  }
+  c.push_back({"status", "1 integrated, 3 dark by the bound, 5 unconverged", &status});
   return c;
 }
 
@@ -234,10 +273,10 @@ EngagementMaps engagementMaps(const FieldSpec& spec, std::span<const std::uint8_
   return m;
 }
 
-EngagementPlane engagementPlane(const FacetIntegrator& target, const Scene& scene,
-                                const FieldSpec& spec, const MemoryWatch& watch,
-                                std::ostream* progress_to, bool terminal, const std::string& what,
-                                PointExchange* exchange) {
+EngagementRegion engagementRegion(const FacetIntegrator& target, const Scene& scene,
+                                  const FieldSpec& spec, const MemoryWatch& watch,
+                                  std::ostream* progress_to, bool terminal, const std::string& what,
+                                  PointExchange* exchange) {
   const auto start = std::chrono::steady_clock::now();
   const Motion motion(scene.engagement->motion, scene.laser);
   // Each sample is integrated to the scene's accuracy, as glint points integrates it: a plane's
@@ -247,21 +286,18 @@ EngagementPlane engagementPlane(const FacetIntegrator& target, const Scene& scen
   const std::vector<std::uint8_t> lit =
       litByBound(integrator, motion, spec, scene.engagement->time);
   const std::array<int, 3> n = spec.nodes();
-  EngagementPlane plane;
-  for (int j = 0; j < n[1]; ++j) {
-    for (int i = 0; i < n[0]; ++i) {
-      if (lit[static_cast<std::size_t>(j) * static_cast<std::size_t>(n[0]) +
-              static_cast<std::size_t>(i)] != 0) {
-        plane.points.push_back(spec.position(i, j, 0));
-      }
-    }
-  }
-  plane.results = sampleEngagement(integrator, scene, plane.points, watch, progress_to, terminal,
-                                   what + "'s points", exchange);
-  plane.results.seconds =
+  EngagementRegion region;
+  std::size_t p = 0;  // lit's index, [(k × nodes[1] + j) × nodes[0] + i]
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i, ++p)
+        if (lit[p] != 0) region.points.push_back(spec.position(i, j, k));
+  region.results = sampleEngagement(integrator, scene, region.points, watch, progress_to, terminal,
+                                    what + "'s points", exchange);
+  region.results.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  plane.maps = engagementMaps(spec, lit, plane.results, scene.hazard);
-  for (const ExrChannel& channel : plane.maps.channels()) {
+  region.maps = engagementMaps(spec, lit, region.results, scene.hazard);
+  for (const ExrChannel& channel : region.maps.channels()) {
     for (float v : *channel.values) {
       if (!std::isfinite(v)) {
         throw std::runtime_error(what + ": " + channel.name +
@@ -269,40 +305,44 @@ EngagementPlane engagementPlane(const FacetIntegrator& target, const Scene& scen
       }
     }
   }
-  return plane;
+  return region;
 }
 
-nlohmann::json engagementPlaneJson(const PlaneSpec& plane, const EngagementMaps& maps,
-                                   const EngagementResults& results, std::span<const Vec3> points,
-                                   const HazardSpec& hazard) {
-  const double pixel_m2 = maps.grid.pixel_m * maps.grid.pixel_m;
+nlohmann::json engagementRegionJson(const std::string& name, const std::string& file,
+                                    const FieldSpec& spec, const EngagementRegion& region,
+                                    const HazardSpec& hazard) {
+  const EngagementMaps& maps = region.maps;
+  const EngagementResults& results = region.results;
+  const Extent extent(spec);
   std::int64_t samples = 0, evaluations = 0;
   for (const ExposureHistory& h : results.histories) {
     samples += static_cast<std::int64_t>(h.time_s.size());
     evaluations += h.evaluations;
   }
+  const std::array<int, 3> n = spec.nodes();
   const auto total = static_cast<std::int64_t>(maps.status.size());
-  nlohmann::json j = {
-      {"name", plane.name},
-      {"file", output_names::planeExr(plane.name)},
-      {"pixels", {maps.grid.width, maps.grid.height}},
-      {"pixel_m", maps.grid.pixel_m},
-      {"points",
-       {{"integrated", maps.integrated},
-        {"dark_by_bound", total - maps.integrated},
-        {"unconverged", maps.unconverged}}},
-      {"time_samples", samples},
-      {"evaluations", evaluations},
-      {"seconds", results.seconds},
-      {"hazardous_area_m2", static_cast<double>(maps.hazardous) * pixel_m2},
-      {"stare_hazardous_area_m2", static_cast<double>(maps.stare_hazardous) * pixel_m2}};
-  if (hazard.aid)
-    j["aided_hazardous_area_m2"] = static_cast<double>(maps.aided_hazardous) * pixel_m2;
+  nlohmann::json j = {{"name", name}, {"file", file}};
+  if (spec.plane) {
+    j["pixels"] = {n[0], n[1]};
+    j["pixel_m"] = spec.voxel_m;
+  } else {
+    j["lattice"] = {n[0], n[1], n[2]};
+    j["voxel_m"] = spec.voxel_m;
+  }
+  j["points"] = {{"integrated", maps.integrated},
+                 {"dark_by_bound", total - maps.integrated},
+                 {"unconverged", maps.unconverged}};
+  j["time_samples"] = samples;
+  j["evaluations"] = evaluations;
+  j["seconds"] = results.seconds;
+  j[extent.key("")] = extent.of(maps.hazardous);
+  j[extent.key("stare_")] = extent.of(maps.stare_hazardous);
+  if (hazard.aid) j[extent.key("aided_")] = extent.of(maps.aided_hazardous);
   if (!results.histories.empty()) {
     const std::size_t w = worstRow(results);
     const ExposureHistory& h = results.histories[w];
     const ExposureVerdict& v = results.verdicts[w];
-    const Vec3& x = points[w];
+    const Vec3& x = region.points[w];
     j["worst"] = {{"at_m", {x.x, x.y, x.z}},
                   {"hazard_ratio", v.window.ratio},
                   {"window_s", v.window.duration_s},
@@ -339,10 +379,12 @@ nlohmann::json engagementJson(const EngagementSpec& e) {
            "of length t collects, against the MPE for t"}};
 }
 
-void printEngagementPlane(std::ostream& err, const PlaneSpec& plane, const EngagementMaps& maps,
-                          const EngagementResults& results, std::span<const Vec3> points) {
-  const double pixel_m2 = maps.grid.pixel_m * maps.grid.pixel_m;
-  err << "plane " << plane.name << ": " << maps.integrated << " of " << maps.status.size()
+void printEngagementRegion(std::ostream& err, const std::string& what, const FieldSpec& spec,
+                           const EngagementRegion& region) {
+  const EngagementMaps& maps = region.maps;
+  const EngagementResults& results = region.results;
+  const Extent extent(spec);
+  err << what << ": " << maps.integrated << " of " << maps.status.size()
       << " points sampled in time (the rest dark by the bound), "
       << formatDuration(results.seconds);
   if (results.histories.empty()) {
@@ -351,13 +393,13 @@ void printEngagementPlane(std::ostream& err, const PlaneSpec& plane, const Engag
   }
   const std::size_t w = worstRow(results);
   const ExposureVerdict& v = results.verdicts[w];
-  const Vec3& x = points[w];
+  const Vec3& x = region.points[w];
   err << "\n  worst point (" << x.x << ", " << x.y << ", " << x.z << "): hazard ratio "
       << formatNumber("%.3g", v.window.ratio) << " over "
       << formatNumber("%.3g", v.window.duration_s) << " s (stare verdict "
       << formatNumber("%.3g", v.stare_ratio) << "); hazardous "
-      << formatNumber("%.4g", static_cast<double>(maps.hazardous) * pixel_m2) << " m², as a stare "
-      << formatNumber("%.4g", static_cast<double>(maps.stare_hazardous) * pixel_m2) << " m²\n";
+      << formatNumber("%.4g", extent.of(maps.hazardous)) << " " << extent.unit() << ", as a stare "
+      << formatNumber("%.4g", extent.of(maps.stare_hazardous)) << " " << extent.unit() << "\n";
   if (maps.unconverged > 0) {
     err << "  warning: " << maps.unconverged
         << " points did not reach the tolerance in time (status 5)\n";

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "export/exr_map.h"
+#include "export/lattice_vdb.h"
 #include "export/points_csv.h"
 #include "hazard/exposure_window.h"
 #include "observers/exposure.h"
@@ -59,12 +60,12 @@ void writeTimeSeriesCsv(std::ostream& out, const EngagementResults& results);
 void printEngagementSummary(std::ostream& err, const Scene& scene, std::span<const Vec3> points,
                             const EngagementResults& results, int threads);
 
-/// @brief An engagement's maps over one plane of `glint run`, arrays indexed [j × width + i]:
-/// each lattice point's exposure, peak, time above the MPE, worst window and its hazard ratio,
-/// the stare verdict, and its status (1 integrated, 3 dark over the whole span by the bound, 5
-/// integrated but unconverged).
+/// @brief An engagement's maps over one region of `glint run` (a plane or the box), arrays
+/// indexed as the lattice's points, [(k × nodes[1] + j) × nodes[0] + i]: each point's exposure,
+/// peak, time above the MPE, worst window and its hazard ratio, the stare verdict, and its status
+/// (1 integrated, 3 dark over the whole span by the bound, 5 integrated but unconverged).
 struct EngagementMaps {
-  PlaneGrid grid;
+  PlaneGrid grid;  ///< a plane's (its first two axes for the box)
   std::vector<float> exposure_j_m2, peak_irradiance_w_m2, time_above_mpe_s, hazard_ratio,
       aided_hazard_ratio, stare_hazard_ratio, worst_window_s, status;
   std::int64_t integrated = 0;       ///< lattice points sampled in time
@@ -74,6 +75,8 @@ struct EngagementMaps {
   std::int64_t unconverged = 0;
   /// @brief The EXR channels, in the order the file holds them.
   [[nodiscard]] std::vector<ExrChannel> channels() const;
+  /// @brief The same as the box's VDB grids, with their units.
+  [[nodiscard]] std::vector<LatticeChannel> latticeChannels() const;
 };
 
 /// @brief The maps of the plane @p spec, whose lattice points @p lit (flags indexed [j × width +
@@ -81,35 +84,39 @@ struct EngagementMaps {
 EngagementMaps engagementMaps(const FieldSpec& spec, std::span<const std::uint8_t> lit,
                               const EngagementResults& results, const HazardSpec& hazard);
 
-/// @brief One plane of an engagement as glint run and a study's scenario compute it: the
-/// lattice points no bound can prove dark (in row order), their histories and the maps.
-struct EngagementPlane {
+/// @brief One region (a plane or the box) of an engagement as glint run and a study's scenario
+/// compute it: the lattice points no bound can prove dark (in lattice order), their histories
+/// and the maps.
+struct EngagementRegion {
   std::vector<Vec3> points;
   EngagementResults results;
   EngagementMaps maps;
 };
 
-/// @brief Maps the engagement of @p scene over the plane lattice @p spec: culled by
-/// litByBound(), the rest sampled by sampleEngagement() (with the arguments it takes) from the
-/// integrator of @p target at the scene's accuracy; results.seconds counts the culling too.
+/// @brief Maps the engagement of @p scene over the lattice @p spec (a plane's or the box's):
+/// culled by litByBound(), the rest sampled by sampleEngagement() (with the arguments it
+/// takes) from the integrator of @p target at the scene's accuracy; results.seconds counts the
+/// culling too.
 /// @throw std::runtime_error when the memory watch stops the work or a map value is not finite
 /// (nothing may then be written).
-EngagementPlane engagementPlane(const FacetIntegrator& target, const Scene& scene,
-                                const FieldSpec& spec, const MemoryWatch& watch,
-                                std::ostream* progress_to, bool terminal, const std::string& what,
-                                PointExchange* exchange = nullptr);
+EngagementRegion engagementRegion(const FacetIntegrator& target, const Scene& scene,
+                                  const FieldSpec& spec, const MemoryWatch& watch,
+                                  std::ostream* progress_to, bool terminal, const std::string& what,
+                                  PointExchange* exchange = nullptr);
 
-/// @brief The summary's entry of one plane: its lattice, counts, worst point and its window,
-/// the hazardous area by the worst window and by the stare verdict.
-nlohmann::json engagementPlaneJson(const PlaneSpec& plane, const EngagementMaps& maps,
-                                   const EngagementResults& results, std::span<const Vec3> points,
-                                   const HazardSpec& hazard);
+/// @brief The summary's entry of one region named @p name, written to @p file: its lattice,
+/// counts, worst point and its window, the hazardous area (a plane: `hazardous_area_m2`,
+/// `stare_hazardous_area_m2`) or volume (the box: `hazard_volume_m3`, ...) by the worst window
+/// and by the stare verdict.
+nlohmann::json engagementRegionJson(const std::string& name, const std::string& file,
+                                    const FieldSpec& spec, const EngagementRegion& region,
+                                    const HazardSpec& hazard);
 
 /// @brief The summary's `engagement`: the span, the motion's kinds and the time sampling.
 nlohmann::json engagementJson(const EngagementSpec& engagement);
 
-/// @brief One plane's line on the terminal.
-void printEngagementPlane(std::ostream& err, const PlaneSpec& plane, const EngagementMaps& maps,
-                          const EngagementResults& results, std::span<const Vec3> points);
+/// @brief One region's lines on the terminal, @p what naming it ("plane wall").
+void printEngagementRegion(std::ostream& err, const std::string& what, const FieldSpec& spec,
+                           const EngagementRegion& region);
 
 }  // namespace glint

@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "export/field_files.h"
+#include "export/lattice_vdb.h"
 #include "glint/version.h"
 #include "observers/exposure.h"
 #include "pipeline/engagement_report.h"
@@ -20,6 +21,7 @@
 #include "pipeline/json_reader.h"
 #include "pipeline/memory_budget.h"
 #include "pipeline/output_folder.h"
+#include "pipeline/output_names.h"
 #include "pipeline/progress.h"
 #include "pipeline/run_folder.h"
 #include "pipeline/run_outputs.h"
@@ -78,14 +80,13 @@ FieldResult computeObserverField(const SceneTarget& target, const Scene& scene,
 // Refuses a region whose memory floor exceeds the budget before any of it is allocated, and
 // tells the user at once what the run is about to do. Returns the floor.
 std::uint64_t checkRegionMemory(const FieldSpec& spec, const std::string& what, const RunArgs& args,
-                                std::uint64_t budget_bytes, std::ostream& err) {
+                                bool dense, std::uint64_t budget_bytes, std::ostream& err) {
   const std::array<int, 3> n = spec.nodes();
   const std::string lattice = std::to_string(n[0]) + "×" + std::to_string(n[1]) +
                               (spec.plane ? "" : "×" + std::to_string(n[2]));
-  const std::uint64_t floor_bytes = fieldMemoryFloorBytes(spec, args.uniform);
+  const std::uint64_t floor_bytes = fieldMemoryFloorBytes(spec, dense);
   requireWithinBudget(what + " (" + lattice + " lattice points at " +
-                          formatNumber("%g", spec.voxel_m) + " m" +
-                          (args.uniform ? ", dense" : "") + ")",
+                          formatNumber("%g", spec.voxel_m) + " m" + (dense ? ", dense" : "") + ")",
                       floor_bytes, budget_bytes,
                       "coarsen voxel_m or pixel_m, enlarge block_m, shrink the region, or raise "
                       "--memory");
@@ -116,14 +117,16 @@ FieldSpec firstRegion(const Scene& scene) {
 // Returns what the target is checked against once its facets are made.
 TargetBudget checkRunMemory(const Scene& scene, const RunArgs& args, std::uint64_t budget,
                             bool writer, std::ostream& err) {
+  // An engagement's maps are arrays over the whole lattice, as the dense twin's grids are.
+  const bool dense = args.uniform || scene.engagement.has_value();
   std::uint64_t region_bytes = 0;
   if (scene.observers) {
-    region_bytes = checkRegionMemory(fieldSpec(scene), "observer box", args, budget, err);
+    region_bytes = checkRegionMemory(fieldSpec(scene), "observer box", args, dense, budget, err);
   }
   for (const PlaneSpec& plane : scene.planes) {
-    region_bytes = std::max(
-        region_bytes,
-        checkRegionMemory(planeFieldSpec(scene, plane), "plane " + plane.name, args, budget, err));
+    region_bytes =
+        std::max(region_bytes, checkRegionMemory(planeFieldSpec(scene, plane),
+                                                 "plane " + plane.name, args, dense, budget, err));
   }
   std::uint64_t far_bytes = 0;
   if (scene.far_field.enabled) {
@@ -381,29 +384,43 @@ void runPlanes(const RunContext& c, RunSummary& s) {
   s.j["planes"] = planes;
 }
 
-// An engagement over each plane: the points no bound can prove dark over the span are sampled
-// in time, and each plane's maps, summary entry and lines written.
-void runEngagementPlanes(const RunContext& c, RunSummary& s) {
+// An engagement over the box and each plane: the points no bound can prove dark over the span
+// are sampled in time, and each region's maps, summary entry and lines written.
+void runEngagement(const RunContext& c, RunSummary& s) {
   const EngagementSpec& e = *c.scene.engagement;
   const Motion motion(e.motion, c.scene.laser);
   if (!c.args.quiet) {
+    const std::size_t regions = c.scene.planes.size() + (c.scene.observers ? 1 : 0);
     c.err << "glint run: an engagement of " << formatNumber("%g", motion.durationS()) << " s over "
-          << c.scene.planes.size() << (c.scene.planes.size() == 1 ? " plane" : " planes")
+          << regions << (regions == 1 ? " region" : " regions")
           << "; the far field and the reach judge one pose and are left out\n";
+  }
+  std::ostream* progress = c.args.quiet ? nullptr : &c.err;
+  if (c.scene.observers) {
+    const FieldSpec spec = fieldSpec(c.scene);
+    const EngagementRegion box = engagementRegion(c.target.integrator, c.scene, spec, c.watch,
+                                                  progress, c.args.terminal, "the box", c.exchange);
+    const std::vector<LatticeChannel> channels = box.maps.latticeChannels();
+    c.outputs.writeEngagementBox({spec, channels, c.info});
+    s.j["box"] =
+        engagementRegionJson("box", output_names::kEngagementVdb, spec, box, c.scene.hazard);
+    if (!c.args.quiet) printEngagementRegion(c.err, "the box", spec, box);
   }
   nlohmann::json planes = nlohmann::json::array();
   for (std::size_t p = 0; p < c.scene.planes.size(); ++p) {
     const PlaneSpec& plane = c.scene.planes[p];
-    const EngagementPlane m = engagementPlane(
-        c.target.integrator, c.scene, planeFieldSpec(c.scene, plane), c.watch,
-        c.args.quiet ? nullptr : &c.err, c.args.terminal, "plane " + plane.name, c.exchange);
+    const FieldSpec spec = planeFieldSpec(c.scene, plane);
+    const std::string what = "plane " + plane.name;
+    const EngagementRegion m = engagementRegion(c.target.integrator, c.scene, spec, c.watch,
+                                                progress, c.args.terminal, what, c.exchange);
     const std::vector<ExrChannel> channels = m.maps.channels();
     c.outputs.writeEngagementPlane(p, {m.maps.grid, channels, c.info});
-    planes.push_back(engagementPlaneJson(plane, m.maps, m.results, m.points, c.scene.hazard));
-    if (!c.args.quiet) printEngagementPlane(c.err, plane, m.maps, m.results, m.points);
+    planes.push_back(engagementRegionJson(plane.name, output_names::planeExr(plane.name), spec, m,
+                                          c.scene.hazard));
+    if (!c.args.quiet) printEngagementRegion(c.err, what, spec, m);
   }
   s.j["engagement"] = engagementJson(e);
-  s.j["planes"] = planes;
+  if (!planes.empty()) s.j["planes"] = planes;
 }
 
 // The hazard reach, its files, its entry in the summary and its line on the terminal.
@@ -457,17 +474,12 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   Scene scene = loadScene(args.scene_path, budget);
   overrideAccuracy(scene.accuracy, std::nullopt, args.scheme, scene.source);
   if (scene.engagement) {
-    // Over an engagement glint run maps its planes; the box, the far field and the reach judge
+    // Over an engagement glint run maps its box and planes; the far field and the reach judge
     // one pose.
-    if (scene.observers) {
+    if (!scene.observers && scene.planes.empty()) {
       throw InputError(scene.source +
-                       ": /observers: glint run integrates an engagement over planes only, not "
-                       "yet over a box; give `planes`, or list the points for glint points");
-    }
-    if (scene.planes.empty()) {
-      throw InputError(scene.source +
-                       ": /engagement: glint run integrates an engagement over `planes`: give "
-                       "some, or list the observers for glint points");
+                       ": /engagement: glint run integrates an engagement over `observers` (a "
+                       "box) or `planes`: give one, or list the observers for glint points");
     }
     scene.far_field.enabled = false;
     scene.reach.enabled = false;
@@ -523,7 +535,7 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   if (scene.engagement) {
     summary.j = runJson(info);
     summary.j["hazard"] = hazardJson(scene.hazard, nullptr);
-    runEngagementPlanes(c, summary);
+    runEngagement(c, summary);
     if (writer) finishRun(c, dir, stale, summary);
     return;
   }

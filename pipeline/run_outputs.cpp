@@ -76,7 +76,7 @@ void writePlaneExr(std::ostream& out, const PlaneResults& r) {
 // that takes the field's grids, written last; summary.json lists them in this order, a plane's
 // one a plane.
 struct RunOutputs::Declared {
-  enum class Region { Run, Box, Plane, Far, Reach, EngagementPlane };
+  enum class Region { Run, Box, Plane, Far, Reach, EngagementPlane, EngagementBox };
   const char* name = nullptr;
   std::string (*plane_name)(const std::string&) = nullptr;  // instead of name, a plane's
   Region region = Region::Run;
@@ -85,6 +85,7 @@ struct RunOutputs::Declared {
   void (*far)(std::ostream&, const FarResults&) = nullptr;
   void (*reach)(std::ostream&, const ReachResults&) = nullptr;
   void (*engagement_plane)(std::ostream&, const EngagementPlaneResults&) = nullptr;
+  void (*engagement_box)(std::ostream&, const EngagementBoxResults&) = nullptr;
   bool takes_field = false;    // the box's VDB moves the grids out of the field
   bool staged_folder = false;  // the AMR data set: a folder staged beside its .vthb
   bool aided_only = false;     // written with an optical aid only
@@ -114,6 +115,8 @@ struct RunOutputs::Declared {
         return one_pose && s.wantsReach();
       case Region::EngagementPlane:
         return !one_pose && !s.planes.empty();
+      case Region::EngagementBox:
+        return !one_pose && s.observers.has_value();
     }
     return false;
   }
@@ -123,6 +126,7 @@ struct RunOutputs::Declared {
   void write(std::ostream& out, const FarResults& r) const { far(out, r); }
   void write(std::ostream& out, const ReachResults& r) const { reach(out, r); }
   void write(std::ostream& out, const EngagementPlaneResults& r) const { engagement_plane(out, r); }
+  void write(std::ostream& out, const EngagementBoxResults& r) const { engagement_box(out, r); }
 };
 
 namespace {
@@ -177,14 +181,35 @@ constexpr Declared kOutputs[] = {
            writeExr(out, r.grid, r.channels, exrInfo(r.info));
          },
      .scenario = true},
+    {.name = output_names::kEngagementVdb,
+     .region = Region::EngagementBox,
+     .engagement_box =
+         [](std::ostream& out, const EngagementBoxResults& r) {
+           LatticeMeta meta;
+           meta.strings = {{"program", r.info.program_version},
+                           {"scene_file", r.info.scene_file},
+                           {"scene_fnv1a64", r.info.scene_fnv1a64},
+                           {"length_unit", "m"},
+                           {"mpe_rule", r.info.mpe_rule}};
+           meta.numbers = {{"wavelength_nm", r.info.wavelength_nm},
+                           {"power_w", r.info.power_w},
+                           {"exposure_s", r.info.exposure_s},
+                           {"mpe_w_m2", r.info.mpe_w_m2},
+                           {"voxel_m", r.spec.voxel_m}};
+           if (r.info.optical_aid_gain > 0.0)
+             meta.numbers["optical_aid_gain"] = r.info.optical_aid_gain;
+           writeLatticeVdb(out, r.spec, r.channels, meta);
+         },
+     .scenario = true},
 };
 
 // A scenario writes maps of its box and planes only (its far field is a figure of its
 // result.json), and commits each as it is written: none is a folder to stage.
 static_assert(std::all_of(std::begin(kOutputs), std::end(kOutputs), [](const Declared& d) {
-  return !d.scenario || ((d.region == Region::Box || d.region == Region::Plane ||
-                          d.region == Region::EngagementPlane) &&
-                         !d.staged_folder);
+  return !d.scenario ||
+         ((d.region == Region::Box || d.region == Region::Plane ||
+           d.region == Region::EngagementPlane || d.region == Region::EngagementBox) &&
+          !d.staged_folder);
 }));
 
 // The outputs of @p region in the order they are written: the list's, but the one that takes
@@ -275,6 +300,13 @@ void RunOutputs::writeEngagementPlane(std::size_t index, const EngagementPlaneRe
   }
 }
 
+void RunOutputs::writeEngagementBox(const EngagementBoxResults& box) {
+  if (!writer_) return;
+  for (const Declared* d : writingOrder(Region::EngagementBox)) {
+    if (const std::optional<std::size_t> i = slotOf(*d, 0)) d->write(files_[*i]->stream(), box);
+  }
+}
+
 void RunOutputs::writeFar(const FarResults& far) {
   if (!writer_) return;
   for (const Declared* d : writingOrder(Region::Far)) {
@@ -328,6 +360,7 @@ std::vector<std::string> ScenarioMaps::names() const {
     }
   };
   add(Region::Box, "");
+  add(Region::EngagementBox, "");
   for (const PlaneSpec& plane : scene_.planes) {
     add(Region::Plane, plane.name);
     add(Region::EngagementPlane, plane.name);
@@ -348,6 +381,10 @@ std::vector<std::string> ScenarioMaps::writeEngagementPlane(
     std::size_t index, const EngagementPlaneResults& plane) const {
   return writeScenarioMaps(scene_, dir_, Region::EngagementPlane, scene_.planes.at(index).name,
                            plane);
+}
+
+std::vector<std::string> ScenarioMaps::writeEngagementBox(const EngagementBoxResults& box) const {
+  return writeScenarioMaps(scene_, dir_, Region::EngagementBox, "", box);
 }
 
 std::vector<std::string> ScenarioMaps::folderNames(const Scene& base) {

@@ -16,6 +16,7 @@
 
 #include "export/exr_map.h"
 #include "export/field_files.h"
+#include "export/lattice_vdb.h"
 #include "hazard/hazard.h"
 #include "observers/far_field.h"
 #include "observers/field.h"
@@ -47,6 +48,13 @@ struct PlaneResults {
 struct EngagementPlaneResults {
   const PlaneGrid& grid;
   const std::vector<ExrChannel>& channels;
+  const RunInfo& info;
+};
+
+/// @brief The box's maps over an engagement as its file is written from them.
+struct EngagementBoxResults {
+  const FieldSpec& spec;
+  const std::vector<LatticeChannel>& channels;
   const RunInfo& info;
 };
 
@@ -89,6 +97,8 @@ class RunOutputs {
   void writeBox(BoxResults& box);
   void writePlane(std::size_t index, const PlaneResults& plane);
   void writeEngagementPlane(std::size_t index, const EngagementPlaneResults& plane);
+  /// @brief Writes the box's maps over an engagement (rank 0; nothing on the others).
+  void writeEngagementBox(const EngagementBoxResults& box);
   void writeFar(const FarResults& far);
   void writeReach(const ReachResults& reach);
   /// @brief Where summary.json is written (none unless a writer).
@@ -141,6 +151,9 @@ class ScenarioMaps {
   /// @throw OutputError when one cannot be written.
   std::vector<std::string> writeEngagementPlane(std::size_t index,
                                                 const EngagementPlaneResults& plane) const;
+  /// @brief Writes the box's maps over time (an engagement's); returns their names.
+  /// @throw OutputError when one cannot be written.
+  std::vector<std::string> writeEngagementBox(const EngagementBoxResults& box) const;
 
   /// @brief Every name glint writes in a scenario folder of a study of @p base: scene.json,
   /// result.json and the maps, a box's whether or not @p base has one (another study's

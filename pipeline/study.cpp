@@ -206,13 +206,8 @@ Study parseStudy(std::string_view text, const std::string& source,
     study.scene_text = readUserFile(study.scene_path, "scene file");
     study.base = parseScene(study.scene_text, study.scene_path.string());
     if (study.base.engagement) {
-      // Each scenario is the engagement integrated over the scene's planes, as glint run
-      // integrates it: the box, the far field and the reach judge one pose.
-      if (study.base.observers) {
-        throw InputError(study.scene_path.string() +
-                         ": /observers: an engagement is integrated over planes only, not yet "
-                         "over a box; give the scene `planes`");
-      }
+      // Each scenario is the engagement integrated over the scene's box and planes, as glint
+      // run integrates it: the far field and the reach judge one pose.
       study.base.far_field.enabled = false;
       study.base.reach.enabled = false;
     }

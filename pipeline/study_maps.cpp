@@ -10,7 +10,8 @@
 namespace glint {
 
 std::string StudyLattice::scenarioFile() const {
-  return plane ? output_names::planeExr(name) : output_names::kIrradianceVdb;
+  if (plane) return output_names::planeExr(name);
+  return engagement ? output_names::kEngagementVdb : output_names::kIrradianceVdb;
 }
 
 std::string StudyLattice::studyFile() const {
