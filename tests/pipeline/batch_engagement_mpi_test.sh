@@ -9,13 +9,9 @@ export HWLOC_COMPONENTS=-gl,-opencl  # see batch_mpi_test.sh
 glint=$1 mpiexec=$2 study=$3 work=$4
 rm -rf "$work" && mkdir -p "$work"
 "$glint" batch "$study" -o "$work/one" --threads 2 -q
-forward=()  # the sanitizers' settings, as run_mpi_test.sh passes them
-for var in ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS; do
-  [[ -n ${!var:-} ]] && forward+=(-x "$var")
-done
-[[ -n ${ASAN_OPTIONS:-} ]] && export ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0"
-"$mpiexec" --allow-run-as-root --oversubscribe "${forward[@]}" -np 2 "$glint" batch "$study" \
-  -o "$work/mpi" --threads 1 2> "$work/mpi.log" || { cat "$work/mpi.log" >&2; exit 1; }
+source "$(dirname "$0")/mpi_ranks.sh"
+"$mpiexec" "${ranks[@]}" "$glint" batch "$study" -o "$work/mpi" --threads 1 2> "$work/mpi.log" ||
+  { cat "$work/mpi.log" >&2; exit 1; }
 cat "$work/mpi.log"
 grep -q "on 2 MPI ranks" "$work/mpi.log" || { echo "FAIL: the run did not use 2 ranks" >&2; exit 1; }
 

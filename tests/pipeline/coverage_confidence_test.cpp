@@ -9,6 +9,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "export/exr_map.h"
@@ -119,42 +120,71 @@ TEST(ClopperPearson, TheWholeMapsStatementFailsInAtMostItsShareOfSeeds) {
       static_cast<double>(certain_high) / (static_cast<double>(repeats) * points / 2));
 }
 
-// A study with a known answer (tests/data/jitter_mirror.json): a mirror square to the beam
-// sends it back, and an eye 10 m out on the axis is in the returning pencil exactly when the
-// pointing error θ has 110 m × tan θ < 0.5 m. With Gaussian jitter of σ per axis the true
-// probability is 1 − exp(−(0.5/110)² / 2σ²) = 0.4757 at σ = 4 mrad. Over 100 seeds of 40
-// samples each, the eye's 95 % interval in the study's map holds it at least 95 % of the time
+// Studies of the jittered mirror (tests/data/jitter_mirror.json) in a folder of their own: a
+// mirror square to the beam sends it back, and an eye 10 m out on the axis is in the returning
+// pencil exactly when the pointing error θ has 110 m × tan θ < 0.5 m. With Gaussian jitter of
+// σ per axis the true probability is 1 − exp(−(0.5/110)² / 2σ²) = 0.4757 at σ = 4 mrad.
+struct JitterMirrorStudies {
+  static constexpr double kSigmaRad = 0.004;
+  std::filesystem::path dir;
+
+  explicit JitterMirrorStudies(const std::string& folder)
+      : dir(std::filesystem::temp_directory_path() / folder) {
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    std::filesystem::copy_file(std::filesystem::path(GLINT_TEST_DATA_DIR) / "jitter_mirror.json",
+                               dir / "jitter_mirror.json");
+  }
+  ~JitterMirrorStudies() { std::filesystem::remove_all(dir); }
+  JitterMirrorStudies(const JitterMirrorStudies&) = delete;
+  JitterMirrorStudies& operator=(const JitterMirrorStudies&) = delete;
+
+  [[nodiscard]] static double truth() {
+    const double edge = 0.5 / 110.0;
+    return 1.0 - std::exp(-edge * edge / (2.0 * kSigmaRad * kSigmaRad));
+  }
+  // The study `name` with pointing_jitter {sigma_rad: σ, @p jitter} and the top-level keys
+  // @p more, run quietly into dir/name.
+  test::Outcome run(const std::string& name, const std::string& jitter,
+                    const std::string& more = "") const {
+    std::ofstream(dir / (name + ".json"))
+        << R"({"scene": "jitter_mirror.json", )" << more << R"("pointing_jitter": {"sigma_rad": )"
+        << kSigmaRad << ", " << jitter << "}}";
+    std::filesystem::remove_all(out(name));
+    return test::glint(
+        {"batch", (dir / (name + ".json")).string(), "-o", out(name).string(), "-q"});
+  }
+  [[nodiscard]] std::filesystem::path out(const std::string& name) const { return dir / name; }
+  // The eye's coverage interval (pixel 0, 1.4 mm off the axis: its probability differs from the
+  // axis's by ~0.3 %) in the study's map.
+  [[nodiscard]] std::pair<double, double> eyeInterval(const std::string& name) const {
+    const std::string map = (out(name) / "eye.exr").string();
+    int w = 0, h = 0;
+    return {static_cast<double>(readExrChannel(map, "coverage_lower", w, h)[0]),
+            static_cast<double>(readExrChannel(map, "coverage_upper", w, h)[0])};
+  }
+};
+
+// A study with a known answer (JitterMirrorStudies): over 100 seeds of 40 samples each, the
+// eye's 95 % interval in the study's map holds the true probability at least 95 % of the time
 // (less three standard errors of that rate over 100 seeds).
 TEST(ClopperPearson, AStudysIntervalsHoldAKnownProbabilityAtTheirRateOverSeeds) {
-  namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / "glint_coverage_seeds";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  fs::copy_file(fs::path(GLINT_TEST_DATA_DIR) / "jitter_mirror.json", dir / "jitter_mirror.json");
-  const double sigma = 0.004, edge = 0.5 / 110.0;
-  const double truth = 1.0 - std::exp(-edge * edge / (2.0 * sigma * sigma));
+  const JitterMirrorStudies studies("glint_coverage_seeds");
+  const double truth = JitterMirrorStudies::truth();
   const int seeds = 100, samples = 40;
   int held = 0;
   double mean_fraction = 0.0;
   for (int seed = 1; seed <= seeds; ++seed) {
-    std::ofstream(dir / "study.json")
-        << R"({"scene": "jitter_mirror.json", "pointing_jitter": {"sigma_rad": )" << sigma
-        << R"(, "samples": )" << samples << R"(, "seed": )" << seed << "}}";
-    const fs::path out = dir / "out";
-    fs::remove_all(out);
-    const test::Outcome run =
-        test::glint({"batch", (dir / "study.json").string(), "-o", out.string(), "-q"});
+    const test::Outcome run = studies.run("seed", R"("samples": )" + std::to_string(samples) +
+                                                      R"(, "seed": )" + std::to_string(seed));
     ASSERT_EQ(run.status, 0) << run.err;
+    const auto [lower, upper] = studies.eyeInterval("seed");
     int w = 0, h = 0;
-    // Pixel 0 lies 1.4 mm off the axis: its probability differs from the axis's by ~0.3 %.
-    const float lower = readExrChannel((out / "eye.exr").string(), "coverage_lower", w, h)[0];
-    const float upper = readExrChannel((out / "eye.exr").string(), "coverage_upper", w, h)[0];
-    mean_fraction += static_cast<double>(readExrChannel((out / "eye.exr").string(),
+    mean_fraction += static_cast<double>(readExrChannel((studies.out("seed") / "eye.exr").string(),
                                                         "coverage_probability", w, h)[0]) /
                      seeds;
-    held += static_cast<double>(lower) <= truth && truth <= static_cast<double>(upper) ? 1 : 0;
+    held += lower <= truth && truth <= upper ? 1 : 0;
   }
-  fs::remove_all(dir);
   const double rate = static_cast<double>(held) / seeds;
   EXPECT_GE(rate, 0.95 - 3.0 * std::sqrt(0.95 * 0.05 / seeds)) << held << " of " << seeds;
   // The premise: the study sees the probability the geometry says (the mean of 100 fractions
@@ -174,66 +204,52 @@ TEST(ClopperPearson, AStudysIntervalsHoldAKnownProbabilityAtTheirRateOverSeeds) 
 // probability at their rate (the stop depends on the data, and the intervals do not allow for
 // it: this measures what that costs).
 TEST(StudyPrecision, StopsAtTheFirstRoundWithinItAndHoldsItsConfidence) {
-  namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / "glint_study_precision";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  fs::copy_file(fs::path(GLINT_TEST_DATA_DIR) / "jitter_mirror.json", dir / "jitter_mirror.json");
-  const double sigma = 0.004, edge = 0.5 / 110.0;
-  const double truth = 1.0 - std::exp(-edge * edge / (2.0 * sigma * sigma));
-  auto study = [&](const std::string& name, const std::string& jitter) {
-    std::ofstream(dir / (name + ".json"))
-        << R"({"scene": "jitter_mirror.json", "pointing_jitter": {"sigma_rad": 0.004, )" << jitter
-        << "}}";
-    const fs::path out = dir / name;
-    fs::remove_all(out);
-    const test::Outcome run =
-        test::glint({"batch", (dir / (name + ".json")).string(), "-o", out.string(), "-q"});
-    EXPECT_EQ(run.status, 0) << run.err;
-    return out;
-  };
-  auto widest = [](const fs::path& out) {
+  const JitterMirrorStudies studies("glint_study_precision");
+  const double truth = JitterMirrorStudies::truth();
+  auto widest = [&](const std::string& name) {
+    const std::string map = (studies.out(name) / "eye.exr").string();
     int w = 0, h = 0;
-    const std::vector<float> lo =
-        readExrChannel((out / "eye.exr").string(), "coverage_lower", w, h);
-    const std::vector<float> hi =
-        readExrChannel((out / "eye.exr").string(), "coverage_upper", w, h);
+    const std::vector<float> lo = readExrChannel(map, "coverage_lower", w, h);
+    const std::vector<float> hi = readExrChannel(map, "coverage_upper", w, h);
     double widest_half = 0.0;
     for (std::size_t i = 0; i < lo.size(); ++i)
       widest_half =
           std::max(widest_half, 0.5 * (static_cast<double>(hi[i]) - static_cast<double>(lo[i])));
     return widest_half;
   };
-  const fs::path stopped = study("stopped", R"("precision": 0.1, "seed": 5)");
-  const auto summary = nlohmann::json::parse(std::ifstream(stopped / "summary.json"));
+  for (const auto& [name, jitter] : {std::pair{"stopped", R"("precision": 0.1, "seed": 5)"},
+                                     std::pair{"fewer", R"("samples": 64, "seed": 5)"},
+                                     std::pair{"fixed", R"("samples": 128, "seed": 5)"}}) {
+    const test::Outcome run = studies.run(name, jitter);
+    ASSERT_EQ(run.status, 0) << name << ": " << run.err;
+  }
+  const auto summary =
+      nlohmann::json::parse(std::ifstream(studies.out("stopped") / "summary.json"));
   const nlohmann::json& p = summary.at("precision");
   EXPECT_TRUE(p.at("reached").get<bool>()) << p;
   EXPECT_EQ(p.at("jitter_samples"), 128) << p;
   EXPECT_EQ(summary.at("scenarios").at("count"), 128) << summary.at("scenarios");
-  EXPECT_LE(widest(stopped), 0.1) << "the map's own intervals";
-  EXPECT_NEAR(widest(stopped), p.at("widest_half_width").get<double>(), 1e-6);
-  EXPECT_GT(widest(study("fewer", R"("samples": 64, "seed": 5)")), 0.1)
-      << "64 samples must not have been enough, or the study stopped late";
-  const fs::path fixed = study("fixed", R"("samples": 128, "seed": 5)");
-  EXPECT_EQ(test::readFile(stopped / "eye.exr"), test::readFile(fixed / "eye.exr"))
+  EXPECT_LE(widest("stopped"), 0.1) << "the map's own intervals";
+  EXPECT_NEAR(widest("stopped"), p.at("widest_half_width").get<double>(), 1e-6);
+  EXPECT_GT(widest("fewer"), 0.1) << "64 samples must not have been enough, or it stopped late";
+  EXPECT_EQ(test::readFile(studies.out("stopped") / "eye.exr"),
+            test::readFile(studies.out("fixed") / "eye.exr"))
       << "the stopped study's map is the map of as many samples";
 
   const int seeds = 100;
   int held = 0, samples = 0;
   for (int seed = 1; seed <= seeds; ++seed) {
-    const fs::path out = study("seed", R"("precision": 0.1, "seed": )" + std::to_string(seed));
-    int w = 0, h = 0;
-    const float lower = readExrChannel((out / "eye.exr").string(), "coverage_lower", w, h)[0];
-    const float upper = readExrChannel((out / "eye.exr").string(), "coverage_upper", w, h)[0];
-    ASSERT_LE(0.5 * (static_cast<double>(upper) - static_cast<double>(lower)), 0.1)
-        << "seed " << seed;
-    held += static_cast<double>(lower) <= truth && truth <= static_cast<double>(upper) ? 1 : 0;
-    samples += nlohmann::json::parse(std::ifstream(out / "summary.json"))
+    const test::Outcome run =
+        studies.run("seed", R"("precision": 0.1, "seed": )" + std::to_string(seed));
+    ASSERT_EQ(run.status, 0) << run.err;
+    const auto [lower, upper] = studies.eyeInterval("seed");
+    ASSERT_LE(0.5 * (upper - lower), 0.1) << "seed " << seed;
+    held += lower <= truth && truth <= upper ? 1 : 0;
+    samples += nlohmann::json::parse(std::ifstream(studies.out("seed") / "summary.json"))
                    .at("precision")
                    .at("jitter_samples")
                    .get<int>();
   }
-  fs::remove_all(dir);
   const double rate = static_cast<double>(held) / seeds;
   EXPECT_GE(rate, 0.95 - 3.0 * std::sqrt(0.95 * 0.05 / seeds)) << held << " of " << seeds;
   std::printf(
@@ -245,23 +261,15 @@ TEST(StudyPrecision, StopsAtTheFirstRoundWithinItAndHoldsItsConfidence) {
 // With a sweep beside the jitter, the scenarios of one jitter sample are not independent trials:
 // the intervals would be too narrow and a precision reached too soon, so it is refused.
 TEST(StudyPrecision, IsRefusedBesideASweepWhoseScenariosShareTheirJitter) {
-  namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / "glint_study_precision_sweep";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  fs::copy_file(fs::path(GLINT_TEST_DATA_DIR) / "jitter_mirror.json", dir / "jitter_mirror.json");
-  std::ofstream(dir / "study.json")
-      << R"({"scene": "jitter_mirror.json", "sweep": {"specular_reflectance": [0.9, 1.0]},
-             "pointing_jitter": {"sigma_rad": 0.004, "precision": 0.1}})";
-  const test::Outcome run =
-      test::glint({"batch", (dir / "study.json").string(), "-o", (dir / "out").string()});
+  const JitterMirrorStudies studies("glint_study_precision_sweep");
+  const test::Outcome run = studies.run("swept", R"("precision": 0.1)",
+                                        R"("sweep": {"specular_reflectance": [0.9, 1.0]}, )");
   EXPECT_EQ(run.status, 2) << run.err;
   EXPECT_NE(run.err.find("/pointing_jitter/precision: a precision is for a study whose only "
                          "variation is the jitter; this one has 2 combinations"),
             std::string::npos)
       << run.err;
-  EXPECT_FALSE(fs::exists(dir / "out"));
-  fs::remove_all(dir);
+  EXPECT_FALSE(std::filesystem::exists(studies.out("swept")));
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -172,6 +173,57 @@ TEST(EngagementRun, ABoxWhoseMapsOutgrowTheBudgetIsRefusedBeforeTheWork) {
   EXPECT_FALSE(fs::exists(f.dir / "out"));
 }
 
+// A region's maps of glint run over an engagement, per lattice point.
+struct RegionMaps {
+  const std::vector<float>& status;
+  const std::vector<float>& exposure_j_m2;
+  const std::vector<float>& hazard_ratio;
+};
+
+// The maps against glint points at up to @p per_kind of the region's dark points and of its
+// integrated ones (every @p stride-th point, placed by @p position): a point the bound proved
+// dark reads at most the floor at every sample, and an integrated point's map values are the
+// table's (floats of its doubles).
+void expectMapsAreGlintPoints(const Folder& f, const fs::path& scene, const RegionMaps& maps,
+                              int per_kind, std::size_t stride,
+                              const std::function<Vec3(std::size_t)>& position) {
+  std::string points = "x,y,z\n";
+  std::vector<std::size_t> chosen;
+  int dark_chosen = 0, lit_chosen = 0;
+  for (std::size_t p = 0; p < maps.status.size(); p += stride) {
+    int& kind = maps.status[p] == 3.0f ? dark_chosen : lit_chosen;
+    if (kind == per_kind) continue;
+    ++kind;
+    chosen.push_back(p);
+    const Vec3 x = position(p);
+    points += std::to_string(x.x) + "," + std::to_string(x.y) + "," + std::to_string(x.z) + "\n";
+  }
+  EXPECT_GT(dark_chosen, 0);
+  EXPECT_GT(lit_chosen, 0);
+  const test::Outcome o =
+      glint({"points", scene.string(), "--points", f.write("points.csv", points).string(), "--out",
+             (f.dir / "table.csv").string()});
+  ASSERT_EQ(o.status, 0) << o.err;
+  const auto table = csv(test::readFile(f.dir / "table.csv"));
+  std::map<std::string, std::size_t> column;
+  for (std::size_t c = 0; c < table[0].size(); ++c) column[table[0][c]] = c;
+  for (std::size_t r = 0; r < chosen.size(); ++r) {
+    const std::size_t p = chosen[r];
+    const std::vector<std::string>& row = table[r + 1];
+    const double h = std::stod(row[column["exposure_j_m2"]]);
+    if (maps.status[p] == 3.0f) {
+      // Dark by the bound: below the floor (a thousandth of the 50 W/m² MPE) at every instant.
+      EXPECT_LE(std::stod(row[column["peak_irradiance_w_m2"]]), 0.05) << "point " << p;
+      EXPECT_EQ(maps.exposure_j_m2[p], 0.0f) << "point " << p;
+    } else {
+      EXPECT_EQ(maps.status[p], 1.0f) << "point " << p;
+      EXPECT_NEAR(maps.exposure_j_m2[p], h, 1e-6 * h + 1e-30) << "point " << p;
+      EXPECT_NEAR(maps.hazard_ratio[p], std::stod(row[column["hazard_ratio"]]), 1e-6)
+          << "point " << p;
+    }
+  }
+}
+
 // glint run over an engagement maps its planes: a point the bound proves dark over the whole
 // span is dark at every instant glint points samples, and an integrated point's map values are
 // the table's for the same point.
@@ -196,43 +248,11 @@ TEST(EngagementRun, APlanesMapsAreWhatGlintPointsGivesAtItsPoints) {
   const std::vector<float> status = readExrChannel(exr, "status", width, height);
   const std::vector<float> exposure = readExrChannel(exr, "exposure_j_m2", width, height);
   const std::vector<float> ratio = readExrChannel(exr, "hazard_ratio", width, height);
-  // Up to 15 points of each kind, through glint points.
-  std::string points = "x,y,z\n";
-  std::vector<std::size_t> chosen;
-  int dark_chosen = 0, lit_chosen = 0;
-  for (std::size_t p = 0; p < status.size(); ++p) {
-    int& kind = status[p] == 3.0f ? dark_chosen : lit_chosen;
-    if (kind == 15) continue;
-    ++kind;
-    chosen.push_back(p);
-    const int i = static_cast<int>(p % static_cast<std::size_t>(width));
-    const int j = static_cast<int>(p / static_cast<std::size_t>(width));
-    points += "-50," + std::to_string(-20.0 + i) + "," + std::to_string(-1.0 + j) + "\n";
-  }
-  EXPECT_GT(dark_chosen, 0);
-  EXPECT_GT(lit_chosen, 0);
-  const fs::path points_path = f.write("points.csv", points);
-  const test::Outcome o = glint({"points", scene_path.string(), "--points", points_path.string(),
-                                 "--out", (f.dir / "table.csv").string()});
-  ASSERT_EQ(o.status, 0) << o.err;
-  const auto table = csv(test::readFile(f.dir / "table.csv"));
-  std::map<std::string, std::size_t> column;
-  for (std::size_t i = 0; i < table[0].size(); ++i) column[table[0][i]] = i;
-  for (std::size_t k = 0; k < chosen.size(); ++k) {
-    const std::size_t p = chosen[k];
-    const double h = std::stod(table[k + 1][column["exposure_j_m2"]]);
-    const double peak = std::stod(table[k + 1][column["peak_irradiance_w_m2"]]);
-    if (status[p] == 3.0f) {
-      // Dark by the bound: below the floor (a thousandth of the 50 W/m² MPE) at every instant.
-      EXPECT_LE(peak, 0.05) << "point " << p;
-      EXPECT_EQ(exposure[p], 0.0f);
-    } else {
-      EXPECT_EQ(status[p], 1.0f) << "point " << p;
-      // The map holds floats of the table's doubles.
-      EXPECT_NEAR(exposure[p], h, 1e-6 * h + 1e-30) << "point " << p;
-      EXPECT_NEAR(ratio[p], std::stod(table[k + 1][column["hazard_ratio"]]), 1e-6) << "point " << p;
-    }
-  }
+  expectMapsAreGlintPoints(f, scene_path, {status, exposure, ratio}, 15, 1, [&](std::size_t p) {
+    const auto i = static_cast<double>(p % static_cast<std::size_t>(width));
+    const auto j = static_cast<double>(p / static_cast<std::size_t>(width));
+    return Vec3(-50.0, -20.0 + i, -1.0 + j);
+  });
   EXPECT_NE(run.err.find("plane wall:"), std::string::npos) << run.err;
 }
 
@@ -271,45 +291,12 @@ TEST(EngagementRun, ABoxsGridsAreWhatGlintPointsGivesAtItsPoints) {
   // Float ratios a rounding from 1 may count apart from the doubles the summary counted.
   EXPECT_NEAR(box.at("hazard_volume_m3").get<double>(), static_cast<double>(hazardous) * 0.125,
               0.125);
-  // Up to 10 points of each kind, through glint points.
-  std::string points = "x,y,z\n";
-  std::vector<std::size_t> chosen;
-  int dark_chosen = 0, lit_chosen = 0;
-  for (std::size_t p = 0; p < status.size(); p += 7) {
-    int& kind = status[p] == 3.0f ? dark_chosen : lit_chosen;
-    if (kind == 10) continue;
-    ++kind;
-    chosen.push_back(p);
-    const auto i = static_cast<int>(p % static_cast<std::size_t>(n[0]));
-    const auto j =
-        static_cast<int>(p / static_cast<std::size_t>(n[0]) % static_cast<std::size_t>(n[1]));
-    const auto k =
-        static_cast<int>(p / (static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1])));
-    const Vec3 x = spec.position(i, j, k);
-    points += std::to_string(x.x) + "," + std::to_string(x.y) + "," + std::to_string(x.z) + "\n";
-  }
-  EXPECT_GT(dark_chosen, 0);
-  EXPECT_GT(lit_chosen, 0);
-  const test::Outcome o =
-      glint({"points", scene_path.string(), "--points", f.write("points.csv", points).string(),
-             "--out", (f.dir / "table.csv").string()});
-  ASSERT_EQ(o.status, 0) << o.err;
-  const auto table = csv(test::readFile(f.dir / "table.csv"));
-  std::map<std::string, std::size_t> column;
-  for (std::size_t c = 0; c < table[0].size(); ++c) column[table[0][c]] = c;
-  for (std::size_t r = 0; r < chosen.size(); ++r) {
-    const std::size_t p = chosen[r];
-    const double h = std::stod(table[r + 1][column["exposure_j_m2"]]);
-    if (status[p] == 3.0f) {
-      // Dark by the bound: below the floor (a thousandth of the 50 W/m² MPE) at every instant.
-      EXPECT_LE(std::stod(table[r + 1][column["peak_irradiance_w_m2"]]), 0.05) << "point " << p;
-      EXPECT_EQ(exposure[p], 0.0f);
-    } else {
-      EXPECT_EQ(status[p], 1.0f) << "point " << p;
-      EXPECT_NEAR(exposure[p], h, 1e-6 * h + 1e-30) << "point " << p;
-      EXPECT_NEAR(ratio[p], std::stod(table[r + 1][column["hazard_ratio"]]), 1e-6) << "point " << p;
-    }
-  }
+  expectMapsAreGlintPoints(f, scene_path, {status, exposure, ratio}, 10, 7, [&](std::size_t p) {
+    const std::size_t row = static_cast<std::size_t>(n[0]);
+    const std::size_t layer = row * static_cast<std::size_t>(n[1]);
+    return spec.position(static_cast<int>(p % row), static_cast<int>(p / row % n[1]),
+                         static_cast<int>(p / layer));
+  });
 }
 
 TEST(EngagementPoints, CommandsThatCannotIntegrateAnEngagementRefuseIt) {

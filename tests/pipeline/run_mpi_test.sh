@@ -9,17 +9,9 @@ export HWLOC_COMPONENTS=-gl,-opencl  # see batch_mpi_test.sh
 glint=$1 mpiexec=$2 scene=$3 work=$4
 rm -rf "$work" && mkdir -p "$work"
 "$glint" run "$scene" -o "$work/one" --threads 2 -q
-# Under the sanitizers (.ci/sanitize) the ranks get the suppressions explicitly, and no leak
-# check: Open MPI's collective components, loaded with dlopen, keep what they allocate on the
-# first MPI_Allgather past MPI_Finalize, and their frames are unknown modules no suppression can
-# name. The one-process run above keeps the leak check on the same code.
-forward=()
-for var in ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS; do
-  [[ -n ${!var:-} ]] && forward+=(-x "$var")
-done
-[[ -n ${ASAN_OPTIONS:-} ]] && export ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0"
-"$mpiexec" --allow-run-as-root --oversubscribe "${forward[@]}" -np 2 "$glint" run "$scene" \
-  -o "$work/mpi" --threads 1 2> "$work/mpi.log" || { cat "$work/mpi.log" >&2; exit 1; }
+source "$(dirname "$0")/mpi_ranks.sh"
+"$mpiexec" "${ranks[@]}" "$glint" run "$scene" -o "$work/mpi" --threads 1 2> "$work/mpi.log" ||
+  { cat "$work/mpi.log" >&2; exit 1; }
 cat "$work/mpi.log"
 grep -q "2 MPI ranks share" "$work/mpi.log" || { echo "FAIL: the run did not use 2 ranks" >&2; exit 1; }
 
