@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstring>
 #include <functional>
 #include <memory>
 #include <stdexcept>
@@ -135,58 +134,34 @@ BallBound boundOverInterval(const FacetIntegrator& swept, const Motion& motion, 
   return swept.boundBall(centre, radius_m + sweep, swept.candidates(), 0.0, o, kept);
 }
 
-// One rank's histories on the wire (integrateExposures() under MPI): each is its sample count,
-// times, irradiances and totals, in this machine's byte order (the ranks of one job share it).
-struct HistoryWire {
-  std::vector<std::byte> bytes;
-  std::size_t at = 0;
+// One observer's history on the wire (integrateExposures() under MPI): its sample count,
+// times, irradiances and totals.
+void putHistory(WireWriter& out, const ExposureHistory& h) {
+  out.put<std::uint64_t>(h.time_s.size());
+  for (double t : h.time_s) out.put(t);
+  for (double e : h.irradiance_w_m2) out.put(e);
+  for (double v : {h.exposure_j_m2, h.error_j_m2, h.peak_w_m2, h.peak_time_s}) out.put(v);
+  out.put<std::int64_t>(h.evaluations);
+  out.put<std::uint8_t>(h.converged ? 1 : 0);
+}
 
-  template <typename T>
-  void put(T v) {
-    const auto* p = reinterpret_cast<const std::byte*>(&v);
-    bytes.insert(bytes.end(), p, p + sizeof v);
-  }
-  template <typename T>
-  T get() {
-    T v{};
-    if (bytes.size() - at < sizeof v) {
-      // A short message would leave an observer unlit, read as "no hazard": refuse it.
-      throw std::runtime_error("exposure exchange: a rank's message ended early");
-    }
-    std::memcpy(&v, bytes.data() + at, sizeof v);
-    at += sizeof v;
-    return v;
-  }
-  [[nodiscard]] bool done() const { return at == bytes.size(); }
-
-  void putHistory(const ExposureHistory& h) {
-    put<std::uint64_t>(h.time_s.size());
-    for (double t : h.time_s) put(t);
-    for (double e : h.irradiance_w_m2) put(e);
-    for (double v : {h.exposure_j_m2, h.error_j_m2, h.peak_w_m2, h.peak_time_s}) put(v);
-    put<std::int64_t>(h.evaluations);
-    put<std::uint8_t>(h.converged ? 1 : 0);
-  }
-  ExposureHistory getHistory(std::size_t rank) {
-    ExposureHistory h;
-    const auto n = get<std::uint64_t>();
-    if (n > (bytes.size() - at) / (2 * sizeof(double))) {
-      throw std::runtime_error("exposure exchange: rank " + std::to_string(rank) +
-                               " sent a history longer than its message");
-    }
-    h.time_s.resize(n);
-    h.irradiance_w_m2.resize(n);
-    for (double& t : h.time_s) t = get<double>();
-    for (double& e : h.irradiance_w_m2) e = get<double>();
-    h.exposure_j_m2 = get<double>();
-    h.error_j_m2 = get<double>();
-    h.peak_w_m2 = get<double>();
-    h.peak_time_s = get<double>();
-    h.evaluations = get<std::int64_t>();
-    h.converged = get<std::uint8_t>() != 0;
-    return h;
-  }
-};
+ExposureHistory getHistory(WireReader& in) {
+  ExposureHistory h;
+  const auto n = in.get<std::uint64_t>();
+  if (n > in.left() / (2 * sizeof(double)))
+    throw std::runtime_error("exposure exchange: a history longer than its message");
+  h.time_s.resize(n);
+  h.irradiance_w_m2.resize(n);
+  for (double& t : h.time_s) t = in.get<double>();
+  for (double& e : h.irradiance_w_m2) e = in.get<double>();
+  h.exposure_j_m2 = in.get<double>();
+  h.error_j_m2 = in.get<double>();
+  h.peak_w_m2 = in.get<double>();
+  h.peak_time_s = in.get<double>();
+  h.evaluations = in.get<std::int64_t>();
+  h.converged = in.get<std::uint8_t>() != 0;
+  return h;
+}
 
 class ExposureRun {
  public:
@@ -501,39 +476,18 @@ std::vector<ExposureHistory> integrateExposures(const FacetIntegrator& reference
   if (exchange == nullptr || exchange->size() <= 1) {
     return ExposureRun(reference, motion, observers_m, options, counter).run();
   }
-  // Every size-th observer from this rank on: neighbours in a points file or a plane cost
-  // alike, so interleaving balances the ranks better than cutting the list in runs.
-  const auto share = static_cast<std::size_t>(exchange->size());
-  const auto rank = static_cast<std::size_t>(exchange->rank());
-  std::vector<Vec3> mine_m;
-  for (std::size_t o = rank; o < observers_m.size(); o += share) mine_m.push_back(observers_m[o]);
-  std::vector<ExposureHistory> mine;
-  bool stopped = false;
-  try {
-    mine = ExposureRun(reference, motion, mine_m, options, counter).run();
-  } catch (const WorkStopped&) {
-    stopped = true;  // said to the others, so that every rank stops here
-  }
-  HistoryWire wire;
-  wire.put<std::uint8_t>(stopped ? 1 : 0);
-  for (const ExposureHistory& h : mine) wire.putHistory(h);
-  const std::vector<std::vector<std::byte>> all = exchange->allGather(wire.bytes);
   std::vector<ExposureHistory> out(observers_m.size());
-  for (std::size_t p = 0; p < all.size(); ++p) {
-    HistoryWire from{all[p]};
-    if (from.get<std::uint8_t>() != 0) stopped = true;
-  }
-  if (stopped) throw WorkStopped();
-  if (all.size() != share) throw std::runtime_error("exposure exchange: wrong number of ranks");
-  for (std::size_t p = 0; p < share; ++p) {
-    HistoryWire from{all[p]};
-    from.get<std::uint8_t>();
-    for (std::size_t o = p; o < observers_m.size(); o += share) out[o] = from.getHistory(p);
-    if (!from.done()) {
-      throw std::runtime_error("exposure exchange: rank " + std::to_string(p) +
-                               " sent more than its observers' histories");
-    }
-  }
+  shareObservers(
+      *exchange, observers_m.size(),
+      [&](std::span<const std::size_t> mine, WireWriter& to) {
+        std::vector<Vec3> mine_m;
+        for (std::size_t o : mine) mine_m.push_back(observers_m[o]);
+        for (const ExposureHistory& h :
+             ExposureRun(reference, motion, mine_m, options, counter).run()) {
+          putHistory(to, h);
+        }
+      },
+      [&](std::size_t o, WireReader& from) { out[o] = getHistory(from); });
   return out;
 }
 

@@ -5,6 +5,8 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
+#include <functional>
 #include <span>
 #include <stdexcept>
 #include <vector>
@@ -42,6 +44,55 @@ class PointExchange {
   virtual std::vector<std::vector<std::byte>> allGather(std::span<const std::byte> mine) = 0;
 };
 
+/// @brief Records written for another process (its machine's byte order: the processes of one
+/// job share it).
+class WireWriter {
+ public:
+  template <typename T>
+  void put(T value) {
+    const auto* p = reinterpret_cast<const std::byte*>(&value);
+    bytes_.insert(bytes_.end(), p, p + sizeof value);
+  }
+  void append(std::span<const std::byte> bytes) {
+    bytes_.insert(bytes_.end(), bytes.begin(), bytes.end());
+  }
+  [[nodiscard]] std::span<const std::byte> bytes() const { return bytes_; }
+
+ private:
+  std::vector<std::byte> bytes_;
+};
+
+/// @brief Records a process sent, read in the order they were written.
+class WireReader {
+ public:
+  explicit WireReader(std::span<const std::byte> bytes) : bytes_(bytes) {}
+  /// @throw std::runtime_error when the message ends before the value: a short message would
+  /// leave an observer unlit, read as "no hazard".
+  template <typename T>
+  T get() {
+    T value{};
+    if (bytes_.size() - at_ < sizeof value)
+      throw std::runtime_error("observer exchange: a process's message ended early");
+    std::memcpy(&value, bytes_.data() + at_, sizeof value);
+    at_ += sizeof value;
+    return value;
+  }
+  [[nodiscard]] std::size_t left() const { return bytes_.size() - at_; }
+
+ private:
+  std::span<const std::byte> bytes_;
+  std::size_t at_ = 0;
+};
+
+/// @brief Shares @p observers observers among the processes of @p exchange: on each,
+/// @p compute gets its share (every size-th index from its rank on, in order) and writes each
+/// one's record, in that order; then every process receives every record, and @p take reads
+/// observer i's. Collective: every process calls it alike.
+/// @throw WorkStopped when @p compute threw it on any process (every process stops here).
+void shareObservers(PointExchange& exchange, std::size_t observers,
+                    const std::function<void(std::span<const std::size_t>, WireWriter&)>& compute,
+                    const std::function<void(std::size_t, WireReader&)>& take);
+
 /// @brief The work was stopped through WorkCounter::stop; the one who raised it says why.
 class WorkStopped : public std::runtime_error {
  public:
@@ -58,9 +109,12 @@ struct PointScheme {
 /// points. Each thread reuses one workspace, so no allocation happens per point once the
 /// workspaces have grown. Results do not depend on the number of threads.
 /// @param counter optional; advanced as points complete.
+/// @param exchange optional: the processes of an MPI job share the points (shareObservers()),
+/// and each returns them all, as one process would.
 std::vector<ObserverResult> evaluatePoints(const FacetIntegrator& integrator,
                                            std::span<const Vec3> points_m,
                                            const PointScheme& scheme,
-                                           WorkCounter* counter = nullptr);
+                                           WorkCounter* counter = nullptr,
+                                           PointExchange* exchange = nullptr);
 
 }  // namespace glint

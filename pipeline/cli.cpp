@@ -35,7 +35,8 @@ Failure failureOf(const std::exception& e) {
   return {kExitInternalError, "internal error: "};
 }
 
-// `glint batch` or `glint run` (@p work) on one process or as one rank of an MPI job. Alone,
+// `glint points`, `glint batch` or `glint run` (@p work) on one process or as one rank of an
+// MPI job. Alone,
 // errors go to the caller's handler; as a rank, an error on one rank ends them all
 // (MPI_Abort): the others would wait for it for ever.
 int runOnCluster(Cluster& cluster, std::ostream& err, const std::function<void()>& work) {
@@ -205,7 +206,13 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
       if (!points_memory.empty()) points.memory_bytes = *parseByteSize(points_memory);
       if (*time_series_opt) points.time_series_path = time_series;
       points.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
-      runPoints(points, out, err);
+      Cluster cluster;
+      if (cluster.size() > 1 && cluster.rank() == 0 && !points.quiet) {
+        err << "glint points: " << cluster.size() << " MPI ranks share the observers\n";
+      }
+      return runOnCluster(cluster, err, [&] {
+        runPoints(points, out, err, cluster.size() > 1 ? &cluster : nullptr);
+      });
     }
     if (app.got_subcommand(run_cmd)) {
       run.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;

@@ -215,7 +215,8 @@ struct Evaluated {
 // next one once the budget is spent.
 // @throw std::runtime_error when the budget is spent or a result is not finite.
 Evaluated evaluateObservers(const FacetIntegrator& integrator, const std::vector<Vec3>& points,
-                            const PointsArgs& args, const MemoryWatch& watch, std::ostream& err) {
+                            const PointsArgs& args, const MemoryWatch& watch, std::ostream& err,
+                            PointExchange* exchange) {
   PointScheme scheme;
   if (args.uniform_level) {
     scheme.uniform = true;
@@ -228,11 +229,14 @@ Evaluated evaluateObservers(const FacetIntegrator& integrator, const std::vector
   {
     std::unique_ptr<ProgressReporter> progress;
     if (!args.quiet) {
-      progress = std::make_unique<ProgressReporter>(err, args.terminal, "observers", points.size(),
-                                                    counter);
+      // Under MPI this rank's share: every size-th point from its rank on.
+      const std::size_t ranks =
+          exchange != nullptr ? static_cast<std::size_t>(exchange->size()) : 1;
+      progress = std::make_unique<ProgressReporter>(err, args.terminal, "observers",
+                                                    (points.size() + ranks - 1) / ranks, counter);
     }
     try {
-      e.results = evaluatePoints(integrator, points, scheme, &counter);
+      e.results = evaluatePoints(integrator, points, scheme, &counter, exchange);
     } catch (const WorkStopped&) {
       if (progress) progress->stop();
       watch.check("the observer points", kAdvice);
@@ -281,7 +285,13 @@ void report(std::ostream& err, const PointsArgs& args, const Scene& scene,
 
 }  // namespace
 
-void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
+void runPoints(const PointsArgs& requested, std::ostream& out, std::ostream& err,
+               PointExchange* exchange) {
+  // Under MPI every rank computes its share of the observers and receives the others'; rank 0
+  // alone reports and writes.
+  const bool writer = exchange == nullptr || exchange->rank() == 0;
+  PointsArgs args = requested;
+  if (!writer) args.quiet = true;
   const std::uint64_t budget =
       args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
   // A mesh is refused before it is decoded, the target before it is built.
@@ -308,8 +318,12 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
                         "split the points file, lower engagement.time.initial_intervals or raise "
                         "--memory");
   }
-  std::unique_ptr<AtomicFile> file = openOutput(args, scene);
-  std::unique_ptr<AtomicFile> series = openTimeSeries(args, scene);
+  std::unique_ptr<AtomicFile> file;
+  std::unique_ptr<AtomicFile> series;
+  if (writer) {
+    file = openOutput(args, scene);
+    series = openTimeSeries(args, scene);
+  }
   if (file || series) pauseForTestsAfterTemporaries(err);
 
   std::unique_ptr<tbb::global_control> thread_limit;
@@ -328,7 +342,8 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
   if (scene.engagement) {
     const EngagementResults results =
         sampleEngagement(integrator, scene, points, watch, args.quiet ? nullptr : &err,
-                         args.terminal, "the observers");
+                         args.terminal, "the observers", exchange);
+    if (!writer) return;
     const std::vector<CsvColumn> columns = engagementColumns(results, scene.hazard);
     // Both are written before either is committed: a value that cannot be written leaves
     // neither file.
@@ -338,7 +353,8 @@ void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err) {
     if (!args.quiet) printEngagementSummary(err, scene, points, results, threads);
     return;
   }
-  const Evaluated evaluated = evaluateObservers(integrator, points, args, watch, err);
+  const Evaluated evaluated = evaluateObservers(integrator, points, args, watch, err, exchange);
+  if (!writer) return;
   writeTable(file.get(), out, points, evaluated.results, scene.hazard);
   if (!args.quiet) report(err, args, scene, integrator, points, evaluated, threads);
 }

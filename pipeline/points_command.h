@@ -11,6 +11,8 @@
 
 namespace glint {
 
+class PointExchange;
+
 /// @brief The arguments of `glint points`.
 struct PointsArgs {
   std::string scene_path;
@@ -29,7 +31,10 @@ struct PointsArgs {
 };
 
 /// @brief Runs the command. Inputs are validated and the output file opened before any work.
+/// Under MPI (@p exchange with more than one rank) the ranks share the observers; rank 0 alone
+/// reports and writes, the same bytes as one process would.
 /// @throw InputError, OutputError on bad input or unwritable output (no file is left behind).
-void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err);
+void runPoints(const PointsArgs& args, std::ostream& out, std::ostream& err,
+               PointExchange* exchange = nullptr);
 
 }  // namespace glint
