@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # `mpirun -np 2 glint batch` against `glint batch` on one process, on a study of an engagement
-# (tests/data/engagement_study.json): the ranks share the scenarios, and the study's maps and
-# every scenario's must be the same bytes; scenarios.csv the same but for its last column (each
-# scenario's seconds, a wall-clock time).
-# Usage: batch_engagement_mpi_test.sh GLINT MPIEXEC STUDY WORKDIR
+# (tests/data/engagement_study.json: the ranks share the scenarios) or one that stops at a
+# precision (jitter_mirror_precision.json: the ranks run its rounds together and stop at rank
+# 0's word): the study's maps and every scenario's must be the same bytes; scenarios.csv the
+# same but for its last column (each scenario's seconds, a wall-clock time).
+# Usage: batch_mpi_maps_test.sh GLINT MPIEXEC STUDY WORKDIR
 set -euo pipefail
 export HWLOC_COMPONENTS=-gl,-opencl  # see batch_mpi_test.sh
 glint=$1 mpiexec=$2 study=$3 work=$4
