@@ -77,28 +77,42 @@ nlohmann::json studyReachJson(const std::map<std::size_t, nlohmann::json>& recor
   return j;
 }
 
+// The intervals count each scenario as an independent trial. With a sweep (or a trajectory)
+// beside the jitter, the scenarios of one jitter sample share its pointing error and are not
+// independent: the intervals are then narrower than the jitter alone justifies, and say so.
+bool sharedJitter(const Study& study) {
+  return study.max_samples > 0 && study.scenarios_per_sample > 1;
+}
+constexpr const char* kSharedJitterCaution =
+    "the study sweeps other parameters beside the jitter, and the scenarios of one jitter "
+    "sample share its pointing error: they are not independent trials, so these intervals are "
+    "narrower than the jitter alone justifies; run a study per combination for exact ones";
+
 // What the region's coverage map says with its confidence: each point's interval, and the
 // region hazardous with the study's probability, bounded at that confidence over the whole map.
 nlohmann::json coverageConfidenceJson(const Study& study, const StudyLattice& r, std::size_t n) {
   const SimultaneousCoverage s =
       simultaneousCoverage(r.hazardous, n, study.coverage_confidence, study.coverage_probability);
   const char* unit = r.plane ? "_m2" : "_m3";
-  return {{"confidence", study.coverage_confidence},
-          {"probability", study.coverage_probability},
-          {"pointwise",
-           "coverage_lower and coverage_upper: each point's Clopper-Pearson interval, which "
-           "holds with probability at least the confidence"},
-          {"simultaneous",
-           "Clopper-Pearson at 1 - (1 - confidence) / (2 points) a side (Bonferroni over the "
-           "map's points): with probability at least the confidence, every point counted in "
-           "the first extent is hazardous with at least the probability, and every such point "
-           "is counted in the second"},
-          {"points", s.points},
-          {std::string("hazardous_with_probability_certainly") + unit,
-           static_cast<double>(s.certain) * r.cell()},
-          {std::string("hazardous_with_probability_possibly") + unit,
-           static_cast<double>(s.possible) * r.cell()},
-          {"scenarios_needed_at_a_point", s.certain_from_count}};
+  nlohmann::json j = {
+      {"confidence", study.coverage_confidence},
+      {"probability", study.coverage_probability},
+      {"pointwise",
+       "coverage_lower and coverage_upper: each point's Clopper-Pearson interval, which "
+       "holds with probability at least the confidence"},
+      {"simultaneous",
+       "Clopper-Pearson at 1 - (1 - confidence) / (2 points) a side (Bonferroni over the "
+       "map's points): with probability at least the confidence, every point counted in "
+       "the first extent is hazardous with at least the probability, and every such point "
+       "is counted in the second"},
+      {"points", s.points},
+      {std::string("hazardous_with_probability_certainly") + unit,
+       static_cast<double>(s.certain) * r.cell()},
+      {std::string("hazardous_with_probability_possibly") + unit,
+       static_cast<double>(s.possible) * r.cell()},
+      {"scenarios_needed_at_a_point", s.certain_from_count}};
+  if (sharedJitter(study)) j["caution"] = kSharedJitterCaution;
+  return j;
 }
 
 }  // namespace
@@ -486,6 +500,11 @@ void printBatchSummary(std::ostream& err, const nlohmann::json& summary,
         << "\n";
   }
   for (const nlohmann::json& r : summary.at("regions")) {
+    if (r == summary.at("regions").front() && r.at("coverage_confidence").contains("caution")) {
+      err << "  warning: the coverage intervals count every scenario as a trial of its own, but "
+             "the sweeps' scenarios share each jitter sample: they are too narrow (run a study "
+             "per combination for exact ones)\n";
+    }
     const bool plane = r.at("kind") == "plane";
     const std::string unit = plane ? "_m2" : "_m3";
     const char* symbol = plane ? "m²" : "m³";

@@ -159,6 +159,18 @@ TEST_F(Batch, TableHasOneRowPerScenarioAndTheSummaryItsQuantiles) {
                    peaks[0] + 0.75 * (peaks[1] - peaks[0]));
 }
 
+// The test study sweeps two pitches beside its jitter: the scenarios of one jitter sample share
+// its pointing error, and the summary says the intervals that count them apart are too narrow.
+TEST_F(Batch, IntervalsOfSweepsSharingTheirJitterSayTheyAreTooNarrow) {
+  const auto summary = nlohmann::json::parse(readFile(dir_ / "summary.json"));
+  for (const auto& region : summary.at("regions")) {
+    const auto& c = region.at("coverage_confidence");
+    ASSERT_TRUE(c.contains("caution")) << region.at("name");
+    EXPECT_NE(c.at("caution").get<std::string>().find("not independent trials"), std::string::npos)
+        << c;
+  }
+}
+
 TEST_F(Batch, ResumeRedoesOnlyTheScenariosWithoutAResult) {
   const fs::path dir = copyOfRun();
   const std::string exr = readFile(dir / "ground.exr"), vdb = readFile(dir / "box.vdb");

@@ -229,6 +229,8 @@ TEST(StudyPrecision, StopsAtTheFirstRoundWithinItAndHoldsItsConfidence) {
   EXPECT_TRUE(p.at("reached").get<bool>()) << p;
   EXPECT_EQ(p.at("jitter_samples"), 128) << p;
   EXPECT_EQ(summary.at("scenarios").at("count"), 128) << summary.at("scenarios");
+  EXPECT_FALSE(summary.at("regions")[0].at("coverage_confidence").contains("caution"))
+      << "the jitter alone: every scenario an independent trial";
   EXPECT_LE(widest("stopped"), 0.1) << "the map's own intervals";
   EXPECT_NEAR(widest("stopped"), p.at("widest_half_width").get<double>(), 1e-6);
   EXPECT_GT(widest("fewer"), 0.1) << "64 samples must not have been enough, or it stopped late";
