@@ -168,7 +168,8 @@ struct ScenarioWork {
   const ScenarioMaps& maps;
   const fs::path& dir;
   const MemoryWatch& watch;
-  std::string what;  // "scenario <index>", as the errors name it
+  std::string what;         // "scenario <index>", as the errors name it
+  std::size_t combination;  // combinationOf() the scenario
 };
 
 // What the scenario's record adds up over its regions.
@@ -213,7 +214,7 @@ void runEngagementRegion(const ScenarioWork& w, StudyLattice& r, ScenarioTally& 
   }
   for (const std::string& name : written) tally.files[name] = fileChecksum(w.dir / name);
   const HazardSpec& h = w.scene.hazard;
-  const HazardousPoints n = r.add(engagementValues(e, h), h);
+  const HazardousPoints n = r.add(engagementValues(e, h), h, w.combination);
   tally.regions.push_back(scenarioEngagementRegionJson(r, e, h, n));
   for (const ExposureHistory& history : e.results.histories)
     tally.evaluations += history.evaluations;
@@ -240,7 +241,8 @@ void runScenarioRegion(const ScenarioWork& w, StudyLattice& r, ScenarioTally& ta
     written = w.maps.writeBox(box);
   }
   for (const std::string& name : written) tally.files[name] = fileChecksum(w.dir / name);
-  tally.regions.push_back(scenarioRegionJson(r, st, w.scene.hazard, r.add(e, w.scene.hazard)));
+  tally.regions.push_back(
+      scenarioRegionJson(r, st, w.scene.hazard, r.add(e, w.scene.hazard, w.combination)));
   tally.evaluations += st.evaluations;
   tally.unconverged += st.unconverged_points;
 }
@@ -282,8 +284,14 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
   // The scenario's target, built and culled once for all its lattices.
   const SceneTarget target = sceneTarget(scene, lattices.front().spec);
   const ScenarioMaps maps(scene, dir);
-  const ScenarioWork w{
-      scene, target, info, maps, dir, watch, "scenario " + std::to_string(s.index)};
+  const ScenarioWork w{scene,
+                       target,
+                       info,
+                       maps,
+                       dir,
+                       watch,
+                       "scenario " + std::to_string(s.index),
+                       combinationOf(study, s)};
   ScenarioTally tally;
   tally.files[output_names::kScenarioScene] = fnv1a64Hex(scene_json);
   for (StudyLattice& r : lattices) runScenarioRegion(w, r, tally);
@@ -446,7 +454,8 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
     why = e.what();
     return redo();
   }
-  for (std::size_t i = 0; i < lattices.size(); ++i) lattices[i].add(maps[i], study.base.hazard);
+  for (std::size_t i = 0; i < lattices.size(); ++i)
+    lattices[i].add(maps[i], study.base.hazard, combinationOf(study, s));
   return record;
 }
 
@@ -592,6 +601,10 @@ void runScenarios(const BatchArgs& args, const Study& study, std::vector<StudyLa
       cluster.maxToRoot(r.max_ratio);
       if (r.aided) cluster.maxToRoot(r.aided_max_ratio);
     }
+    if (r.combinations > 1) {
+      cluster.sumToRoot(r.hazardous_by_combination);
+      if (r.aided) cluster.sumToRoot(r.aided_hazardous_by_combination);
+    }
     // Rank 0 holds them all now: the others start the next round from nothing, or they would
     // add their share again.
     if (cluster.rank() != 0) r.allocate();
@@ -657,6 +670,7 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   }
 
   std::vector<StudyLattice> lattices = studyLattices(study.base);
+  for (StudyLattice& r : lattices) r.combinations = jitterSharingCombinations(study);
   const std::uint64_t budget =
       args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
   checkStudyMemory(study, lattices, budget);

@@ -77,22 +77,11 @@ nlohmann::json studyReachJson(const std::map<std::size_t, nlohmann::json>& recor
   return j;
 }
 
-// The intervals count each scenario as an independent trial. With a sweep (or a trajectory)
-// beside the jitter, the scenarios of one jitter sample share its pointing error and are not
-// independent: the intervals are then narrower than the jitter alone justifies, and say so.
-bool sharedJitter(const Study& study) {
-  return study.max_samples > 0 && study.scenarios_per_sample > 1;
-}
-constexpr const char* kSharedJitterCaution =
-    "the study sweeps other parameters beside the jitter, and the scenarios of one jitter "
-    "sample share its pointing error: they are not independent trials, so these intervals are "
-    "narrower than the jitter alone justifies; run a study per combination for exact ones";
-
 // What the region's coverage map says with its confidence: each point's interval, and the
 // region hazardous with the study's probability, bounded at that confidence over the whole map.
 nlohmann::json coverageConfidenceJson(const Study& study, const StudyLattice& r, std::size_t n) {
   const SimultaneousCoverage s =
-      simultaneousCoverage(r.hazardous, n, study.coverage_confidence, study.coverage_probability);
+      simultaneousCoverage(r, n, study.coverage_confidence, study.coverage_probability);
   const char* unit = r.plane ? "_m2" : "_m3";
   nlohmann::json j = {
       {"confidence", study.coverage_confidence},
@@ -111,7 +100,20 @@ nlohmann::json coverageConfidenceJson(const Study& study, const StudyLattice& r,
       {std::string("hazardous_with_probability_possibly") + unit,
        static_cast<double>(s.possible) * r.cell()},
       {"scenarios_needed_at_a_point", s.certain_from_count}};
-  if (sharedJitter(study)) j["caution"] = kSharedJitterCaution;
+  if (r.combinations > 1) {
+    // The scenarios of one jitter sample share its pointing error: each combination's are
+    // trials apart from the others'.
+    j["combinations"] = r.combinations;
+    j["pointwise"] =
+        "coverage_lower and coverage_upper: the mean over the combinations of the swept "
+        "parameters of each one's Clopper-Pearson interval at (1 - confidence) / combinations "
+        "(Bonferroni: the scenarios of one jitter sample share it and are not independent), "
+        "which holds with probability at least the confidence";
+    j["simultaneous"] =
+        "the same at 1 - (1 - confidence) / (2 points) a side: with probability at least the "
+        "confidence, every point counted in the first extent is hazardous with at least the "
+        "probability, and every such point is counted in the second";
+  }
   return j;
 }
 
@@ -201,7 +203,7 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
   const std::vector<float> cover = coverage(r.hazardous, scenarios);
   // Each point's exact interval at the study's confidence.
   const double alpha_each_side = 0.5 * (1.0 - study.coverage_confidence);
-  const CoverageBounds bounds = coverageBounds(r.hazardous, scenarios, alpha_each_side);
+  const CoverageBounds bounds = r.coverageBounds(false, scenarios, alpha_each_side);
   // With an optical aid, the same through it.
   std::vector<float> aided_max_ratio, aided_cover;
   CoverageBounds aided_bounds;
@@ -213,7 +215,7 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
         aided_max_ratio[i] = static_cast<float>(h.aidedRatio(static_cast<double>(r.max_w_m2[i])));
     }
     aided_cover = coverage(r.aided_hazardous, scenarios);
-    aided_bounds = coverageBounds(r.aided_hazardous, scenarios, alpha_each_side);
+    aided_bounds = r.coverageBounds(true, scenarios, alpha_each_side);
   }
   const std::string program = std::string("glint ") + GLINT_VERSION;
   AtomicFile file(path);
@@ -500,11 +502,6 @@ void printBatchSummary(std::ostream& err, const nlohmann::json& summary,
         << "\n";
   }
   for (const nlohmann::json& r : summary.at("regions")) {
-    if (r == summary.at("regions").front() && r.at("coverage_confidence").contains("caution")) {
-      err << "  warning: the coverage intervals count every scenario as a trial of its own, but "
-             "the sweeps' scenarios share each jitter sample: they are too narrow (run a study "
-             "per combination for exact ones)\n";
-    }
     const bool plane = r.at("kind") == "plane";
     const std::string unit = plane ? "_m2" : "_m3";
     const char* symbol = plane ? "m²" : "m³";

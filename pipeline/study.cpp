@@ -337,9 +337,8 @@ Study parseStudy(std::string_view text, const std::string& source,
               s.specular_reflectance = re;
             }
   study.scenarios_per_sample = combinations.size();
-  // The intervals count every scenario as a trial of its own; with a sweep beside the jitter,
-  // the scenarios of one jitter sample are not independent, and a stop on those intervals
-  // would come too soon.
+  // A round adds jitter samples after those already run: with the jitter innermost in the
+  // numbering, only a study whose sole variation is the jitter has them as its next scenarios.
   if (study.precision_half_width && combinations.size() > 1) {
     throw InputError(source +
                      ": /pointing_jitter/precision: a precision is for a study whose only "
@@ -364,6 +363,15 @@ Study parseStudy(std::string_view text, const std::string& source,
   study.fnv1a64 = fnv1a64Hex(std::string(text) + '\0' + study.scene_text);
   for (const Scenario& s : study.scenarios) (void)applyScenario(study, s, false);
   return study;
+}
+
+std::size_t jitterSharingCombinations(const Study& study) {
+  return study.max_samples > 0 ? study.scenarios_per_sample : 1;
+}
+
+std::size_t combinationOf(const Study& study, const Scenario& s) {
+  // The jitter is the innermost loop: scenario c × samples + k.
+  return study.max_samples > 0 ? s.index / static_cast<std::size_t>(study.max_samples) : 0;
 }
 
 std::vector<std::size_t> studyRounds(const Study& study) {

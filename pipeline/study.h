@@ -74,6 +74,14 @@ struct Study {
   std::string fnv1a64;
 };
 
+/// @brief The combinations of other parameters that share each jitter sample of @p study: its
+/// scenarios per sample when it has jitter, else 1 (every scenario a case of its own). Above
+/// 1, a study's coverage intervals keep each combination's counts apart (pipeline/study_maps.h).
+std::size_t jitterSharingCombinations(const Study& study);
+
+/// @brief The combination scenario @p s belongs to (< jitterSharingCombinations()).
+std::size_t combinationOf(const Study& study, const Scenario& s);
+
 /// @brief The number of scenarios each round of @p study runs up to (cumulative): all of them
 /// at once without a precision, else the first round's samples doubling up to max_samples.
 std::vector<std::size_t> studyRounds(const Study& study);

@@ -22,13 +22,17 @@ double StudyLattice::cell() const {
   return plane ? spec.voxel_m * spec.voxel_m : spec.voxel_m * spec.voxel_m * spec.voxel_m;
 }
 
-HazardousPoints StudyLattice::add(const RegionValues& v, const HazardSpec& h) {
+HazardousPoints StudyLattice::add(const RegionValues& v, const HazardSpec& h,
+                                  std::size_t combination) {
   const std::vector<float>& e_w_m2 = v.irradiance_w_m2;
   const bool fits = e_w_m2.size() == max_w_m2.size() &&
                     (engagement ? v.hazard_ratio.size() == e_w_m2.size() &&
                                       (!aided || v.aided_hazard_ratio.size() == e_w_m2.size())
                                 : v.hazard_ratio.empty() && v.aided_hazard_ratio.empty());
-  if (!fits) throw std::logic_error("batch: a scenario's map does not fit its region's lattice");
+  if (!fits || combination >= combinations)
+    throw std::logic_error("batch: a scenario's map does not fit its region's lattice");
+  const bool apart = combinations > 1;
+  const std::size_t offset = combination * e_w_m2.size();
   HazardousPoints n;
   for (std::size_t i = 0; i < e_w_m2.size(); ++i) {
     max_w_m2[i] = std::max(max_w_m2[i], e_w_m2[i]);
@@ -37,6 +41,7 @@ HazardousPoints StudyLattice::add(const RegionValues& v, const HazardSpec& h) {
     if (engagement) max_ratio[i] = std::max(max_ratio[i], v.hazard_ratio[i]);
     if (ratio >= 1.0) {
       ++hazardous[i];
+      if (apart) ++hazardous_by_combination[offset + i];
       ++n.unaided;
     }
     if (!aided) continue;
@@ -45,6 +50,7 @@ HazardousPoints StudyLattice::add(const RegionValues& v, const HazardSpec& h) {
     if (engagement) aided_max_ratio[i] = std::max(aided_max_ratio[i], v.aided_hazard_ratio[i]);
     if (aided_ratio >= 1.0) {
       ++aided_hazardous[i];
+      if (apart) ++aided_hazardous_by_combination[offset + i];
       ++n.aided;
     }
   }
@@ -56,7 +62,9 @@ std::uint64_t StudyLattice::mapBytes() const {
   const std::uint64_t points = static_cast<std::uint64_t>(n[0]) * static_cast<std::uint64_t>(n[1]) *
                                static_cast<std::uint64_t>(n[2]);
   const std::uint64_t ratios = engagement ? sizeof(float) * (aided ? 2 : 1) : 0;
-  return points * (sizeof(float) + sizeof(std::uint32_t) * (aided ? 2 : 1) + ratios);
+  const std::uint64_t counts =
+      sizeof(std::uint32_t) * (aided ? 2 : 1) * (1 + (combinations > 1 ? combinations : 0));
+  return points * (sizeof(float) + counts + ratios);
 }
 
 void StudyLattice::allocate() {
@@ -69,6 +77,10 @@ void StudyLattice::allocate() {
   if (engagement) {
     max_ratio.assign(points, 0.0f);
     if (aided) aided_max_ratio.assign(points, 0.0f);
+  }
+  if (combinations > 1) {
+    hazardous_by_combination.assign(points * combinations, 0u);
+    if (aided) aided_hazardous_by_combination.assign(points * combinations, 0u);
   }
 }
 
@@ -110,33 +122,103 @@ std::vector<ProportionInterval> intervalTable(std::size_t n, double alpha_each_s
   return table;
 }
 
-}  // namespace
+// Each point's interval ends in double precision (StudyLattice::coverageBounds()).
+struct Bounds {
+  std::vector<double> lower, upper;
+};
 
-CoverageBounds coverageBounds(const std::vector<std::uint32_t>& counts, std::size_t scenarios,
-                              double alpha_each_side) {
-  const std::vector<ProportionInterval> table = intervalTable(scenarios, alpha_each_side);
-  CoverageBounds b;
+Bounds latticeBounds(const StudyLattice& r, bool aided_counts, std::size_t scenarios,
+                     double alpha_each_side) {
+  const std::vector<std::uint32_t>& counts = aided_counts ? r.aided_hazardous : r.hazardous;
+  Bounds b;
   b.lower.resize(counts.size());
   b.upper.resize(counts.size());
-  for (std::size_t i = 0; i < counts.size(); ++i) {
-    const ProportionInterval& p = table.at(counts[i]);
-    b.lower[i] = static_cast<float>(p.lower);
-    b.upper[i] = static_cast<float>(p.upper);
+  if (r.combinations <= 1) {
+    const std::vector<ProportionInterval> table = intervalTable(scenarios, alpha_each_side);
+    for (std::size_t i = 0; i < counts.size(); ++i) {
+      b.lower[i] = table.at(counts[i]).lower;
+      b.upper[i] = table.at(counts[i]).upper;
+    }
+    return b;
+  }
+  // Each combination's samples are independent trials among themselves. Each combination's
+  // interval misses on a side with probability at most alpha / combinations, so on that side
+  // all hold together with probability at least 1 − alpha; and when they all hold, the mean of
+  // their ends holds the mean of their probabilities, which the coverage estimates.
+  const std::size_t c = r.combinations;
+  const std::vector<std::uint32_t>& by =
+      aided_counts ? r.aided_hazardous_by_combination : r.hazardous_by_combination;
+  const std::vector<ProportionInterval> table =
+      intervalTable(scenarios / c, alpha_each_side / static_cast<double>(c));
+  const std::size_t points = counts.size();
+  for (std::size_t i = 0; i < points; ++i) {
+    double lower = 0.0, upper = 0.0;
+    for (std::size_t k = 0; k < c; ++k) {
+      lower += table.at(by[k * points + i]).lower;
+      upper += table.at(by[k * points + i]).upper;
+    }
+    b.lower[i] = lower / static_cast<double>(c);
+    b.upper[i] = upper / static_cast<double>(c);
   }
   return b;
 }
 
-double widestCoverageHalfWidth(const std::vector<StudyLattice>& lattices, std::size_t scenarios,
-                               double confidence) {
-  const std::vector<ProportionInterval> table = intervalTable(scenarios, 0.5 * (1.0 - confidence));
+double widestHalfWidthOf(const StudyLattice& r, std::size_t scenarios, double confidence) {
   double widest = 0.0;
-  for (const StudyLattice& r : lattices) {
-    for (const std::vector<std::uint32_t>* counts : {&r.hazardous, &r.aided_hazardous}) {
-      for (const std::uint32_t k : *counts)
-        widest = std::max(widest, 0.5 * (table.at(k).upper - table.at(k).lower));
-    }
+  for (const bool aided_counts : {false, true}) {
+    if (aided_counts && !r.aided) continue;
+    const Bounds b = latticeBounds(r, aided_counts, scenarios, 0.5 * (1.0 - confidence));
+    for (std::size_t i = 0; i < b.lower.size(); ++i)
+      widest = std::max(widest, 0.5 * (b.upper[i] - b.lower[i]));
   }
   return widest;
+}
+
+}  // namespace
+
+CoverageBounds StudyLattice::coverageBounds(bool aided_counts, std::size_t scenarios,
+                                            double alpha_each_side) const {
+  const Bounds b = latticeBounds(*this, aided_counts, scenarios, alpha_each_side);
+  CoverageBounds f;
+  for (double x : b.lower) f.lower.push_back(static_cast<float>(x));
+  for (double x : b.upper) f.upper.push_back(static_cast<float>(x));
+  return f;
+}
+
+double widestCoverageHalfWidth(const std::vector<StudyLattice>& lattices, std::size_t scenarios,
+                               double confidence) {
+  double widest = 0.0;
+  for (const StudyLattice& r : lattices)
+    widest = std::max(widest, widestHalfWidthOf(r, scenarios, confidence));
+  return widest;
+}
+
+SimultaneousCoverage simultaneousCoverage(const StudyLattice& r, std::size_t scenarios,
+                                          double confidence, double probability) {
+  if (r.combinations <= 1) {
+    return simultaneousCoverage(r.hazardous, scenarios, confidence, probability);
+  }
+  SimultaneousCoverage c;
+  c.points = static_cast<std::int64_t>(r.hazardous.size());
+  if (r.hazardous.empty()) return c;
+  const double alpha_each_side = (1.0 - confidence) / (2.0 * static_cast<double>(c.points));
+  const Bounds b = latticeBounds(r, false, scenarios, alpha_each_side);
+  for (std::size_t i = 0; i < b.lower.size(); ++i) {
+    c.certain += b.lower[i] >= probability ? 1 : 0;
+    c.possible += b.upper[i] >= probability ? 1 : 0;
+  }
+  // Spread evenly: every combination hazardous in k of its samples.
+  const std::size_t samples = scenarios / r.combinations;
+  const std::vector<ProportionInterval> table =
+      intervalTable(samples, alpha_each_side / static_cast<double>(r.combinations));
+  c.certain_from_count = scenarios + 1;
+  for (std::size_t k = 0; k <= samples; ++k) {
+    if (table[k].lower >= probability) {
+      c.certain_from_count = k * r.combinations;
+      break;
+    }
+  }
+  return c;
 }
 
 SimultaneousCoverage simultaneousCoverage(const std::vector<std::uint32_t>& counts,

@@ -22,6 +22,23 @@ struct HazardousPoints {
   std::int64_t aided = 0;
 };
 
+/// @brief A confidence interval for a proportion.
+struct ProportionInterval {
+  double lower = 0.0;
+  double upper = 1.0;
+};
+
+/// @brief The exact (Clopper–Pearson) interval for @p k successes in @p n trials: each end
+/// misses the true proportion with probability at most @p alpha_each_side, whatever it is
+/// (lower = 0 at k = 0, upper = 1 at k = n). The ends are quantiles of Beta distributions,
+/// B(α; k, n − k + 1) and B(1 − α; k + 1, n − k), through Boost.Math.
+ProportionInterval clopperPearson(std::uint64_t k, std::uint64_t n, double alpha_each_side);
+
+/// @brief Each point's coverage interval: its ends, as floats.
+struct CoverageBounds {
+  std::vector<float> lower, upper;
+};
+
 /// @brief One scenario's values over a region, as a study adds them.
 struct RegionValues {
   /// A pose's irradiance, or an engagement's peak irradiance over its span (W/m²).
@@ -47,6 +64,11 @@ struct StudyLattice {
   /// largest ratio is kept beside the largest irradiance (which no longer gives it).
   bool engagement = false;
   std::vector<float> max_ratio, aided_max_ratio;  ///< engagement only (aided: with an aid)
+  /// The study's combinations of other parameters that share each jitter sample. Above 1 their
+  /// scenarios are independent trials only within a combination, so each combination's counts
+  /// are kept apart, [combination × points + point], for intervals that hold.
+  std::size_t combinations = 1;
+  std::vector<std::uint32_t> hazardous_by_combination, aided_hazardous_by_combination;
 
   /// @brief Bytes of the maps allocate() makes.
   [[nodiscard]] std::uint64_t mapBytes() const;
@@ -66,7 +88,14 @@ struct StudyLattice {
   /// fresh.
   /// @throw std::logic_error when the values do not fit the lattice or the scene's kind (a
   /// programming error).
-  HazardousPoints add(const RegionValues& values, const HazardSpec& h);
+  HazardousPoints add(const RegionValues& values, const HazardSpec& h, std::size_t combination = 0);
+
+  /// @brief Each point's coverage interval after @p scenarios (every combination's), each end
+  /// wrong with probability at most @p alpha_each_side: clopperPearson() of its count, or with
+  /// combinations the mean over them of each one's interval at alpha_each_side / combinations
+  /// (Bonferroni: when every combination's interval holds, so does their mean's).
+  [[nodiscard]] CoverageBounds coverageBounds(bool aided_counts, std::size_t scenarios,
+                                              double alpha_each_side) const;
 };
 
 /// @brief The lattices of @p base (its box, then its planes), their maps not yet allocated.
@@ -74,25 +103,6 @@ std::vector<StudyLattice> studyLattices(const Scene& base);
 
 /// @brief The coverage probability at each point: @p counts / @p scenarios.
 std::vector<float> coverage(const std::vector<std::uint32_t>& counts, std::size_t scenarios);
-
-/// @brief A confidence interval for a proportion.
-struct ProportionInterval {
-  double lower = 0.0;
-  double upper = 1.0;
-};
-
-/// @brief The exact (Clopper–Pearson) interval for @p k successes in @p n trials: each end
-/// misses the true proportion with probability at most @p alpha_each_side, whatever it is
-/// (lower = 0 at k = 0, upper = 1 at k = n). The ends are quantiles of Beta distributions,
-/// B(α; k, n − k + 1) and B(1 − α; k + 1, n − k), through Boost.Math.
-ProportionInterval clopperPearson(std::uint64_t k, std::uint64_t n, double alpha_each_side);
-
-/// @brief clopperPearson() at each point of a coverage map (@p counts of @p scenarios).
-struct CoverageBounds {
-  std::vector<float> lower, upper;
-};
-CoverageBounds coverageBounds(const std::vector<std::uint32_t>& counts, std::size_t scenarios,
-                              double alpha_each_side);
 
 /// @brief Half the width of the widest coverage interval of any point of @p lattices after
 /// @p scenarios (clopperPearson() at @p confidence, half the rest a side), aided counts
@@ -117,5 +127,11 @@ struct SimultaneousCoverage {
 SimultaneousCoverage simultaneousCoverage(const std::vector<std::uint32_t>& counts,
                                           std::size_t scenarios, double confidence,
                                           double probability);
+
+/// @brief simultaneousCoverage() of a lattice's (unaided) counts, with its combinations kept
+/// apart as StudyLattice::coverageBounds() keeps them; `certain_from_count` is then the
+/// hazardous scenarios needed when they are spread evenly over the combinations.
+SimultaneousCoverage simultaneousCoverage(const StudyLattice& lattice, std::size_t scenarios,
+                                          double confidence, double probability);
 
 }  // namespace glint
