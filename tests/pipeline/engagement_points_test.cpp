@@ -36,6 +36,17 @@ constexpr const char* kScene = R"({
   "engagement": {"start_s": -0.5, "end_s": 0.5, "target": {"turn_deg_s": [20, 0, 0]}}
 })";
 
+// The turning mirror's scene with more top-level keys (@p keys: `"name": value, ...`).
+std::string sceneWith(const std::string& keys) {
+  std::string scene = kScene;
+  scene.replace(scene.rfind('}'), 1, ",\n  " + keys + "}");
+  return scene;
+}
+
+// A wall 50 m back across the glint's path, 1 m pixels.
+constexpr const char* kWall = R"("planes": [{"name": "wall", "origin": [-50, -20, -1],
+  "u_axis": [0, 1, 0], "v_axis": [0, 0, 1], "size_m": [40, 2], "pixel_m": 1.0, "block_m": 4}])";
+
 struct Folder {
   fs::path dir;
   explicit Folder(const std::string& name) : dir(fs::temp_directory_path() / name) {
@@ -161,9 +172,8 @@ TEST(EngagementPoints, ObserversWhoseFirstSamplesOutgrowTheBudgetAreRefusedBefor
 // field would have been allowed: 1 500 bytes per 16³ block, 0.05 MB here).
 TEST(EngagementRun, ABoxWhoseMapsOutgrowTheBudgetIsRefusedBeforeTheWork) {
   const Folder f("glint_engagement_box_memory");
-  std::string scene = kScene;
-  scene.replace(scene.rfind('}'), 1, R"(,
-    "observers": {"min": [-60, -10, -5], "max": [-40, 10, 5], "voxel_m": 0.1}})");
+  const std::string scene =
+      sceneWith(R"("observers": {"min": [-60, -10, -5], "max": [-40, 10, 5], "voxel_m": 0.1})");
   const test::Outcome o = glint({"run", f.write("scene.json", scene).string(), "-o",
                                  (f.dir / "out").string(), "--memory", "100M"});
   EXPECT_EQ(o.status, 2) << o.err;
@@ -229,10 +239,7 @@ void expectMapsAreGlintPoints(const Folder& f, const fs::path& scene, const Regi
 // the table's for the same point.
 TEST(EngagementRun, APlanesMapsAreWhatGlintPointsGivesAtItsPoints) {
   const Folder f("glint_engagement_run");
-  std::string scene = kScene;
-  scene.replace(scene.rfind('}'), 1, R"(,
-    "planes": [{"name": "wall", "origin": [-50, -20, -1], "u_axis": [0, 1, 0],
-                "v_axis": [0, 0, 1], "size_m": [40, 2], "pixel_m": 1.0, "block_m": 4}]})");
+  const std::string scene = sceneWith(kWall);
   const fs::path scene_path = f.write("scene.json", scene);
   const test::Outcome run = glint({"run", scene_path.string(), "-o", (f.dir / "out").string()});
   ASSERT_EQ(run.status, 0) << run.err;
@@ -261,10 +268,9 @@ TEST(EngagementRun, APlanesMapsAreWhatGlintPointsGivesAtItsPoints) {
 // volume counts the voxels whose worst window reaches the MPE.
 TEST(EngagementRun, ABoxsGridsAreWhatGlintPointsGivesAtItsPoints) {
   const Folder f("glint_engagement_box");
-  std::string scene = kScene;
   // Across the glint's path 50 m back, and above it: some points dark by the bound.
-  scene.replace(scene.rfind('}'), 1, R"(,
-    "observers": {"min": [-50.5, -2, -1], "max": [-49.5, 2, 5], "voxel_m": 0.5, "block_m": 2}})");
+  const std::string scene = sceneWith(
+      R"("observers": {"min": [-50.5, -2, -1], "max": [-49.5, 2, 5], "voxel_m": 0.5, "block_m": 2})");
   const fs::path scene_path = f.write("scene.json", scene);
   const test::Outcome run = glint({"run", scene_path.string(), "-o", (f.dir / "out").string()});
   ASSERT_EQ(run.status, 0) << run.err;
@@ -330,10 +336,7 @@ TEST(EngagementPoints, CommandsThatCannotIntegrateAnEngagementRefuseIt) {
 // reaches the MPE there, and a second run resumes every scenario to the same bytes.
 TEST(EngagementStudy, ItsMapsAddUpTheScenariosWorstWindowsAsGlintRunGivesThem) {
   const Folder f("glint_engagement_study");
-  std::string scene = kScene;
-  scene.replace(scene.rfind('}'), 1, R"(,
-    "planes": [{"name": "wall", "origin": [-50, -20, -1], "u_axis": [0, 1, 0],
-                "v_axis": [0, 0, 1], "size_m": [40, 2], "pixel_m": 1.0, "block_m": 4}]})");
+  const std::string scene = sceneWith(kWall);
   f.write("scene.json", scene);
   // 3 mrad of jitter moves the glint's path across the wall by about 0.3 m at 50 m: some
   // scenarios' worst windows reach the MPE somewhere, others nowhere.
@@ -394,9 +397,8 @@ TEST(EngagementStudy, ItsMapsAddUpTheScenariosWorstWindowsAsGlintRunGivesThem) {
 // scenarios' engagement.vdb, and a resumed study reads them back into the same map.
 TEST(EngagementStudy, ABoxStudyKeepsEachPointsWorstWindowAndResumesFromItsScenarios) {
   const Folder f("glint_engagement_box_study");
-  std::string scene = kScene;
-  scene.replace(scene.rfind('}'), 1, R"(,
-    "observers": {"min": [-50.5, -2, -1], "max": [-49.5, 2, 3], "voxel_m": 1, "block_m": 2}})");
+  const std::string scene = sceneWith(
+      R"("observers": {"min": [-50.5, -2, -1], "max": [-49.5, 2, 3], "voxel_m": 1, "block_m": 2})");
   f.write("scene.json", scene);
   const fs::path study = f.write("study.json", R"({"scene": "scene.json",
     "pointing_jitter": {"sigma_rad": 0.003, "samples": 2, "seed": 3}})");
@@ -426,10 +428,7 @@ TEST(EngagementStudy, ABoxStudyKeepsEachPointsWorstWindowAndResumesFromItsScenar
 
 TEST(EngagementStudy, SweepsAnEngagementCannotTakeAreRefused) {
   const Folder f("glint_engagement_study_refused");
-  std::string scene = kScene;
-  scene.replace(scene.rfind('}'), 1, R"(,
-    "planes": [{"name": "wall", "origin": [-50, -20, -1], "u_axis": [0, 1, 0],
-                "v_axis": [0, 0, 1], "size_m": [40, 2], "pixel_m": 1.0}]})");
+  const std::string scene = sceneWith(kWall);
   f.write("scene.json", scene);
   const fs::path trajectory = f.write("trajectory.json", R"({"scene": "scene.json",
     "trajectory": {"poses": [{"time_s": 0}, {"time_s": 1, "offset_m": [0, 1, 0]}]}})");
