@@ -62,6 +62,7 @@ void writeChannels(std::ostream& out, Imf::Header& header, int width, int height
   header.insert("glint_wavelength_nm", Imf::DoubleAttribute(info.wavelength_nm));
   header.insert("glint_mpe_w_m2", Imf::DoubleAttribute(info.mpe_w_m2));
   header.insert("glint_program", Imf::StringAttribute(info.program_version));
+  if (!info.mpe_rule.empty()) header.insert("glint_mpe_rule", Imf::StringAttribute(info.mpe_rule));
 
   // Image row y holds lattice row j = height − 1 − y.
   std::vector<std::vector<float>> rows_down(channels.size(), std::vector<float>(n));

@@ -42,6 +42,7 @@ struct ExrInfo {
   std::string program_version;
   double wavelength_nm = 0.0;
   double mpe_w_m2 = 0.0;
+  std::string mpe_rule;  ///< the standard, table and row the MPE came from (empty: none)
 };
 
 /// @brief Writes @p channels over @p grid as a scanline OpenEXR image with FLOAT channels (ZIP

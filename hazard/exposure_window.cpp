@@ -44,7 +44,7 @@ class History {
   std::vector<double> f_;
 };
 
-// The shortest duration the MPE table covers (ocularMpe()).
+// The shortest duration the MPE tables cover (tableMpe()).
 constexpr double kShortestS = 1e-9;
 
 }  // namespace
@@ -95,7 +95,7 @@ WindowHazard worstWindow(std::span<const double> time_s, std::span<const double>
   };
   auto at = [&](double duration) {
     const WindowExposure w = largestWindowExposure(time_s, irradiance_w_m2, duration);
-    const Mpe mpe = ocularMpe(hazard.wavelength_nm, duration, hazard.standard);
+    const Mpe mpe = tableMpe(hazard.wavelength_nm, duration, hazard.standard, hazard.tissue);
     return Point{duration, w.exposure_j_m2, mpe.radiant_exposure_j_m2, w.start_s};
   };
   const double lo = kShortestS, hi = std::max(longest_s, kShortestS);

@@ -24,7 +24,7 @@ struct WindowHazard {
 
 /// @brief The worst window of the irradiance piecewise linear through (@p time_s,
 /// @p irradiance_w_m2), for durations from 1 ns (where the MPE table starts) to @p longest_s,
-/// under @p hazard's wavelength and standard (its pulse is not used: a continuous laser).
+/// under @p hazard's wavelength, standard and tissue (its pulse is not used: a continuous laser).
 /// @pre times increasing, irradiance ≥ 0, longest_s within the MPE table (≤ 30 000 s).
 WindowHazard worstWindow(std::span<const double> time_s, std::span<const double> irradiance_w_m2,
                          const HazardSpec& hazard, double longest_s);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 namespace glint {
@@ -14,24 +15,57 @@ double tMinS(double wavelength_nm) { return wavelength_nm < 1050.0 ? 5e-6 : 13e-
 // The retinal hazard region, where rule 3 and the grouping of close pulses apply.
 bool retinal(double wavelength_nm) { return wavelength_nm < 1400.0; }
 
+std::string formatCount(double n) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", n);
+  return text;
+}
+
 }  // namespace
 
-double defaultExposureS(double wavelength_nm) { return wavelength_nm <= 700.0 ? 0.25 : 10.0; }
+double defaultExposureS(double wavelength_nm, Tissue tissue) {
+  if (tissue == Tissue::Skin) return 10.0;
+  return wavelength_nm <= 700.0 ? 0.25 : 10.0;
+}
+
+namespace {
+
+// Rule 3's reduction of the single pulse's limit for @p groups pulses (or groups) of
+// @p duration_s each over @p exposure_s.
+double ruleThreeReduction(const PulseTrainMpe& r, double wavelength_nm, double duration_s,
+                          double rate_hz, double exposure_s, SafetyStandard standard,
+                          double& counted) {
+  if (standard == SafetyStandard::AnsiZ136_1_2014) {
+    counted = r.pulses;
+    return std::pow(r.pulses, -0.25);  // ANSI Z136.1-2014 8.2.3.3: C_P = n^-0.25
+  }
+  // IEC 60825-1:2014 A.3 (4.3 f) 3)) for α ≤ α_min: N counts the pulses within T2 (10 s for a
+  // point source) or the exposure if shorter. Pulses no longer than T_i reduce the limit only
+  // beyond 600 of them, to 5 N^-0.25 and never below 0.4; longer pulses, for sources smaller
+  // than 5 mrad, not at all.
+  counted = rate_hz * std::min(exposure_s, 10.0);
+  if (duration_s > tMinS(wavelength_nm) * (1.0 + 1e-12)) return 1.0;
+  if (counted <= 600.0) return 1.0;
+  return std::max(5.0 * std::pow(counted, -0.25), 0.4);
+}
+
+}  // namespace
 
 PulseTrainMpe pulseTrainMpe(double wavelength_nm, const PulseSpec& pulse, double exposure_s,
-                            SafetyStandard standard) {
+                            SafetyStandard standard, Tissue tissue) {
   const double f = *pulse.repetition_rate_hz;
+  const bool eye_retina = tissue == Tissue::Eye && retinal(wavelength_nm);
   PulseTrainMpe r;
   double duration_s = pulse.duration_s;
   double rate_hz = f;
-  if (retinal(wavelength_nm) && 1.0 / f < tMinS(wavelength_nm)) {
+  if (eye_retina && 1.0 / f < tMinS(wavelength_nm)) {
     r.grouped = true;
     duration_s = tMinS(wavelength_nm);
     rate_hz = 1.0 / duration_s;
   }
   r.pulses = rate_hz * exposure_s;
-  const Mpe single = ocularMpe(wavelength_nm, duration_s, standard);
-  const Mpe whole = ocularMpe(wavelength_nm, exposure_s, standard);
+  const Mpe single = tableMpe(wavelength_nm, duration_s, standard, tissue);
+  const Mpe whole = tableMpe(wavelength_nm, exposure_s, standard, tissue);
   r.single_pulse_j_m2 = single.radiant_exposure_j_m2;
   r.average_j_m2 = whole.radiant_exposure_j_m2 / r.pulses;
   double limit = r.single_pulse_j_m2;
@@ -40,9 +74,11 @@ PulseTrainMpe pulseTrainMpe(double wavelength_nm, const PulseSpec& pulse, double
     limit = r.average_j_m2;
     r.rule = 2;
   }
-  // Rule 3 guards against the additive heating of many pulses: a thermal limit only.
-  if (retinal(wavelength_nm) && single.limit == MpeLimit::Thermal) {
-    r.c_p = std::pow(r.pulses, -0.25);
+  // Rule 3 guards against the additive heating of the retina by many pulses: the eye's
+  // thermal limit only.
+  if (eye_retina && single.limit == MpeLimit::Thermal) {
+    r.c_p = ruleThreeReduction(r, wavelength_nm, duration_s, rate_hz, exposure_s, standard,
+                               r.reduction_pulses);
     r.reduced_j_m2 = r.single_pulse_j_m2 * r.c_p;
     if (r.reduced_j_m2 < limit) {
       limit = r.reduced_j_m2;
@@ -86,20 +122,20 @@ void completeHazard(HazardSpec& h) {
   const double wavelength_nm = h.wavelength_nm;
   h.train.reset();
   if (!h.pulse) {
-    h.mpe = ocularMpe(wavelength_nm, h.exposure_s, h.standard);
+    h.mpe = tableMpe(wavelength_nm, h.exposure_s, h.standard, h.tissue);
     h.mpe_w_m2 = h.mpe.irradiance_w_m2;
     h.pulse_exposure_s = 0.0;
     return;
   }
   const PulseSpec& p = *h.pulse;
-  h.mpe = ocularMpe(wavelength_nm, p.duration_s, h.standard);
+  h.mpe = tableMpe(wavelength_nm, p.duration_s, h.standard, h.tissue);
   if (!p.repetition_rate_hz) {
     h.exposure_s = p.duration_s;
     h.mpe_w_m2 = h.mpe.irradiance_w_m2;
     h.pulse_exposure_s = p.duration_s;
     return;
   }
-  h.train = pulseTrainMpe(wavelength_nm, p, h.exposure_s, h.standard);
+  h.train = pulseTrainMpe(wavelength_nm, p, h.exposure_s, h.standard, h.tissue);
   h.mpe_w_m2 = h.train->per_pulse_j_m2 * *p.repetition_rate_hz;
   h.pulse_exposure_s = 1.0 / *p.repetition_rate_hz;
 }
@@ -110,7 +146,12 @@ std::string hazardCitation(const HazardSpec& h) {
     const StandardClauses& c = clauses(h.standard);
     s += std::string("; repetitive pulses, ") + c.name + " " + c.repeated_pulses + " rule " +
          std::to_string(h.train->rule);
-    if (h.train->rule == 3) s += " (C_P = n^-0.25)";
+    if (h.train->rule == 3) {
+      s += h.standard == SafetyStandard::Iec60825_1_2014
+               ? " (C5 = 5 N^-0.25, N = " + formatCount(h.train->reduction_pulses) +
+                     " pulses within T2)"
+               : std::string(" (C_P = n^-0.25)");
+    }
     if (h.train->grouped) s += ", pulses within t_min counted as one";
   } else if (h.pulse) {
     s += "; a single pulse";

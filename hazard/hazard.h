@@ -32,7 +32,8 @@ struct PulseSpec {
 };
 
 /// @brief The MPE of a train of pulses, per pulse, by the three rules of ANSI Z136.1-2014
-/// section 8.2.3 (IEC 60825-1:2014 section A.3 words them alike).
+/// 8.2.3 or IEC 60825-1:2014 A.3. They agree on rules 1 and 2 and on counting pulses closer than
+/// t_min (IEC: T_i) as one; they differ in rule 3's reduction (docs/hazard.md).
 struct PulseTrainMpe {
   double pulses = 0.0;  ///< n = f T over the exposure T (of groups, where grouped below)
   /// 400–1400 nm: pulses closer than t_min (5 µs below 1050 nm, 13 µs above) act as one pulse
@@ -40,18 +41,24 @@ struct PulseTrainMpe {
   bool grouped = false;
   double single_pulse_j_m2 = 0.0;  ///< rule 1: the MPE of one pulse alone
   double average_j_m2 = 0.0;       ///< rule 2: the MPE for T shared among the n pulses
-  /// rule 3 (retinal thermal limits, 400–1400 nm): rule 1 × C_P, C_P = n^-0.25; 0 elsewhere.
+  /// rule 3 (the eye's retinal thermal limits, 400–1400 nm): rule 1 × the reduction c_p;
+  /// 0 where rule 3 does not apply.
   double reduced_j_m2 = 0.0;
+  /// Rule 3's reduction: ANSI's C_P = n^-0.25; IEC's C5, for a point source 1 up to 600 pulses
+  /// within T2 = 10 s and 5 N^-0.25 (at least 0.4) beyond, 1 for pulses longer than T_i.
   double c_p = 1.0;
-  double per_pulse_j_m2 = 0.0;  ///< the most restrictive of the three, per (ungrouped) pulse
-  int rule = 1;                 ///< which of the three set it
+  double reduction_pulses = 0.0;  ///< the pulses rule 3 counts: n by ANSI, N within T2 by IEC
+  double per_pulse_j_m2 = 0.0;    ///< the most restrictive of the three, per (ungrouped) pulse
+  int rule = 1;                   ///< which of the three set it
 };
 
-/// @brief The MPE per pulse of @p pulse repeated over @p exposure_s at @p wavelength_nm.
+/// @brief The MPE per pulse of @p pulse repeated over @p exposure_s at @p wavelength_nm, for
+/// @p tissue under @p standard.
 /// @pre the pulse has a repetition rate, duration × rate ≤ 1 and rate × exposure ≥ 1; the MPE
-/// table's ranges hold (ocularMpe throws std::out_of_range otherwise).
+/// table's ranges hold (tableMpe throws std::out_of_range otherwise).
 PulseTrainMpe pulseTrainMpe(double wavelength_nm, const PulseSpec& pulse, double exposure_s,
-                            SafetyStandard standard = SafetyStandard::AnsiZ136_1_2014);
+                            SafetyStandard standard = SafetyStandard::AnsiZ136_1_2014,
+                            Tissue tissue = Tissue::Eye);
 
 /// @brief How meteorological visibility gives extinction (both: μ = 3.912/V (λ/550 nm)^-q).
 enum class VisibilityModel {
@@ -94,9 +101,11 @@ double opticalGain(double aperture_m, double magnification, double transmission,
 struct HazardSpec {
   /// The standard whose limits apply (its tables and rules; cited in every output).
   SafetyStandard standard = SafetyStandard::AnsiZ136_1_2014;
-  double wavelength_nm = 0.0;  ///< the laser's (`laser.wavelength_nm`): the limits' row
+  Tissue tissue = Tissue::Eye;  ///< what the limits protect: the eye, or the skin
+  double wavelength_nm = 0.0;   ///< the laser's (`laser.wavelength_nm`): the limits' row
   /// `laser.exposure_s`, by default 0.25 s (the aversion response) for 400–700 nm and 10 s
-  /// beyond 700 nm, where nothing makes the eye turn away; a single pulse's duration.
+  /// beyond 700 nm, where nothing makes the eye turn away, and 10 s for the skin (whose
+  /// limits are a constant irradiance from there on); a single pulse's duration.
   double exposure_s = 0.25;
   /// The exposure is the default for the wavelength (defaultExposureS()): exposure_s was not
   /// in the file and the laser is not a single pulse (whose exposure is its duration).
@@ -137,9 +146,9 @@ struct HazardSpec {
   }
 };
 
-/// @brief The default exposure at @p wavelength_nm: 0.25 s (aversion response) to 700 nm, 10 s
-/// beyond.
-double defaultExposureS(double wavelength_nm);
+/// @brief The default exposure at @p wavelength_nm for @p tissue: for the eye 0.25 s (aversion
+/// response) to 700 nm and 10 s beyond; for the skin 10 s.
+double defaultExposureS(double wavelength_nm, Tissue tissue = Tissue::Eye);
 
 /// @brief Fills @p h's limits from its wavelength, exposure, pulse and aid: the table's MPE, the
 /// pulse train's, `mpe_w_m2` and `pulse_exposure_s`.

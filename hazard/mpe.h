@@ -1,7 +1,7 @@
 #pragma once
 /// @file
-/// @brief The ocular Maximum Permissible Exposure for a point source (ANSI Z136.1-2014
-/// Table 5a, harmonised with IEC 60825-1:2014 Table A.1).
+/// @brief The Maximum Permissible Exposure for a point source, for the eye or the skin, under
+/// ANSI Z136.1-2014 (Tables 5a and 7) or IEC 60825-1:2014 (Tables A.1 and A.5).
 
 #include <string>
 #include <vector>
@@ -24,24 +24,34 @@ struct Mpe {
   std::string
       rule;  ///< the table row that applied, e.g. "400-700 nm, 5e-6-10 s: 18 C_A t^0.75 J/m²"
   SafetyStandard standard = SafetyStandard::AnsiZ136_1_2014;  ///< whose table the row is
+  Tissue tissue = Tissue::Eye;                                ///< which of its tables
 };
 
-/// @brief The ocular MPE for intrabeam (point-source) viewing of a single exposure of
-/// @p exposure_s seconds at @p wavelength_nm.
+/// @brief The MPE of @p standard for @p tissue, a single exposure of @p exposure_s seconds at
+/// @p wavelength_nm.
 ///
-/// A glint is treated as a point source (apparent angular subtense ≤ α_min = 1.5 mrad): that
-/// is the most restrictive case, so the MPE is conservative for larger apparent sources.
-/// Repetitive pulses and extended-source relaxations are not modelled.
+/// For the eye, intrabeam (point-source) viewing: a glint is treated as a point source
+/// (apparent angular subtense ≤ α_min = 1.5 mrad), the most restrictive case, so the MPE is
+/// conservative for larger apparent sources. For the skin beyond 10 s at 1.4 µm to 1 mm, the
+/// limit of lit areas above 0.1 m² (glint does not know the area a glint lights).
+/// Repetitive pulses are applied by pulseTrainMpe() (hazard/hazard.h).
 /// Valid for 400 nm ≤ wavelength ≤ 1 mm and 1 ns ≤ exposure ≤ 30 000 s; anything else throws
-/// std::out_of_range naming the range: the table is never extrapolated.
+/// std::out_of_range naming the range: the tables are never extrapolated.
+Mpe tableMpe(double wavelength_nm, double exposure_s, SafetyStandard standard, Tissue tissue);
+
+/// @brief The ocular MPE for intrabeam (point-source) viewing: tableMpe() for the eye.
 Mpe ocularMpe(double wavelength_nm, double exposure_s,
               SafetyStandard standard = SafetyStandard::AnsiZ136_1_2014);
 
-/// @brief The durations (s) at which some row of the table begins, at any wavelength, in
-/// increasing order. Between two of them every row is a constant or a power of t with a
-/// non-negative exponent as radiant exposure, so there the MPE in J/m² never falls as the
-/// duration grows; at one of them it may (ANSI Z136.1-2014 Table 5a: 2.0e-3 J/m² to 5 µs,
-/// 18 t^0.75 J/m² = 1.9e-3 J/m² from 5 µs at 400–700 nm).
+/// @brief The skin's MPE: tableMpe() for the skin.
+Mpe skinMpe(double wavelength_nm, double exposure_s,
+            SafetyStandard standard = SafetyStandard::AnsiZ136_1_2014);
+
+/// @brief The durations (s) at which some row of the tables begins, at any wavelength, for
+/// either standard and tissue, in increasing order. Between two of them every row is a constant or
+/// a power of t with a non-negative exponent as radiant exposure, so there the MPE in J/m² never
+/// falls as the duration grows; at one of them it may (ANSI Z136.1-2014 Table 5a: 2.0e-3 J/m² to 5
+/// µs, 18 t^0.75 J/m² = 1.9e-3 J/m² from 5 µs at 400–700 nm).
 const std::vector<double>& mpeRowEdgesS();
 
 /// @brief The table row of @p mpe with the standard's and the table's name, as outputs record

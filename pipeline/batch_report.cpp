@@ -240,7 +240,8 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
       channels.push_back({"aided_coverage_lower", &aided_bounds.lower});
       channels.push_back({"aided_coverage_upper", &aided_bounds.upper});
     }
-    writeExr(file.stream(), g, channels, {program, study.base.hazard.wavelength_nm, h.mpe_w_m2});
+    writeExr(file.stream(), g, channels,
+             {program, study.base.hazard.wavelength_nm, h.mpe_w_m2, hazardCitation(h)});
   } else {
     LatticeMeta meta;
     meta.strings = {{"program", program},

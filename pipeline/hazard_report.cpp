@@ -9,7 +9,8 @@
 namespace glint {
 
 std::string hazardLine(const HazardSpec& h) {
-  std::string s = "MPE " + formatNumber("%.4g", h.mpe_w_m2) + " W/m² for " +
+  std::string s = std::string(clauses(h.standard).name) + ", " + toString(h.tissue) + ": MPE " +
+                  formatNumber("%.4g", h.mpe_w_m2) + " W/m² for " +
                   formatNumber("%g", h.exposure_s) + " s (" +
                   (h.exposure_default ? "default, " : "") + toString(h.mpe.limit) + ")";
   if (h.train) {
@@ -27,7 +28,12 @@ std::string hazardLine(const HazardSpec& h) {
 }
 
 nlohmann::json hazardLimitsJson(const HazardSpec& h) {
-  nlohmann::json j = {{"exposure_s", h.exposure_s},
+  const StandardClauses& c = clauses(h.standard);
+  nlohmann::json j = {{"standard", c.name},
+                      {"standard_edition", c.edition_year},
+                      {"tissue", toString(h.tissue)},
+                      {"mpe_table", mpeTable(h.standard, h.tissue)},
+                      {"exposure_s", h.exposure_s},
                       {"exposure_default", h.exposure_default},
                       {"mpe_w_m2", h.mpe_w_m2},
                       {"mpe_j_m2", h.mpe_w_m2 * h.exposure_s},
@@ -48,7 +54,10 @@ nlohmann::json hazardLimitsJson(const HazardSpec& h) {
       pulse["rule_2_average_j_m2"] = t.average_j_m2;
       if (t.reduced_j_m2 > 0.0) {
         pulse["rule_3_reduced_j_m2"] = t.reduced_j_m2;
-        pulse["c_p"] = t.c_p;
+        pulse["rule_3_reduction"] = t.c_p;
+        pulse["rule_3_pulses"] = t.reduction_pulses;
+        if (h.standard == SafetyStandard::AnsiZ136_1_2014) pulse["c_p"] = t.c_p;
+        if (h.standard == SafetyStandard::Iec60825_1_2014) pulse["c5"] = t.c_p;
       }
     }
     j["pulse"] = pulse;

@@ -406,7 +406,7 @@ std::vector<std::string> ScenarioMaps::folderNames(const Scene& base) {
 }
 
 ExrInfo exrInfo(const RunInfo& info) {
-  return {info.program_version, info.wavelength_nm, info.mpe_w_m2};
+  return {info.program_version, info.wavelength_nm, info.mpe_w_m2, info.mpe_rule};
 }
 
 }  // namespace glint

@@ -64,8 +64,10 @@ PulseSpec readPulse(ObjectReader r, const std::optional<double>& power_w, double
 // The exposure; its MPE once the pulse and the optical aid are known (completeHazard).
 HazardSpec readExposure(ObjectReader& r, double wavelength_nm,
                         const std::optional<double>& exposure_s,
-                        const std::optional<PulseSpec>& pulse) {
+                        const std::optional<PulseSpec>& pulse, const HazardSpec& limits) {
   HazardSpec h;
+  h.standard = limits.standard;
+  h.tissue = limits.tissue;
   h.wavelength_nm = wavelength_nm;
   if (!(wavelength_nm >= 400.0 && wavelength_nm <= 1.0e6)) {
     r.fail("wavelength_nm",
@@ -84,7 +86,7 @@ HazardSpec readExposure(ObjectReader& r, double wavelength_nm,
     h.exposure_s = pulse->duration_s;
     return h;
   }
-  h.exposure_s = exposure_s.value_or(defaultExposureS(wavelength_nm));
+  h.exposure_s = exposure_s.value_or(defaultExposureS(wavelength_nm, h.tissue));
   if (!(h.exposure_s >= 1e-9 && h.exposure_s <= 3e4)) {
     r.fail("exposure_s", "must be in 1e-9 s to 3e4 s, the range of the MPE table");
   }
@@ -99,7 +101,8 @@ HazardSpec readExposure(ObjectReader& r, double wavelength_nm,
   return h;
 }
 
-// The laser as a beam; its wavelength and exposure go to @p hazard.
+// The laser as a beam; its wavelength and exposure go to @p hazard, whose standard and tissue
+// are read already.
 Beam readLaser(ObjectReader r, HazardSpec& hazard) {
   Beam laser;
   laser.origin_m = position(r, "position");
@@ -117,7 +120,7 @@ Beam readLaser(ObjectReader r, HazardSpec& hazard) {
   } else {
     laser.power_w = r.number("power_w");  // required: fails with the key's name when missing
   }
-  hazard = readExposure(r, wavelength_nm, exposure_s, pulse);
+  hazard = readExposure(r, wavelength_nm, exposure_s, pulse, hazard);
 
   ObjectReader beam = r.object("beam");
   const std::size_t profile = beam.choice("profile", {"flat_top", "gaussian"});
@@ -132,6 +135,22 @@ Beam readLaser(ObjectReader r, HazardSpec& hazard) {
   beam.finish();
   r.finish();
   return laser;
+}
+
+// The limits' standard and tissue (`hazard`); ANSI Z136.1-2014 for the eye by default.
+void readHazardLimits(ObjectReader r, HazardSpec& h) {
+  if (r.has("standard")) {
+    const std::string name = r.string("standard");
+    const std::optional<SafetyStandard> standard = standardNamed(name);
+    if (!standard) {
+      r.fail("standard", "must be \"" + std::string(clauses(SafetyStandard::AnsiZ136_1_2014).name) +
+                             "\" (the default) or \"" +
+                             clauses(SafetyStandard::Iec60825_1_2014).name + "\"");
+    }
+    h.standard = *standard;
+  }
+  h.tissue = r.choice("tissue", {"eye", "skin"}, 0) == 0 ? Tissue::Eye : Tissue::Skin;
+  r.finish();
 }
 
 // The air (`atmosphere`): an extinction coefficient, or a visibility and the model that turns
@@ -650,6 +669,7 @@ Scene parseScene(std::string_view text, const std::string& source,
   scene.source = source;
   ObjectReader r(root, "", source);
   scene.description = r.string("description", "");
+  if (r.has("hazard")) readHazardLimits(r.object("hazard"), scene.hazard);
   scene.laser = readLaser(r.object("laser"), scene.hazard);
   const double wavelength_nm = scene.hazard.wavelength_nm;
   if (r.has("atmosphere")) {
@@ -658,6 +678,10 @@ Scene parseScene(std::string_view text, const std::string& source,
   scene.laser.extinction_per_m = scene.hazard.atmosphere.extinction_per_m;
   scene.laser.return_extinction_per_m = scene.hazard.atmosphere.extinction_per_m;
   if (r.has("optical_aid")) {
+    if (scene.hazard.tissue == Tissue::Skin) {
+      r.fail("optical_aid",
+             "is a viewer's: it changes the eye's exposure, and hazard.tissue is \"skin\"");
+    }
     scene.hazard.aid =
         readOpticalAid(r.object("optical_aid"), wavelength_nm, scene.hazard.standard);
   }

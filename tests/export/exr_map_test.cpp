@@ -49,7 +49,7 @@ TEST(ExrMap, ChannelsAreFloatAndKeepValuesBeyondHalfRange) {
   map.level = {0, 1, 2, 3, 4, 5};
   map.status = {1, 2, 3, 1, 1, 5};
   std::ostringstream out;
-  writeExr(out, map, {"glint test", 532.0, 25.0});
+  writeExr(out, map, {"glint test", 532.0, 25.0, "ANSI Z136.1-2014 Table 5a: test row"});
 
   MemoryIStream in(out.str());
   Imf::InputFile file(in);

@@ -214,24 +214,30 @@ TEST(ExposureWindow, AConstantExposureIsWorstOverItsOwnLength) {
   }
 }
 
-// Within each row of the table the MPE as radiant exposure never falls as the duration grows,
-// at every wavelength row glint uses: what the window search's bound H_max(b) / MPE(a) rests
-// on between the rows' edges.
+// Within each row of the tables the MPE as radiant exposure never falls as the duration grows,
+// at every wavelength row glint uses, for either standard and tissue: what the window search's
+// bound H_max(b) / MPE(a) rests on between the rows' edges.
 TEST(ExposureWindow, TheMpeAsRadiantExposureGrowsWithDurationWithinEachRow) {
   const std::vector<double>& edges = mpeRowEdgesS();
-  for (double nm : {400.0, 450.0, 532.0, 600.0, 700.0, 905.0, 1064.0, 1200.0, 1450.0, 1550.0,
-                    2000.0, 10600.0}) {
-    double before = 0.0, previous_t = 0.0;
-    for (double lg = -9.0; lg <= 4.4; lg += 0.002) {
-      const double t = std::pow(10.0, lg);
-      const bool new_row = std::any_of(edges.begin(), edges.end(),
-                                       [&](double e) { return previous_t < e && e <= t; });
-      const double h = ocularMpe(nm, t).radiant_exposure_j_m2;
-      if (!new_row) {
-        ASSERT_GE(h, before * (1 - 1e-12)) << nm << " nm at " << t << " s";
+  for (SafetyStandard standard :
+       {SafetyStandard::AnsiZ136_1_2014, SafetyStandard::Iec60825_1_2014}) {
+    for (Tissue tissue : {Tissue::Eye, Tissue::Skin}) {
+      for (double nm : {400.0, 450.0, 532.0, 600.0, 700.0, 905.0, 1064.0, 1200.0, 1300.0, 1450.0,
+                        1550.0, 2000.0, 10600.0}) {
+        double before = 0.0, previous_t = 0.0;
+        for (double lg = -9.0; lg <= 4.4; lg += 0.002) {
+          const double t = std::pow(10.0, lg);
+          const bool new_row = std::any_of(edges.begin(), edges.end(),
+                                           [&](double e) { return previous_t < e && e <= t; });
+          const double h = tableMpe(nm, t, standard, tissue).radiant_exposure_j_m2;
+          if (!new_row) {
+            ASSERT_GE(h, before * (1 - 1e-12)) << clauses(standard).name << " " << toString(tissue)
+                                               << " " << nm << " nm at " << t << " s";
+          }
+          before = h;
+          previous_t = t;
+        }
       }
-      before = h;
-      previous_t = t;
     }
   }
 }

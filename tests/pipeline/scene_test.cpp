@@ -91,9 +91,9 @@ TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
        "scene.json: /laser/colour: unknown key (expected one of: position, direction, power_w, "
        "wavelength_nm, exposure_s, pulse, beam)"},
       {[](json& j) { j["extra"] = 1; },
-       "scene.json: /extra: unknown key (expected one of: description, laser, atmosphere, "
-       "optical_aid, materials, objects, accuracy, observers, planes, far_field, reach, "
-       "engagement)"},
+       "scene.json: /extra: unknown key (expected one of: description, hazard, laser, "
+       "atmosphere, optical_aid, materials, objects, accuracy, observers, planes, far_field, "
+       "reach, engagement)"},
       {[](json& j) {
          j["engagement"] = {{"start_s", 0}, {"end_s", 1}};
        },
