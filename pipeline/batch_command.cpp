@@ -235,7 +235,7 @@ void runScenarioRegion(const ScenarioWork& w, StudyLattice& r, ScenarioTally& ta
   const RegionValues e{r.plane ? planeIrradiance(field) : field.irradianceLattice(), {}, {}};
   std::vector<std::string> written;
   if (r.plane) {
-    written = w.maps.writePlane(r.plane_index, {field, w.scene.hazard, w.info});
+    written = w.maps.writePlane(r.plane_index, {field, w.scene.hazard, w.info, nullptr, {}});
   } else {
     BoxResults box{field, problem.integrator, w.info};
     written = w.maps.writeBox(box);

@@ -22,6 +22,15 @@ inline constexpr const char* kReachVtp = "reach.vtp";
 inline constexpr const char* kEngagementVdb = "engagement.vdb";  ///< an engagement over the box
 /// @brief A plane's map (glint run), and its aggregate over a study's scenarios (glint batch).
 inline std::string planeExr(const std::string& plane_name) { return plane_name + ".exr"; }
+/// @brief A plane's map on the site's projected map (a scene with a `site`).
+inline std::string planeGeoTiff(const std::string& plane_name) { return plane_name + ".tif"; }
+/// @brief A plane's hazard zones as polygons on the Earth (a scene with a `site`).
+inline std::string planeZonesGeoJson(const std::string& plane_name) {
+  return plane_name + "_zones.geojson";
+}
+inline std::string planeZonesKml(const std::string& plane_name) {
+  return plane_name + "_zones.kml";
+}
 
 // glint batch: the study's folder (summary.json too) and each scenario's
 inline constexpr const char* kScenariosCsv = "scenarios.csv";

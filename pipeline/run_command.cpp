@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "export/field_files.h"
+#include "export/geo_files.h"
 #include "export/lattice_vdb.h"
 #include "glint/version.h"
 #include "observers/exposure.h"
@@ -362,8 +363,44 @@ void runBox(const RunContext& c, const FarResult& far, RunSummary& s) {
   c.outputs.writeBox(results);  // last: the VDB takes the field's grids
 }
 
+// Where a plane's map lies on the site's map, or why it has none.
+nlohmann::json planeMapJson(const PlaneSpec& plane, const ObserverField& field,
+                            const SiteFrame& site) {
+  if (!mappable(plane.u_axis, plane.v_axis)) {
+    return {{"written", false},
+            {"reason", "the plane is tilted more than " + formatNumber("%g", kMaxMapTiltDeg) +
+                           " degrees from the horizontal: seen from above it is a sliver"}};
+  }
+  const auto n = field.spec().nodes();
+  PlaneGrid grid;
+  grid.width = n[0];
+  grid.height = n[1];
+  grid.origin_m = field.spec().min_m;
+  grid.u_axis = field.spec().axes[0];
+  grid.v_axis = field.spec().axes[1];
+  grid.pixel_m = field.spec().voxel_m;
+  const GeoPlacement p = placeOnMap(grid, site);
+  return {{"written", true},
+          {"geotiff", output_names::planeGeoTiff(plane.name)},
+          {"zones",
+           {output_names::planeZonesGeoJson(plane.name), output_names::planeZonesKml(plane.name)}},
+          {"geotransform", p.geotransform},
+          {"affine_error_m", p.affine_error_m}};
+}
+
+nlohmann::json siteJson(const SiteFrame& site) {
+  const SiteSpec& s = site.spec();
+  nlohmann::json j = {{"latitude_deg", s.latitude_deg}, {"longitude_deg", s.longitude_deg},
+                      {"height_m", s.height_m},         {"bearing_deg", s.bearing_deg},
+                      {"map_crs", site.mapName()},      {"map_proj", site.mapProj()}};
+  if (site.mapEpsg() > 0) j["map_epsg"] = site.mapEpsg();
+  return j;
+}
+
 void runPlanes(const RunContext& c, RunSummary& s) {
   nlohmann::json planes = nlohmann::json::array();
+  const std::unique_ptr<SiteFrame> site =
+      c.scene.site ? std::make_unique<SiteFrame>(*c.scene.site) : nullptr;
   for (std::size_t p = 0; p < c.scene.planes.size(); ++p) {
     const PlaneSpec& plane = c.scene.planes[p];
     const FieldResult r =
@@ -371,10 +408,11 @@ void runPlanes(const RunContext& c, RunSummary& s) {
                              plane.name.c_str(), c.watch, c.err, c.exchange);
     const ObserverField& field = *r.field;
     requireFinite(field, "plane " + plane.name);
-    c.outputs.writePlane(p, {field, c.scene.hazard, c.info});
+    c.outputs.writePlane(p, {field, c.scene.hazard, c.info, nullptr, {}});
     const HazardZone zone =
         hazardZone(field, c.scene.hazard, targetCentre(r.problem.integrator.target()));
     planes.push_back(planeJson(plane, field, zone));
+    if (site) planes.back()["map"] = planeMapJson(plane, field, *site);
     if (field.stats().peak_w_m2 > 0.0) {
       s.probes.emplace_back("plane " + plane.name + "'s peak", field.stats().peak_at_m);
     }
@@ -449,6 +487,7 @@ void checkSurfaces(const RunContext& c, const FarResult& far, RunSummary& s) {
 void finishRun(const RunContext& c, const std::filesystem::path& dir,
                const std::vector<std::string>& stale, RunSummary& s) {
   s.j["scene_path"] = sceneIdentity(c.args.scene_path);
+  if (c.scene.site) s.j["site"] = siteJson(SiteFrame(*c.scene.site));
   s.j["files"] = c.outputs.names();
   if (!stale.empty()) s.j["earlier_files_kept"] = stale;
   *c.outputs.summary() << s.j.dump(2) << "\n";

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "export/atomic_file.h"
+#include "export/geo_files.h"
 #include "export/vtk_files.h"
 #include "facets/integrator.h"
 #include "pipeline/hazard_report.h"
@@ -69,6 +70,55 @@ void writePlaneExr(std::ostream& out, const PlaneResults& r) {
   writeExr(out, planeMap(r.field, r.hazard), exrInfo(r.info));
 }
 
+GeoInfo geoInfo(const PlaneResults& r) {
+  return {r.info.program_version, r.plane_name, r.info.mpe_rule, r.info.wavelength_nm,
+          r.info.mpe_w_m2};
+}
+
+// The plane's map on the site's map: the hazard ratio and the irradiance first, as GIS tools
+// show the first band; then the aided ratio (with an aid) and the status codes.
+void writePlaneGeoTiff(std::ostream& out, const PlaneResults& r) {
+  const PlaneMap m = planeMap(r.field, r.hazard);
+  std::vector<ExrChannel> channels = {{"hazard_ratio", &m.hazard_ratio},
+                                      {"irradiance_w_m2", &m.irradiance_w_m2}};
+  std::vector<std::string> units = {"1 (irradiance / MPE)", "W/m^2"};
+  if (r.hazard.aid) {
+    channels.push_back({"aided_hazard_ratio", &m.aided_hazard_ratio});
+    units.emplace_back("1 (irradiance x optical aid gain / MPE)");
+  }
+  channels.push_back({"status", &m.status});
+  units.emplace_back(voxelStatusMeanings());
+  writeGeoTiff(out, m, channels, units, *r.site, geoInfo(r));
+}
+
+// The plane's zones: where the ratio reaches 1, naked eye and aided, and where a glint narrower
+// than the lattice may pass with a bound above the MPE (status 6), which a hazard map must not
+// leave out.
+void writePlaneZones(std::ostream& out, const PlaneResults& r, VectorFormat format) {
+  const PlaneMap m = planeMap(r.field, r.hazard);
+  const std::size_t n = m.hazard_ratio.size();
+  ZoneMask hazardous{"hazardous", "hazard ratio >= 1: irradiance at or above the MPE", {}};
+  ZoneMask unresolved{"may_be_hazardous",
+                      "a glint narrower than the lattice may pass here, and its bound reaches "
+                      "the MPE (status 6)",
+                      {}};
+  hazardous.inside.resize(n);
+  unresolved.inside.resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    hazardous.inside[k] = m.hazard_ratio[k] >= 1.0F;
+    unresolved.inside[k] = !hazardous.inside[k] && static_cast<int>(m.status[k]) ==
+                                                       static_cast<int>(VoxelStatus::Unresolved);
+  }
+  std::vector<ZoneMask> zones{std::move(hazardous), std::move(unresolved)};
+  if (r.hazard.aid) {
+    ZoneMask aided{"aided_hazardous", "aided hazard ratio >= 1: through the optical aid", {}};
+    aided.inside.resize(n);
+    for (std::size_t k = 0; k < n; ++k) aided.inside[k] = m.aided_hazard_ratio[k] >= 1.0F;
+    zones.push_back(std::move(aided));
+  }
+  writeZones(out, format, m, zones, *r.site, geoInfo(r));
+}
+
 }  // namespace
 
 // Every output of glint run: its name, the region it is written from, its writer and whether a
@@ -89,6 +139,7 @@ struct RunOutputs::Declared {
   bool takes_field = false;    // the box's VDB moves the grids out of the field
   bool staged_folder = false;  // the AMR data set: a folder staged beside its .vthb
   bool aided_only = false;     // written with an optical aid only
+  bool geo = false;            // with a site only, of planes flat enough for a map
   // A study's scenario writes it too, under the same name in its folder, so that a scenario's
   // map is what glint run writes of the scenario's scene (its result.json vouches for it).
   bool scenario = false;
@@ -99,6 +150,7 @@ struct RunOutputs::Declared {
   }
 
   [[nodiscard]] bool wanted(const Scene& s) const {
+    if (geo && !s.site) return false;
     // An engagement's run writes its planes' maps over time and its summary only: a box, the
     // far field and the reach judge one pose.
     const bool one_pose = !s.engagement.has_value();
@@ -174,6 +226,20 @@ constexpr Declared kOutputs[] = {
      .region = Region::Plane,
      .plane = writePlaneExr,
      .scenario = true},
+    {.plane_name = output_names::planeGeoTiff,
+     .region = Region::Plane,
+     .plane = writePlaneGeoTiff,
+     .geo = true},
+    {.plane_name = output_names::planeZonesGeoJson,
+     .region = Region::Plane,
+     .plane = [](std::ostream& out,
+                 const PlaneResults& r) { writePlaneZones(out, r, VectorFormat::GeoJson); },
+     .geo = true},
+    {.plane_name = output_names::planeZonesKml,
+     .region = Region::Plane,
+     .plane = [](std::ostream& out,
+                 const PlaneResults& r) { writePlaneZones(out, r, VectorFormat::Kml); },
+     .geo = true},
     {.plane_name = output_names::planeExr,
      .region = Region::EngagementPlane,
      .engagement_plane =
@@ -254,8 +320,13 @@ RunOutputs::RunOutputs(const Scene& scene, const std::filesystem::path& dir,
       declare(d, 0);
       continue;
     }
-    for (std::size_t p = 0; p < scene.planes.size(); ++p) declare(d, p);
+    for (std::size_t p = 0; p < scene.planes.size(); ++p) {
+      const PlaneSpec& plane = scene.planes[p];
+      if (!d.geo || mappable(plane.u_axis, plane.v_axis)) declare(d, p);
+    }
   }
+  for (const PlaneSpec& plane : scene.planes) plane_names_.push_back(plane.name);
+  if (scene.site && writer_) site_ = std::make_unique<SiteFrame>(*scene.site);
 }
 
 RunOutputs::~RunOutputs() = default;
@@ -286,9 +357,12 @@ void RunOutputs::writeBox(BoxResults& box) {
 
 void RunOutputs::writePlane(std::size_t index, const PlaneResults& plane) {
   if (!writer_) return;
+  PlaneResults placed = plane;
+  placed.site = site_.get();
+  placed.plane_name = plane_names_.at(index);
   for (const Declared* d : writingOrder(Region::Plane)) {
     if (const std::optional<std::size_t> i = slotOf(*d, index))
-      d->write(files_[*i]->stream(), plane);
+      d->write(files_[*i]->stream(), placed);
   }
 }
 

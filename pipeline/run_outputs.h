@@ -17,6 +17,7 @@
 #include "export/exr_map.h"
 #include "export/field_files.h"
 #include "export/lattice_vdb.h"
+#include "geo/site.h"
 #include "hazard/hazard.h"
 #include "observers/far_field.h"
 #include "observers/field.h"
@@ -42,6 +43,9 @@ struct PlaneResults {
   const ObserverField& field;
   const HazardSpec& hazard;
   const RunInfo& info;
+  /// The scene's site and the plane's name, for the geo-referenced maps: RunOutputs fills them.
+  const SiteFrame* site = nullptr;
+  std::string plane_name;
 };
 
 /// @brief One plane's maps over an engagement as its file is written from them.
@@ -126,6 +130,8 @@ class RunOutputs {
   std::vector<std::size_t> planes_;
   std::vector<std::unique_ptr<AtomicFile>> files_;
   std::unique_ptr<StagedAmr> amr_;
+  std::vector<std::string> plane_names_;  ///< the scene's planes, by index
+  std::unique_ptr<SiteFrame> site_;       ///< the scene's site, where it has one
 };
 
 /// @brief The maps one scenario of a study writes into its folder (glint batch): of each of

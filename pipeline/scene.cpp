@@ -137,6 +137,26 @@ Beam readLaser(ObjectReader r, HazardSpec& hazard) {
   return laser;
 }
 
+// Where the local frame lies on the Earth (`site`).
+SiteSpec readSite(ObjectReader r) {
+  SiteSpec site;
+  site.projection = r.choice("projection", {"utm", "local_tm"}, 0) == 0
+                        ? MapProjection::Utm
+                        : MapProjection::LocalTransverseMercator;
+  // UTM is defined from 80° S to 84° N; the local transverse Mercator anywhere short of a pole.
+  const bool utm = site.projection == MapProjection::Utm;
+  site.latitude_deg = inRange(r, "latitude_deg", r.number("latitude_deg"), utm ? -80.0 : -89.0,
+                              utm ? 84.0 : 89.0, "degrees");
+  site.longitude_deg =
+      inRange(r, "longitude_deg", r.number("longitude_deg"), -180.0, 180.0, "degrees");
+  // From the Dead Sea's shore to above Everest's summit.
+  site.height_m = inRange(r, "height_m", r.number("height_m", 0.0), -500.0, 9000.0, "m");
+  site.bearing_deg =
+      inRange(r, "bearing_deg", r.number("bearing_deg", 0.0), -360.0, 360.0, "degrees");
+  r.finish();
+  return site;
+}
+
 // The limits' standard and tissue (`hazard`); ANSI Z136.1-2014 for the eye by default.
 void readHazardLimits(ObjectReader r, HazardSpec& h) {
   if (r.has("standard")) {
@@ -722,6 +742,7 @@ Scene parseScene(std::string_view text, const std::string& source,
   if (r.has("far_field")) scene.far_field = readFarField(r.object("far_field"));
   if (r.has("reach")) scene.reach = readReach(r.object("reach"));
   if (r.has("engagement")) scene.engagement = readEngagement(r.object("engagement"), scene);
+  if (r.has("site")) scene.site = readSite(r.object("site"));
   r.finish();
   return scene;
 }

@@ -19,6 +19,7 @@
 #include "facets/patch.h"
 #include "facets/tessellate.h"
 #include "facets/vec3.h"
+#include "geo/site.h"
 #include "hazard/hazard.h"
 #include "observers/exposure.h"
 #include "observers/motion.h"
@@ -143,6 +144,9 @@ struct Scene {
   FarFieldSettings far_field;
   ReachSettings reach;
   std::optional<EngagementSpec> engagement;
+  /// Key `site`: where the local frame lies on the Earth; with it every map of a plane flat
+  /// enough is also written geo-referenced (export/geo_files.h).
+  std::optional<SiteSpec> site;
 
   /// @brief Whether `glint run` computes the hazard reach: asked for, or, unless refused,
   /// where there is no box or plane.

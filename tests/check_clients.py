@@ -28,6 +28,8 @@ PROGRAMS = {
     "xvfb-run": "xvfb",  # examples/README.md, render_hazard.py
     "xauth": "xauth",  # xvfb-run
     "vdb_print": "libopenvdb-tools",  # examples/README.md, GlintRun.VdbPrintListsTheGrids
+    "gdalinfo": "gdal-bin",  # tests/export/check_geo.py
+    "ogrinfo": "gdal-bin",
     "cmake": "cmake",  # the build, `cmake -E env` in tests
     "ctest": "cmake",
     "ninja": "ninja-build",
@@ -49,6 +51,7 @@ MODULES = {
     "numpy": "python3-numpy",
     "paraview": "python3-paraview",
     "vtkmodules": "python3-paraview",
+    "osgeo": "python3-gdal",
 }
 
 
