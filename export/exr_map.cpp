@@ -116,6 +116,7 @@ void writeExr(std::ostream& out, const PlaneMap& map, const ExrInfo& info) {
   }
   channels.push_back({"level", &map.level});
   channels.push_back({"status", &map.status});
+  if (!map.observer_z_m.empty()) channels.push_back({"observer_z_m", &map.observer_z_m});
   writeExr(out, static_cast<const PlaneGrid&>(map), channels, info);
 }
 

@@ -29,6 +29,8 @@ struct PlaneMap : PlaneGrid {
   std::vector<float> aided_hazard_ratio;  ///< irradiance × aid gain / MPE; empty without an aid
   std::vector<float> level;               ///< refinement level (0 = coarsest block)
   std::vector<float> status;              ///< VoxelStatus: why a 0 is 0 (proven below floor, ...)
+  /// A plane laid over the terrain: each observer's height, local z (m); empty for a flat one.
+  std::vector<float> observer_z_m;
 };
 
 /// @brief One FLOAT channel: width × height values indexed [j × width + i].

@@ -43,8 +43,10 @@ PatchGeometry enclosing(const PatchGeometry& a, const PatchGeometry& b) {
 }  // namespace
 
 void FacetIntegrator::buildOccluder() {
-  if (options_.occlusion && needsOcclusion(*target_)) {
-    occluder_ = std::make_shared<const Occluder>(*target_);
+  const bool self_shadowing = options_.occlusion && needsOcclusion(*target_);
+  if (self_shadowing || options_.terrain) {
+    occluder_ =
+        std::make_shared<const Occluder>(*target_, 2, self_shadowing, options_.terrain.get());
   }
 }
 

@@ -20,6 +20,8 @@
 
 namespace glint {
 
+struct ShadowMesh;  // facets/occluder.h
+
 /// @brief How each observer's integral over a lit facet is computed: each scheme is a rule (how a
 /// piece is seeded, estimated and split) of the one refinement engine (detail/refine.h,
 /// detail/schemes.h), chosen once per observer.
@@ -66,6 +68,9 @@ struct IntegratorOptions {
   /// if its centre sees the laser and the observer. Off: every facet sees everything.
   bool occlusion = true;
   IntegrationScheme scheme = IntegrationScheme::Lobe;
+  /// Triangles that shadow the beam and the reflected paths whatever `occlusion` says: the
+  /// terrain. Null: none.
+  std::shared_ptr<const ShadowMesh> terrain;
 };
 
 /// @brief The irradiance at one observer and how it was obtained.

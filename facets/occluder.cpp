@@ -45,7 +45,8 @@ struct Occluder::Impl {
   }
 };
 
-Occluder::Occluder(const Target& target, int level) : impl_(std::make_unique<Impl>()) {
+Occluder::Occluder(const Target& target, int level, bool target_shadows, const ShadowMesh* terrain)
+    : impl_(std::make_unique<Impl>()) {
   // The pieces of every coarse facet, in world coordinates for now.
   std::vector<std::array<Vec3, 3>> pieces;
   lift_m_.resize(target.facetCount());
@@ -58,6 +59,8 @@ Occluder::Occluder(const Target& target, int level) : impl_(std::make_unique<Imp
     const Vec3 chord_normal =
         tryNormalize(glm::cross(c[1] - c[0], c[2] - c[0])).value_or(Vec3(0.0));
     subFacetsAtDepth(target, i, level, leaves);
+    // Without the target's own shadows its pieces still set the frame and the lifts, but stay
+    // out of the scene.
     // How far the surface bulges off the chord, sampled at the pieces' corners: the lift
     // clears it with half again to spare.
     double bulge = 0.0;
@@ -69,12 +72,13 @@ Occluder::Occluder(const Target& target, int level) : impl_(std::make_unique<Imp
         lo = glm::min(lo, world[k]);
         hi = glm::max(hi, world[k]);
       }
-      pieces.push_back(world);
+      if (target_shadows) pieces.push_back(world);
     }
     lift_m_[i] = 1.5 * bulge;
   }
-  triangles_ = pieces.size();
-  if (pieces.empty()) return;
+  terrain_triangles_ = terrain != nullptr ? terrain->triangles.size() : 0;
+  triangles_ = pieces.size() + terrain_triangles_;
+  if (triangles_ == 0) return;
 
   impl_->frame_origin_m = 0.5 * (lo + hi);
   // Float rounding of the stored triangles: a few ulps of the largest coordinate.
@@ -88,25 +92,50 @@ Occluder::Occluder(const Target& target, int level) : impl_(std::make_unique<Imp
   impl_->scene = rtcNewScene(impl_->device);
   rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
-  RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                               RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                               3 * pieces.size()));
-  auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-      geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), pieces.size()));
-  for (std::size_t t = 0; t < pieces.size(); ++t) {
-    for (int k = 0; k < 3; ++k) {
-      const Vec3 v = pieces[t][k] - impl_->frame_origin_m;
-      const std::size_t at = 3 * t + static_cast<std::size_t>(k);
-      vertices[3 * at + 0] = static_cast<float>(v.x);
-      vertices[3 * at + 1] = static_cast<float>(v.y);
-      vertices[3 * at + 2] = static_cast<float>(v.z);
-      indices[at] = static_cast<unsigned>(at);
+  if (!pieces.empty()) {
+    RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* vertices = static_cast<float*>(
+        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                3 * sizeof(float), 3 * pieces.size()));
+    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), pieces.size()));
+    for (std::size_t t = 0; t < pieces.size(); ++t) {
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 v = pieces[t][k] - impl_->frame_origin_m;
+        const std::size_t at = 3 * t + static_cast<std::size_t>(k);
+        vertices[3 * at + 0] = static_cast<float>(v.x);
+        vertices[3 * at + 1] = static_cast<float>(v.y);
+        vertices[3 * at + 2] = static_cast<float>(v.z);
+        indices[at] = static_cast<unsigned>(at);
+      }
     }
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(impl_->scene, geometry);
+    rtcReleaseGeometry(geometry);
   }
-  rtcCommitGeometry(geometry);
-  rtcAttachGeometry(impl_->scene, geometry);
-  rtcReleaseGeometry(geometry);
+  if (terrain_triangles_ > 0) {
+    // In the target's frame too: the terrain far off rounds to ~1e-7 of its distance, below
+    // any elevation model's resolution, while the target keeps its own precision.
+    RTCGeometry ground = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(ground, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                          RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                          terrain->vertices_m.size()));
+    auto* t = static_cast<unsigned*>(rtcSetNewGeometryBuffer(ground, RTC_BUFFER_TYPE_INDEX, 0,
+                                                             RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+                                                             terrain->triangles.size()));
+    for (std::size_t k = 0; k < terrain->vertices_m.size(); ++k) {
+      const Vec3 p = terrain->vertices_m[k] - impl_->frame_origin_m;
+      v[3 * k + 0] = static_cast<float>(p.x);
+      v[3 * k + 1] = static_cast<float>(p.y);
+      v[3 * k + 2] = static_cast<float>(p.z);
+    }
+    for (std::size_t k = 0; k < terrain->triangles.size(); ++k) {
+      for (std::size_t c = 0; c < 3; ++c) t[3 * k + c] = terrain->triangles[k][c];
+    }
+    rtcCommitGeometry(ground);
+    rtcAttachGeometry(impl_->scene, ground);
+    rtcReleaseGeometry(ground);
+  }
   rtcCommitScene(impl_->scene);
 }
 

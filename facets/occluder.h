@@ -3,6 +3,7 @@
 /// @brief The target as an occluder: whether a light path from a facet to the laser or to an
 /// observer is blocked by the target itself, traced by Embree (docs/meshes.md, "Occlusion").
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -11,6 +12,14 @@
 #include "facets/vec3.h"
 
 namespace glint {
+
+/// @brief Triangles that cast shadows but reflect nothing, in world coordinates: the terrain
+/// (geo/terrain.h), which masks the beam on its way to the target and each reflection on its
+/// way to an observer.
+struct ShadowMesh {
+  std::vector<Vec3> vertices_m;
+  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< indices into vertices_m
+};
 
 /// @brief Whether a target can shadow itself: false only for one object that is convex
 /// (TargetObject::convex), where every ray would come back clear.
@@ -25,7 +34,10 @@ bool needsOcclusion(const Target& target);
 /// shadows itself.
 class Occluder {
  public:
-  explicit Occluder(const Target& target, int level = 2);
+  /// @param target_shadows the target's own facets join the scene (its self-shadowing);
+  /// @param terrain triangles that shadow too (none: null).
+  explicit Occluder(const Target& target, int level = 2, bool target_shadows = true,
+                    const ShadowMesh* terrain = nullptr);
   ~Occluder();
   Occluder(const Occluder&) = delete;
   Occluder& operator=(const Occluder&) = delete;
@@ -44,6 +56,9 @@ class Occluder {
   /// starts.
   [[nodiscard]] double lift_m(std::uint32_t coarse) const { return lift_m_[coarse]; }
 
+  /// @brief The terrain's triangles among them.
+  [[nodiscard]] std::size_t terrainTriangleCount() const { return terrain_triangles_; }
+
   /// @brief Triangles in the Embree scene.
   [[nodiscard]] std::size_t triangleCount() const { return triangles_; }
 
@@ -52,6 +67,7 @@ class Occluder {
   std::unique_ptr<Impl> impl_;
   std::vector<double> lift_m_;
   std::size_t triangles_ = 0;
+  std::size_t terrain_triangles_ = 0;
 };
 
 }  // namespace glint

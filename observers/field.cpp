@@ -49,6 +49,17 @@ std::vector<float> activeOnLattice(const openvdb::FloatGrid& grid, const std::ar
   return out;
 }
 
+std::array<double, 2> SurfaceOffsets::range(int i0, int j0, int i1, int j1) const {
+  std::array<double, 2> r{at(i0, j0), at(i0, j0)};
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i) {
+      const double o = at(i, j);
+      r[0] = std::min(r[0], o);
+      r[1] = std::max(r[1], o);
+    }
+  return r;
+}
+
 std::array<int, 3> FieldSpec::nodes() const {
   if (radial) return {radial->face_cells + 1, radial->face_cells + 1, radial->layers + 1};
   std::array<int, 3> n{};

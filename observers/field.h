@@ -40,6 +40,22 @@ struct RadialLattice {
   }
 };
 
+/// @brief A plane's lattice laid over a surface: lattice point (i, j) lies offset_m[j × width +
+/// i] along the plane's normal (FieldSpec::axes[2]) from its place on the plane. What carries
+/// observers at eye height over the terrain (geo/terrain.h, docs/terrain.md).
+struct SurfaceOffsets {
+  int width = 0;   ///< lattice points along axes[0]: FieldSpec::nodes()[0]
+  int height = 0;  ///< along axes[1]
+  std::vector<double> offset_m;
+
+  [[nodiscard]] double at(int i, int j) const {
+    return offset_m[static_cast<std::size_t>(j) * static_cast<std::size_t>(width) +
+                    static_cast<std::size_t>(i)];
+  }
+  /// @brief The least and greatest offsets of lattice points (i0..i1, j0..j1), ends included.
+  [[nodiscard]] std::array<double, 2> range(int i0, int j0, int i1, int j1) const;
+};
+
 /// @brief The observer box or plane and its accuracy (scene keys `observers`, `planes`).
 ///
 /// Observers sit on a lattice of spacing voxel_m starting at min_m; the region is extended up
@@ -70,6 +86,8 @@ struct FieldSpec {
   /// whose bound reaches it while a glint narrower than its lattice may pass unseen marks its
   /// points below it VoxelStatus::Unresolved. 0: every such block marks all its points.
   double hazard_threshold_w_m2 = 0.0;
+  /// A plane laid over a surface (plane only): each point offset along axes[2]; null: flat.
+  std::shared_ptr<const SurfaceOffsets> surface;
   /// A lattice of directions × distances instead of the box (min_m, max_m and voxel_m are then
   /// unused): see RadialLattice.
   std::optional<RadialLattice> radial;
@@ -79,8 +97,10 @@ struct FieldSpec {
   /// @brief World position of lattice point (i, j, k).
   [[nodiscard]] Vec3 position(int i, int j, int k) const {
     if (radial) return radialPosition(i, j, k);
-    return min_m + voxel_m * (static_cast<double>(i) * axes[0] + static_cast<double>(j) * axes[1] +
-                              static_cast<double>(k) * axes[2]);
+    const Vec3 flat =
+        min_m + voxel_m * (static_cast<double>(i) * axes[0] + static_cast<double>(j) * axes[1] +
+                           static_cast<double>(k) * axes[2]);
+    return surface ? flat + surface->at(i, j) * axes[2] : flat;
   }
 
  private:

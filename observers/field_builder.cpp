@@ -297,6 +297,7 @@ class FieldBuilder {
   // Three samples span each edge (the octant centres lie between them).
   [[nodiscard]] double sampleSpacing(const Block& b) const {
     const int widest = std::max({b.size[0], b.size[1], flat() ? 0 : b.size[2]});
+    if (spec_.surface) return surfaceSampleSpacing(b);
     if (!spec_.radial) return spec_.voxel_m * std::max(1, widest / 2);
     // A radial block's edges are straight (rays and lines on a layer's plane): the longest.
     const std::array<Vec3, 8> c = corners(b);
@@ -330,7 +331,43 @@ class FieldBuilder {
     return 0.5 * (lo + hi);
   }
 
+  // A plane over a surface: the block's points lie in the box of its square and the range of
+  // their offsets, so the ball about that box holds them.
+  [[nodiscard]] std::array<double, 2> offsetRange(const Block& b) const {
+    return spec_.surface->range(b.o[0], b.o[1], b.o[0] + b.size[0], b.o[1] + b.size[1]);
+  }
+  [[nodiscard]] Vec3 surfaceCentre(const Block& b) const {
+    const std::array<double, 2> r = offsetRange(b);
+    const std::array<Vec3, 3>& e = spec_.axes;
+    return spec_.min_m +
+           spec_.voxel_m * ((b.o[0] + 0.5 * b.size[0]) * e[0] + (b.o[1] + 0.5 * b.size[1]) * e[1]) +
+           0.5 * (r[0] + r[1]) * e[2];
+  }
+  [[nodiscard]] double surfaceRadius(const Block& b) const {
+    const std::array<double, 2> r = offsetRange(b);
+    const double u = spec_.voxel_m * b.size[0], v = spec_.voxel_m * b.size[1], w = r[1] - r[0];
+    return 0.5 * std::sqrt(u * u + v * v + w * w) * (1.0 + 1e-12);
+  }
+  // The widest gap between neighbouring samples of the block's 3 × 3 (in space: a slope
+  // stretches them).
+  [[nodiscard]] double surfaceSampleSpacing(const Block& b) const {
+    const int hu = std::max(1, b.size[0] / 2), hv = std::max(1, b.size[1] / 2);
+    double widest_m = 0.0;
+    for (int a = 0; a <= b.size[0]; a += hu)
+      for (int c = 0; c <= b.size[1]; c += hv) {
+        const Vec3 p = spec_.position(b.o[0] + a, b.o[1] + c, 0);
+        if (a + hu <= b.size[0])
+          widest_m =
+              std::max(widest_m, glm::length(spec_.position(b.o[0] + a + hu, b.o[1] + c, 0) - p));
+        if (c + hv <= b.size[1])
+          widest_m =
+              std::max(widest_m, glm::length(spec_.position(b.o[0] + a, b.o[1] + c + hv, 0) - p));
+      }
+    return widest_m;
+  }
+
   [[nodiscard]] Vec3 centre(const Block& b) const {
+    if (spec_.surface) return surfaceCentre(b);
     if (spec_.radial) return middle(corners(b));
     const std::array<Vec3, 3>& e = spec_.axes;
     return spec_.position(b.o[0], b.o[1], b.o[2]) +
@@ -340,6 +377,7 @@ class FieldBuilder {
   // Half the block's diagonal (a plane's block has no depth). The edges are powers of two, so
   // their ratios to the longest are exact.
   [[nodiscard]] double radius(const Block& b) const {
+    if (spec_.surface) return surfaceRadius(b);
     if (spec_.radial) {
       const std::array<Vec3, 8> c = corners(b);
       const Vec3 m = middle(c);

@@ -69,6 +69,16 @@ void validateFieldSpec(const FieldSpec& spec) {
     if (!spec.radial && !(glm::dot(spec.max_m - spec.min_m, spec.axes[a]) > 0.0))
       throw std::invalid_argument("FieldSpec: empty box");
   }
+  if (const std::shared_ptr<const SurfaceOffsets>& o = spec.surface) {
+    const auto n = spec.nodes();
+    bool finite = true;
+    for (double x : o->offset_m) finite = finite && std::isfinite(x);
+    if (!spec.plane || spec.radial || o->width != n[0] || o->height != n[1] ||
+        o->offset_m.size() != static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]) ||
+        !finite) {
+      throw std::invalid_argument("FieldSpec: surface offsets must cover the plane's lattice");
+    }
+  }
   if (const std::optional<RadialLattice>& r = spec.radial) {
     if (spec.plane || r->face_cells < b || r->face_cells % b != 0 || r->layers < b ||
         r->layers % b != 0 || !(r->near_m > 0.0) || !std::isfinite(r->near_m) ||

@@ -173,6 +173,7 @@ PlaneMap planeMap(const ObserverField& field, const HazardSpec& h) {
       if (h.aid) m.aided_hazard_ratio.push_back(static_cast<float>(h.aidedRatio(e)));
       m.level.push_back(static_cast<float>(field.level(i, j, 0)));
       m.status.push_back(static_cast<float>(static_cast<int>(field.status(i, j, 0))));
+      if (spec.surface) m.observer_z_m.push_back(static_cast<float>(spec.position(i, j, 0).z));
     }
   return m;
 }

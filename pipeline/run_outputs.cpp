@@ -88,6 +88,10 @@ void writePlaneGeoTiff(std::ostream& out, const PlaneResults& r) {
   }
   channels.push_back({"status", &m.status});
   units.emplace_back(voxelStatusMeanings());
+  if (!m.observer_z_m.empty()) {
+    channels.push_back({"observer_z_m", &m.observer_z_m});
+    units.emplace_back("m (each observer's height in the site's local frame)");
+  }
   writeGeoTiff(out, m, channels, units, *r.site, geoInfo(r));
 }
 

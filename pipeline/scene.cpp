@@ -529,8 +529,60 @@ PlaneSpec readPlane(ObjectReader r, const std::vector<PlaneSpec>& earlier) {
     r.fail("pixel_m", "gives more than 65536 pixels along an axis");
   p.block_m = blockSize(r, "block_m", "pixel_m", p.pixel_m);
   readRefinement(r, p.tolerance, p.floor_w_m2);
+  if (auto above = r.optionalNumber("above_terrain_m")) {
+    // Over the ground, from a person lying down to a mast.
+    p.above_terrain_m = inRange(r, "above_terrain_m", *above, 0.05, 1000.0, "m");
+    if (!(std::abs(glm::cross(p.u_axis, p.v_axis).z) >= 1.0 - 1e-9))
+      r.fail("above_terrain_m", "needs a horizontal plane (u_axis and v_axis with z = 0)");
+  }
   r.finish();
   return p;
+}
+
+// The local horizontal rectangle the terrain must cover: the laser, the objects, the box and
+// the planes (with the whole blocks their lattices extend to), and a margin.
+HorizontalBox sceneRegion(const Scene& scene) {
+  Vec3 lo = scene.laser.origin_m, hi = scene.laser.origin_m;
+  const auto take = [&](const Vec3& p) { lo = glm::min(lo, p), hi = glm::max(hi, p); };
+  for (const ObjectSpec& o : scene.objects) take(o.centre_m());
+  if (scene.observers) take(scene.observers->min_m), take(scene.observers->max_m);
+  for (const PlaneSpec& p : scene.planes) {
+    const double u = p.width_m + p.block_m, v = p.height_m + p.block_m;
+    for (const Vec3& c : {p.origin_m, p.origin_m + u * p.u_axis, p.origin_m + v * p.v_axis,
+                          p.origin_m + u * p.u_axis + v * p.v_axis})
+      take(c);
+  }
+  const double margin = 10.0 + 0.05 * std::hypot(hi.x - lo.x, hi.y - lo.y);
+  return {lo.x - margin, lo.y - margin, hi.x + margin, hi.y + margin};
+}
+
+// Each lattice point of a plane laid over the terrain, raised to its height above the ground.
+std::shared_ptr<const SurfaceOffsets> surfaceOffsets(const PlaneSpec& p, const Terrain& terrain,
+                                                     const std::string& at) {
+  FieldSpec lattice;
+  lattice.plane = true;
+  lattice.axes = {p.u_axis, p.v_axis, glm::cross(p.u_axis, p.v_axis)};
+  lattice.min_m = p.origin_m;
+  lattice.max_m = p.origin_m + p.width_m * p.u_axis + p.height_m * p.v_axis;
+  lattice.voxel_m = p.pixel_m;
+  lattice.block_voxels = static_cast<int>(std::lround(p.block_m / p.pixel_m));
+  const auto n = lattice.nodes();
+  auto s = std::make_shared<SurfaceOffsets>();
+  s->width = n[0];
+  s->height = n[1];
+  s->offset_m.reserve(static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]));
+  for (int j = 0; j < n[1]; ++j)
+    for (int i = 0; i < n[0]; ++i) {
+      const Vec3 flat = lattice.position(i, j, 0);
+      const std::optional<double> ground = terrain.surfaceZ(flat.x, flat.y);
+      if (!ground) {
+        throw InputError(at + ": the plane reaches beyond the terrain (or over a hole in it) at (" +
+                         formatNumber("%.1f", flat.x) + ", " + formatNumber("%.1f", flat.y) +
+                         ") m");
+      }
+      s->offset_m.push_back((*ground + *p.above_terrain_m - flat.z) / lattice.axes[2].z);
+    }
+  return s;
 }
 
 FarFieldSettings readFarField(ObjectReader r) {
@@ -743,6 +795,31 @@ Scene parseScene(std::string_view text, const std::string& source,
   if (r.has("reach")) scene.reach = readReach(r.object("reach"));
   if (r.has("engagement")) scene.engagement = readEngagement(r.object("engagement"), scene);
   if (r.has("site")) scene.site = readSite(r.object("site"));
+  if (r.has("terrain")) {
+    ObjectReader t = r.object("terrain");
+    scene.terrain_file = base / t.string("file");
+    const std::int64_t max_posts = t.integer("max_posts", 4'000'000);
+    if (max_posts < 4 || max_posts > 100'000'000) t.fail("max_posts", "must be from 4 to 1e8");
+    t.finish();
+    if (!scene.site) r.fail("terrain", "needs a site: the elevation model lies on the Earth");
+    if (scene.engagement) {
+      r.fail("terrain", "cannot join an engagement yet: the target moves and the ground does not");
+    }
+    try {
+      scene.terrain = Terrain::read(scene.terrain_file, SiteFrame(*scene.site), sceneRegion(scene),
+                                    static_cast<std::size_t>(max_posts));
+    } catch (const std::runtime_error& e) {
+      throw InputError(source + ": /terrain/file: " + e.what());
+    }
+    scene.accuracy.terrain = scene.terrain->mesh();
+  }
+  for (std::size_t i = 0; i < scene.planes.size(); ++i) {
+    PlaneSpec& p = scene.planes[i];
+    if (!p.above_terrain_m) continue;
+    const std::string at = source + ": /planes/" + std::to_string(i) + "/above_terrain_m";
+    if (!scene.terrain) throw InputError(at + ": there is no terrain");
+    p.surface = surfaceOffsets(p, *scene.terrain, at);
+  }
   r.finish();
   return scene;
 }

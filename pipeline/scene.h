@@ -20,6 +20,7 @@
 #include "facets/tessellate.h"
 #include "facets/vec3.h"
 #include "geo/site.h"
+#include "geo/terrain.h"
 #include "hazard/hazard.h"
 #include "observers/exposure.h"
 #include "observers/motion.h"
@@ -91,6 +92,12 @@ struct PlaneSpec {
   double block_m = 0.0;  ///< coarsest square block: pixel_m × a power of two (default 16 px)
   double tolerance = FieldSpec{}.tolerance;
   std::optional<double> floor_w_m2;  ///< default: HazardSpec::negligibleW_m2()
+  /// Key `above_terrain_m`: the plane (horizontal) is laid over the terrain, each observer this
+  /// high above the ground below it (eye height); none: a flat plane.
+  std::optional<double> above_terrain_m;
+  /// With above_terrain_m: each lattice point's offset along the plane's normal, filled once
+  /// the terrain is read.
+  std::shared_ptr<const SurfaceOffsets> surface;
 };
 
 /// @brief The far field by direction (key `far_field`, all optional; observers/far_field.h).
@@ -147,6 +154,10 @@ struct Scene {
   /// Key `site`: where the local frame lies on the Earth; with it every map of a plane flat
   /// enough is also written geo-referenced (export/geo_files.h).
   std::optional<SiteSpec> site;
+  /// Key `terrain`: the elevation model under the site (`file`), read over the scene's region;
+  /// it shadows the beam and the reflections, and carries the planes laid over it.
+  std::shared_ptr<const Terrain> terrain;
+  std::filesystem::path terrain_file;  ///< as resolved against the scene's folder
 
   /// @brief Whether `glint run` computes the hazard reach: asked for, or, unless refused,
   /// where there is no box or plane.

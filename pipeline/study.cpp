@@ -412,6 +412,11 @@ std::string scenarioSceneJson(const Study& study, const Scenario& s) {
       }
     }
   }
+  // The terrain's file too is named absolutely.
+  if (scene.contains("terrain")) {
+    scene["terrain"]["file"] =
+        std::filesystem::absolute(study.base.terrain_file).lexically_normal().string();
+  }
   for (auto& [name, m] : scene["materials"].items()) {
     if (!study.material.empty() && name != study.material) continue;
     if (s.sigma) m["sigma"] = *s.sigma;

@@ -210,6 +210,7 @@ FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane) {
   f.tolerance = plane.tolerance;
   f.floor_w_m2 = plane.floor_w_m2.value_or(scene.hazard.negligibleW_m2());
   f.hazard_threshold_w_m2 = scene.hazard.lowestHazardousW_m2();
+  f.surface = plane.surface;
   return f;
 }
 

@@ -93,7 +93,7 @@ TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
       {[](json& j) { j["extra"] = 1; },
        "scene.json: /extra: unknown key (expected one of: description, hazard, laser, "
        "atmosphere, optical_aid, materials, objects, accuracy, observers, planes, far_field, "
-       "reach, engagement, site)"},
+       "reach, engagement, site, terrain)"},
       {[](json& j) {
          j["engagement"] = {{"start_s", 0}, {"end_s", 1}};
        },

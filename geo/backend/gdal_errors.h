@@ -1,0 +1,21 @@
+#pragma once
+/// @file
+/// @brief GDAL's drivers registered once, and its messages kept from the terminal while a
+/// GdalErrors lives: what failed is said once, in glint's own message, with GDAL's reason.
+
+#include <string>
+
+namespace glint::detail {
+
+class GdalErrors {
+ public:
+  GdalErrors();
+  ~GdalErrors();
+  GdalErrors(const GdalErrors&) = delete;
+  GdalErrors& operator=(const GdalErrors&) = delete;
+
+  /// @brief @p what, and GDAL's last message after ": " where it gave one.
+  [[nodiscard]] static std::string explain(const std::string& what);
+};
+
+}  // namespace glint::detail

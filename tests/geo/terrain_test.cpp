@@ -1,0 +1,250 @@
+// The terrain: an elevation model placed on the site, its surface's heights, and what it
+// shadows, against references that need neither Embree nor the field: the ellipsoid's fall
+// below the tangent plane, and a brute-force segment test against every triangle of the model.
+#include "geo/terrain.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "facets/integrator.h"
+#include "observers/field.h"
+#include "observers/field_compare.h"
+#include "pipeline/scene.h"
+#include "pipeline/target_builder.h"
+#include "support/dem.h"
+#include "support/refusal.h"
+
+namespace glint {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// A folder per test, removed after it.
+class TerrainTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("glint_terrain_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+const SiteSpec kSite{35.0, -106.0, 0.0, 0.0, MapProjection::Utm};
+
+// A DEM over local x from -1200 to 600 m and y from -300 to 300 m, posts 5 m apart on the map.
+void writeSiteDem(const fs::path& path, const std::function<double(double, double)>& height_m) {
+  const SiteFrame site(kSite);
+  const MapPoint o = site.toMap(Vec3(0.0));
+  // +x is north and +y west: the map's rows run south from the corner's northing.
+  test::writeDem(path, site, {o.easting_m - 330.0, o.northing_m + 630.0}, 5.0, 132, 372, height_m);
+}
+
+// Heights 0 above the ellipsoid: the surface falls below the tangent plane by d² / 2R, R the
+// ellipsoid's radius of curvature in that direction (northward the meridian's M, eastward the
+// prime vertical's N); the piecewise-linear surface between posts 5 m apart departs from the
+// ellipsoid by at most (5 m)² / 8R, 5e-7 m.
+TEST_F(TerrainTest, AFlatModelFallsBelowTheTangentPlaneAsTheEllipsoidDoes) {
+  writeSiteDem(dir_ / "flat.tif", [](double, double) { return 0.0; });
+  const SiteFrame site(kSite);
+  const auto t = Terrain::read(dir_ / "flat.tif", site, {-1000.0, -200.0, 400.0, 200.0}, 1e6);
+  const double a = 6378137.0, f = 1.0 / 298.257223563, e2 = f * (2.0 - f);
+  const double s = std::sin(35.0 * 3.14159265358979323846 / 180.0);
+  const double m = a * (1.0 - e2) / std::pow(1.0 - e2 * s * s, 1.5);
+  const double n = a / std::sqrt(1.0 - e2 * s * s);
+  for (double x : {-1000.0, -400.0, 0.0, 250.0, 400.0}) {
+    const std::optional<double> z = t->surfaceZ(x, 0.0);
+    ASSERT_TRUE(z.has_value()) << x;
+    EXPECT_NEAR(*z, -x * x / (2.0 * m), 2e-4) << "north " << x << " m";
+  }
+  for (double y : {-200.0, 150.0}) {
+    EXPECT_NEAR(*t->surfaceZ(0.0, y), -y * y / (2.0 * n), 2e-4) << "west " << y << " m";
+  }
+  EXPECT_FALSE(t->surfaceZ(5000.0, 0.0).has_value()) << "off the model";
+  EXPECT_NEAR(t->postSpacingM(), 5.0, 0.01) << "5 m on the map, the map's scale ≈ 1";
+}
+
+TEST_F(TerrainTest, AModelThatMissesTheRegionIsRefusedNamingIt) {
+  writeSiteDem(dir_ / "dem.tif", [](double, double) { return 0.0; });
+  const SiteFrame site(kSite);
+  try {
+    (void)Terrain::read(dir_ / "dem.tif", site, {-100.0, -100.0, 2000.0, 100.0}, 1e6);
+    ADD_FAILURE() << "a region beyond the model was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("does not cover the scene's region"), std::string::npos)
+        << e.what();
+  }
+  try {
+    (void)Terrain::read(dir_ / "dem.tif", site, {-100.0, -100.0, 100.0, 100.0}, 100);
+    ADD_FAILURE() << "a window beyond max_posts was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("more than 100"), std::string::npos) << e.what();
+  }
+}
+
+// A ridge across the view: 20 m high at x = 150 m, its slopes 50 m wide.
+double ridge(double x, double) { return std::max(0.0, 20.0 * (1.0 - std::abs(x - 150.0) / 50.0)); }
+
+// Whether the segment from p to q crosses triangle (a, b, c) strictly inside both
+// (Möller–Trumbore in double precision).
+bool crosses(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 d = q - p, e1 = b - a, e2 = c - a, h = glm::cross(d, e2);
+  const double det = glm::dot(e1, h);
+  if (std::abs(det) < 1e-14) return false;
+  const Vec3 s = p - a;
+  const double u = glm::dot(s, h) / det;
+  if (u < 0.0 || u > 1.0) return false;
+  const Vec3 qv = glm::cross(s, e1);
+  const double v = glm::dot(d, qv) / det;
+  if (v < 0.0 || u + v > 1.0) return false;
+  const double t = glm::dot(e2, qv) / det;
+  return t > 1e-9 && t < 1.0 - 1e-9;
+}
+
+json ridgeScene(const fs::path& dem) {
+  return json::parse(R"({
+    "site": {"latitude_deg": 35.0, "longitude_deg": -106.0},
+    "laser": {"position": [-200, 0, 400], "direction": [200, 0, -395], "power_w": 1000.0,
+              "wavelength_nm": 532, "beam": {"profile": "flat_top", "radius_m": 2.0}},
+    "materials": {"painted": {"specular_reflectance": 0.5, "sigma": 0.05,
+                              "diffuse_reflectance": 0.4}},
+    "objects": [{"shape": "sphere", "center": [0, 0, 5], "radius": 0.5, "material": "painted"}],
+    "planes": [{"name": "ground", "origin": [60, -60, 0], "u_axis": [1, 0, 0],
+                "v_axis": [0, 1, 0], "size_m": [240, 120], "pixel_m": 4, "block_m": 32,
+                "above_terrain_m": 1.7, "floor_w_m2": 1e-9}],
+    "far_field": {"enabled": false},
+    "terrain": {"file": ")" +
+                     dem.string() + R"("}
+  })");
+}
+
+// Behind a ridge: an observer on the ground sees the sphere exactly when the segment from the
+// sphere's lit facets to it misses every triangle of the model. glint's plane laid over the
+// terrain has irradiance 0 at exactly the points a brute-force test of the segment from the
+// sphere's centre finds shadowed, save those within a post of the shadow's edge (where which
+// of the sphere's facets is seen decides, and the model's resolution ends).
+TEST_F(TerrainTest, ARidgeRemovesExactlyTheShadowedObservers) {
+  writeSiteDem(dir_ / "ridge.tif", ridge);
+  const Scene scene = parseScene(ridgeScene(dir_ / "ridge.tif").dump(), "ridge.json");
+  ASSERT_TRUE(scene.terrain);
+  const auto target = buildTarget(scene);
+  const FacetIntegrator integrator(target, scene.laser, scene.accuracy);
+  IntegratorWorkspace ws;
+  const FieldSpec spec = planeFieldSpec(scene, scene.planes[0]);
+  const auto n = spec.nodes();
+  const ShadowMesh& mesh = *scene.terrain->mesh();
+  const Vec3 sphere(0.0, 0.0, 5.0);
+  int shadowed = 0, lit = 0, edge = 0;
+  for (int j = 0; j < n[1]; j += 3)
+    for (int i = 0; i < n[0]; i += 2) {
+      const Vec3 p = spec.position(i, j, 0);
+      EXPECT_NEAR(p.z - *scene.terrain->surfaceZ(p.x, p.y), 1.7, 1e-6) << "eye height";
+      bool blocked = false;
+      for (const auto& tri : mesh.triangles) {
+        blocked = crosses(sphere, p, mesh.vertices_m[tri[0]], mesh.vertices_m[tri[1]],
+                          mesh.vertices_m[tri[2]]);
+        if (blocked) break;
+      }
+      // The shadow's edge: the line over the crest (x = 150 m, 20 m) from the sphere.
+      const double over_crest_z = 5.0 + (20.0 - 5.0) * p.x / 150.0;
+      if (p.x > 140.0 && std::abs(p.z - over_crest_z) < 2.0) {
+        ++edge;
+        continue;
+      }
+      const double e = integrator.adaptive(p, ws).irradiance_w_m2;
+      if (blocked) {
+        ++shadowed;
+        EXPECT_EQ(e, 0.0) << "shadowed at (" << p.x << ", " << p.y << ", " << p.z << ")";
+      } else {
+        ++lit;
+        EXPECT_GT(e, 0.0) << "in view at (" << p.x << ", " << p.y << ", " << p.z << ")";
+      }
+    }
+  EXPECT_GT(shadowed, 100) << "the ridge hides the ground behind it";
+  EXPECT_GT(lit, 100) << "the ground before it is lit";
+  EXPECT_LT(edge, (shadowed + lit) / 10) << "few points at the shadow's edge are excused";
+}
+
+// The plane over the ridge refined adaptively, against its dense twin (every lattice point
+// integrated): within the field's tolerance everywhere, no bright point proven dark by a bound
+// (the bounds leave the ground out, so they stay upper bounds), and at every point the field
+// integrated, exactly what the integrator gives there on its own (what `glint points` gives).
+TEST_F(TerrainTest, APlaneOverTheTerrainMatchesItsDenseTwinAndThePointsAtItsObservers) {
+  writeSiteDem(dir_ / "ridge.tif", ridge);
+  json j = ridgeScene(dir_ / "ridge.tif");
+  j["planes"][0]["floor_w_m2"] = 1e-6;
+  const Scene scene = parseScene(j.dump(), "ridge.json");
+  const FieldSpec spec = planeFieldSpec(scene, scene.planes[0]);
+  const FieldProblem p = fieldProblem(scene, spec);
+  const ObserverField adaptive = computeField(p.integrator, spec, p.excluded);
+  const ObserverField dense = computeDenseField(p.integrator, spec, p.excluded);
+  const FieldComparison c = compareFields(adaptive, dense);
+  EXPECT_LE(c.max_error_w_m2, c.allowed_error_w_m2)
+      << "at (" << c.max_error_at_m.x << ", " << c.max_error_at_m.y << ", " << c.max_error_at_m.z
+      << "), peak " << c.peak_w_m2;
+  EXPECT_EQ(c.bright_skipped, 0);
+  EXPECT_GT(c.peak_w_m2, 100.0 * spec.floor_w_m2) << "the test needs light on the ground";
+  const auto n = spec.nodes();
+  IntegratorWorkspace ws;
+  int evaluated = 0;
+  for (int jj = 0; jj < n[1]; ++jj)
+    for (int i = 0; i < n[0]; ++i) {
+      if (adaptive.status(i, jj, 0) != VoxelStatus::Evaluated) continue;
+      ++evaluated;
+      const Vec3 at = spec.position(i, jj, 0);
+      const double alone = p.integrator.adaptive(at, ws).irradiance_w_m2;
+      EXPECT_NEAR(adaptive.irradiance(i, jj, 0), alone, 1e-6 * alone + 1e-30)
+          << "(" << at.x << ", " << at.y << ", " << at.z << ")";
+    }
+  EXPECT_GT(evaluated, 50);
+}
+
+// A ridge between the laser and the target: the beam never reaches it.
+TEST_F(TerrainTest, ARidgeBeforeTheTargetMasksTheBeam) {
+  writeSiteDem(dir_ / "wall.tif", [](double x, double) {
+    return std::max(0.0, 80.0 * (1.0 - std::abs(x + 400.0) / 30.0));
+  });
+  json j = ridgeScene(dir_ / "wall.tif");
+  // Low over the ridge's crest: the line to the sphere passes 32.5 m up at x = -400 m.
+  j["laser"]["position"] = {-800, 0, 60};
+  j["laser"]["direction"] = {800, 0, -55};
+  const Scene scene = parseScene(j.dump(), "wall.json");
+  const FacetIntegrator integrator(buildTarget(scene), scene.laser, scene.accuracy);
+  EXPECT_EQ(integrator.cullStats().lit, 0u) << "every facet's ray to the laser meets the ridge";
+  EXPECT_GT(integrator.cullStats().shadowed, 0u);
+  // Without the terrain the sphere is lit.
+  j.erase("terrain");
+  j["planes"][0].erase("above_terrain_m");
+  const Scene open = parseScene(j.dump(), "open.json");
+  EXPECT_GT(FacetIntegrator(buildTarget(open), open.laser, open.accuracy).cullStats().lit, 0u);
+}
+
+TEST_F(TerrainTest, SceneKeysAreRefusedWhereTheyCannotHold) {
+  writeSiteDem(dir_ / "dem.tif", [](double, double) { return 0.0; });
+  json j = ridgeScene(dir_ / "dem.tif");
+  j.erase("site");
+  EXPECT_NE(test::refusalOf([&] { parseScene(j.dump(), "s.json"); }).find("needs a site"),
+            std::string::npos);
+  j = ridgeScene(dir_ / "dem.tif");
+  j.erase("terrain");
+  EXPECT_NE(test::refusalOf([&] { parseScene(j.dump(), "s.json"); }).find("there is no terrain"),
+            std::string::npos);
+  j = ridgeScene(dir_ / "dem.tif");
+  j["planes"][0]["v_axis"] = {0, 0, 1};
+  EXPECT_NE(test::refusalOf([&] { parseScene(j.dump(), "s.json"); }).find("horizontal plane"),
+            std::string::npos);
+  j = ridgeScene(dir_ / "missing.tif");
+  EXPECT_NE(test::refusalOf([&] { parseScene(j.dump(), "s.json"); }).find("/terrain/file"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace glint
