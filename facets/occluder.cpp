@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "facets/detail/embree_triangles.h"
 #include "facets/patch.h"
 
 namespace glint {
@@ -47,8 +48,8 @@ struct Occluder::Impl {
 
 Occluder::Occluder(const Target& target, int level, bool target_shadows, const ShadowMesh* terrain)
     : impl_(std::make_unique<Impl>()) {
-  // The pieces of every coarse facet, in world coordinates for now.
-  std::vector<std::array<Vec3, 3>> pieces;
+  // The pieces of every coarse facet, in world coordinates.
+  ShadowMesh pieces;
   lift_m_.resize(target.facetCount());
   Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
   std::vector<SubFacet> leaves;
@@ -72,12 +73,16 @@ Occluder::Occluder(const Target& target, int level, bool target_shadows, const S
         lo = glm::min(lo, world[k]);
         hi = glm::max(hi, world[k]);
       }
-      if (target_shadows) pieces.push_back(world);
+      if (target_shadows) {
+        const auto first = static_cast<std::uint32_t>(pieces.vertices_m.size());
+        pieces.vertices_m.insert(pieces.vertices_m.end(), world.begin(), world.end());
+        pieces.triangles.push_back({first, first + 1, first + 2});
+      }
     }
     lift_m_[i] = 1.5 * bulge;
   }
   terrain_triangles_ = terrain != nullptr ? terrain->triangles.size() : 0;
-  triangles_ = pieces.size() + terrain_triangles_;
+  triangles_ = pieces.triangles.size() + terrain_triangles_;
   if (triangles_ == 0) return;
 
   impl_->frame_origin_m = 0.5 * (lo + hi);
@@ -92,50 +97,11 @@ Occluder::Occluder(const Target& target, int level, bool target_shadows, const S
   impl_->scene = rtcNewScene(impl_->device);
   rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
-  if (!pieces.empty()) {
-    RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* vertices = static_cast<float*>(
-        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                3 * sizeof(float), 3 * pieces.size()));
-    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-        geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), pieces.size()));
-    for (std::size_t t = 0; t < pieces.size(); ++t) {
-      for (int k = 0; k < 3; ++k) {
-        const Vec3 v = pieces[t][k] - impl_->frame_origin_m;
-        const std::size_t at = 3 * t + static_cast<std::size_t>(k);
-        vertices[3 * at + 0] = static_cast<float>(v.x);
-        vertices[3 * at + 1] = static_cast<float>(v.y);
-        vertices[3 * at + 2] = static_cast<float>(v.z);
-        indices[at] = static_cast<unsigned>(at);
-      }
-    }
-    rtcCommitGeometry(geometry);
-    rtcAttachGeometry(impl_->scene, geometry);
-    rtcReleaseGeometry(geometry);
-  }
-  if (terrain_triangles_ > 0) {
-    // In the target's frame too: the terrain far off rounds to ~1e-7 of its distance, below
-    // any elevation model's resolution, while the target keeps its own precision.
-    RTCGeometry ground = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(ground, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                          RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                          terrain->vertices_m.size()));
-    auto* t = static_cast<unsigned*>(rtcSetNewGeometryBuffer(ground, RTC_BUFFER_TYPE_INDEX, 0,
-                                                             RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
-                                                             terrain->triangles.size()));
-    for (std::size_t k = 0; k < terrain->vertices_m.size(); ++k) {
-      const Vec3 p = terrain->vertices_m[k] - impl_->frame_origin_m;
-      v[3 * k + 0] = static_cast<float>(p.x);
-      v[3 * k + 1] = static_cast<float>(p.y);
-      v[3 * k + 2] = static_cast<float>(p.z);
-    }
-    for (std::size_t k = 0; k < terrain->triangles.size(); ++k) {
-      for (std::size_t c = 0; c < 3; ++c) t[3 * k + c] = terrain->triangles[k][c];
-    }
-    rtcCommitGeometry(ground);
-    rtcAttachGeometry(impl_->scene, ground);
-    rtcReleaseGeometry(ground);
-  }
+  detail::attachTriangles(impl_->device, impl_->scene, pieces, impl_->frame_origin_m);
+  // The terrain in the target's frame too: far off it rounds to ~1e-7 of its distance, below
+  // any elevation model's resolution, while the target keeps its own precision.
+  if (terrain != nullptr)
+    detail::attachTriangles(impl_->device, impl_->scene, *terrain, impl_->frame_origin_m);
   rtcCommitScene(impl_->scene);
 }
 
@@ -155,4 +121,31 @@ bool Occluder::rayClear(const Vec3& from_m, const Vec3& direction, double distan
   return impl_->clear(from_m, direction, distance_m, skip_m);
 }
 
+namespace detail {
+
+void attachTriangles(RTCDevice device, RTCScene scene, const ShadowMesh& mesh,
+                     const Vec3& origin_m) {
+  if (mesh.triangles.empty()) return;
+  RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                        RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                        mesh.vertices_m.size()));
+  auto* t = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0,
+                                                           RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+                                                           mesh.triangles.size()));
+  for (std::size_t k = 0; k < mesh.vertices_m.size(); ++k) {
+    const Vec3 p = mesh.vertices_m[k] - origin_m;
+    v[3 * k + 0] = static_cast<float>(p.x);
+    v[3 * k + 1] = static_cast<float>(p.y);
+    v[3 * k + 2] = static_cast<float>(p.z);
+  }
+  for (std::size_t k = 0; k < mesh.triangles.size(); ++k) {
+    for (std::size_t c = 0; c < 3; ++c) t[3 * k + c] = mesh.triangles[k][c];
+  }
+  rtcCommitGeometry(geometry);
+  rtcAttachGeometry(scene, geometry);
+  rtcReleaseGeometry(geometry);
+}
+
+}  // namespace detail
 }  // namespace glint

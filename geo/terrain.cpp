@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "facets/detail/embree_triangles.h"
 #include "geo/backend.h"
 
 namespace glint {
@@ -74,23 +75,7 @@ std::shared_ptr<const Terrain> Terrain::read(const std::filesystem::path& dem_fi
   if (!heights->device) throw std::runtime_error("Embree: cannot create a device");
   heights->scene = rtcNewScene(heights->device);
   rtcSetSceneFlags(heights->scene, RTC_SCENE_FLAG_ROBUST);
-  RTCGeometry g = rtcNewGeometry(heights->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-      g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh->vertices_m.size()));
-  auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-      g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh->triangles.size()));
-  for (std::size_t k = 0; k < mesh->vertices_m.size(); ++k) {
-    const Vec3 p = mesh->vertices_m[k] - heights->origin_m;
-    v[3 * k] = static_cast<float>(p.x);
-    v[3 * k + 1] = static_cast<float>(p.y);
-    v[3 * k + 2] = static_cast<float>(p.z);
-  }
-  for (std::size_t k = 0; k < mesh->triangles.size(); ++k) {
-    for (std::size_t c = 0; c < 3; ++c) idx[3 * k + c] = mesh->triangles[k][c];
-  }
-  rtcCommitGeometry(g);
-  rtcAttachGeometry(heights->scene, g);
-  rtcReleaseGeometry(g);
+  detail::attachTriangles(heights->device, heights->scene, *mesh, heights->origin_m);
   rtcCommitScene(heights->scene);
   t->heights_ = std::move(heights);
   t->mesh_ = std::move(mesh);

@@ -159,10 +159,9 @@ Mpe visibleEye(double nm, double t, SafetyStandard, Tissue) {
   return photochemical.irradiance_w_m2 < thermal.irradiance_w_m2 ? photochemical : thermal;
 }
 
-const Band kEyeBands[] = {
-    {400.0, 1050.0, visibleEye},
-    {1050.0, 1400.0,
-     [](double nm, double t, SafetyStandard s, Tissue) { return retinalNearIr(nm, t, s); }},
+// Beyond 1400 nm the cornea's and lens's rows, the same for the eye and (but beyond 10 s) the
+// skin.
+const Band kInfraredBands[] = {
     {1400.0, 1500.0,
      [](double, double t, SafetyStandard, Tissue k) { return infrared(kIr1400, t, k); }},
     {1500.0, 1800.0,
@@ -171,6 +170,12 @@ const Band kEyeBands[] = {
      [](double, double t, SafetyStandard, Tissue k) { return infrared(kIr1800, t, k); }},
     {2600.0, kMaxWavelengthNm,
      [](double, double t, SafetyStandard, Tissue k) { return infrared(kIr2600, t, k); }},
+};
+
+const Band kRetinalBands[] = {
+    {400.0, 1050.0, visibleEye},
+    {1050.0, 1400.0,
+     [](double nm, double t, SafetyStandard s, Tissue) { return retinalNearIr(nm, t, s); }},
 };
 
 // IEC's C7 lets the retinal limit climb a millionfold towards 1400 nm, where the cornea and
@@ -185,18 +190,9 @@ const Band kIecAnteriorEyeBand{
       return m;
     }};
 
-const Band kSkinBands[] = {
-    {400.0, 1400.0,
-     [](double nm, double t, SafetyStandard, Tissue) { return skinVisibleNearIr(nm, t); }},
-    {1400.0, 1500.0,
-     [](double, double t, SafetyStandard, Tissue k) { return infrared(kIr1400, t, k); }},
-    {1500.0, 1800.0,
-     [](double, double t, SafetyStandard, Tissue k) { return infrared(kIr1500, t, k); }},
-    {1800.0, 2600.0,
-     [](double, double t, SafetyStandard, Tissue k) { return infrared(kIr1800, t, k); }},
-    {2600.0, kMaxWavelengthNm,
-     [](double, double t, SafetyStandard, Tissue k) { return infrared(kIr2600, t, k); }},
-};
+const Band kSkinVisibleNearIrBand{400.0, 1400.0, [](double nm, double t, SafetyStandard, Tissue) {
+                                    return skinVisibleNearIr(nm, t);
+                                  }};
 
 }  // namespace
 
@@ -218,11 +214,12 @@ Mpe tableMpe(double wavelength_nm, double exposure_s, SafetyStandard standard, T
     found = true;
   };
   if (tissue == Tissue::Skin) {
-    for (const Band& band : kSkinBands) consider(band);
+    consider(kSkinVisibleNearIrBand);
   } else {
-    for (const Band& band : kEyeBands) consider(band);
+    for (const Band& band : kRetinalBands) consider(band);
     if (standard == SafetyStandard::Iec60825_1_2014) consider(kIecAnteriorEyeBand);
   }
+  for (const Band& band : kInfraredBands) consider(band);
   lowest.standard = standard;
   lowest.tissue = tissue;
   return lowest;

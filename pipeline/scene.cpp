@@ -539,6 +539,22 @@ PlaneSpec readPlane(ObjectReader r, const std::vector<PlaneSpec>& earlier) {
   return p;
 }
 
+}  // namespace
+
+FieldSpec planeLattice(const PlaneSpec& plane) {
+  FieldSpec f;
+  f.plane = true;
+  f.axes = {plane.u_axis, plane.v_axis, glm::cross(plane.u_axis, plane.v_axis)};
+  f.min_m = plane.origin_m;
+  f.max_m = plane.origin_m + plane.width_m * plane.u_axis + plane.height_m * plane.v_axis;
+  f.voxel_m = plane.pixel_m;
+  f.block_voxels = static_cast<int>(std::lround(plane.block_m / plane.pixel_m));
+  f.surface = plane.surface;
+  return f;
+}
+
+namespace {
+
 // The local horizontal rectangle the terrain must cover: the laser, the objects, the box and
 // the planes (with the whole blocks their lattices extend to), and a margin.
 HorizontalBox sceneRegion(const Scene& scene) {
@@ -559,13 +575,7 @@ HorizontalBox sceneRegion(const Scene& scene) {
 // Each lattice point of a plane laid over the terrain, raised to its height above the ground.
 std::shared_ptr<const SurfaceOffsets> surfaceOffsets(const PlaneSpec& p, const Terrain& terrain,
                                                      const std::string& at) {
-  FieldSpec lattice;
-  lattice.plane = true;
-  lattice.axes = {p.u_axis, p.v_axis, glm::cross(p.u_axis, p.v_axis)};
-  lattice.min_m = p.origin_m;
-  lattice.max_m = p.origin_m + p.width_m * p.u_axis + p.height_m * p.v_axis;
-  lattice.voxel_m = p.pixel_m;
-  lattice.block_voxels = static_cast<int>(std::lround(p.block_m / p.pixel_m));
+  const FieldSpec lattice = planeLattice(p);
   const auto n = lattice.nodes();
   auto s = std::make_shared<SurfaceOffsets>();
   s->width = n[0];

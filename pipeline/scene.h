@@ -174,6 +174,10 @@ struct Scene {
   }
 };
 
+/// @brief The lattice of @p plane, its geometry only (no accuracy): its axes u, v and normal,
+/// its extent and pixel, its coarsest blocks and its surface over the terrain.
+FieldSpec planeLattice(const PlaneSpec& plane);
+
 /// @brief Reads and validates a scene file, and the mesh files it names. With
 /// @p memory_budget_bytes > 0 (`--memory`), a mesh whose target would need more
 /// (meshMemoryFloorBytes()) is refused before it is decoded.

@@ -200,17 +200,10 @@ FieldSpec fieldSpec(const Scene& scene) {
 }
 
 FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane) {
-  FieldSpec f;
-  f.plane = true;
-  f.axes = {plane.u_axis, plane.v_axis, glm::cross(plane.u_axis, plane.v_axis)};
-  f.min_m = plane.origin_m;
-  f.max_m = plane.origin_m + plane.width_m * plane.u_axis + plane.height_m * plane.v_axis;
-  f.voxel_m = plane.pixel_m;
-  f.block_voxels = static_cast<int>(std::lround(plane.block_m / plane.pixel_m));
+  FieldSpec f = planeLattice(plane);
   f.tolerance = plane.tolerance;
   f.floor_w_m2 = plane.floor_w_m2.value_or(scene.hazard.negligibleW_m2());
   f.hazard_threshold_w_m2 = scene.hazard.lowestHazardousW_m2();
-  f.surface = plane.surface;
   return f;
 }
 

@@ -16,6 +16,7 @@
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
 #include "support/dem.h"
+#include "support/files.h"
 #include "support/refusal.h"
 
 namespace glint {
@@ -27,13 +28,7 @@ using nlohmann::json;
 // A folder per test, removed after it.
 class TerrainTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("glint_terrain_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
+  void SetUp() override { dir_ = test::freshTestFolder("glint_terrain_"); }
   void TearDown() override { fs::remove_all(dir_); }
   fs::path dir_;
 };

@@ -34,11 +34,7 @@ std::size_t entries(const fs::path& dir) {
 class Outputs : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("glint_outputs_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = test::freshTestFolder("glint_outputs_");
     scene_ = dir_ / "scene.json";
     fs::copy_file(fs::path(GLINT_EXAMPLES_DIR) / "cylinder.json", scene_);
     points_ = dir_ / "p.csv";

@@ -1,5 +1,8 @@
 #pragma once
-// A file's whole content, for tests that compare what glint wrote (or left alone) byte for byte.
+// A file's whole content, for tests that compare what glint wrote (or left alone) byte for byte;
+// a fresh folder for the running test.
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -13,6 +16,17 @@ inline std::string readFile(const std::filesystem::path& path) {
   std::ostringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+/// @brief An empty folder named @p prefix and the running test's name in the temporary folder
+/// (emptied if an earlier run left it); the test removes it when done.
+inline std::filesystem::path freshTestFolder(const std::string& prefix) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() /
+      (prefix + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
 }
 
 }  // namespace glint::test
