@@ -52,6 +52,10 @@ class Terrain {
   /// highest of its triangles there, in double precision; none off the model or over a hole.
   [[nodiscard]] std::optional<double> surfaceZ(double x_m, double y_m) const;
 
+  /// @brief Whether the surface leaves the segment from @p from_m to @p to_m clear (its ends'
+  /// first and last millimetre aside: an end may stand on the ground).
+  [[nodiscard]] bool segmentClear(const Vec3& from_m, const Vec3& to_m) const;
+
   [[nodiscard]] std::size_t posts() const { return posts_; }
   /// @brief The largest distance between neighbouring posts (m): the model's resolution.
   [[nodiscard]] double postSpacingM() const { return post_spacing_m_; }

@@ -19,6 +19,10 @@ inline constexpr const char* kFarFieldVtp = "far_field.vtp";
 inline constexpr const char* kFarFieldAidedVtp = "far_field_aided.vtp";  ///< with an optical aid
 inline constexpr const char* kReachExr = "reach.exr";
 inline constexpr const char* kReachVtp = "reach.vtp";
+/// The reach's footprint on the ground (a scene with a site and reach.footprint).
+inline constexpr const char* kReachFootprintTif = "reach_footprint.tif";
+inline constexpr const char* kReachFootprintGeoJson = "reach_footprint.geojson";
+inline constexpr const char* kReachFootprintKml = "reach_footprint.kml";
 inline constexpr const char* kEngagementVdb = "engagement.vdb";  ///< an engagement over the box
 /// @brief A plane's map (glint run), and its aggregate over a study's scenarios (glint batch).
 inline std::string planeExr(const std::string& plane_name) { return plane_name + ".exr"; }

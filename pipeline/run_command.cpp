@@ -467,7 +467,30 @@ void runReach(const RunContext& c, const FarResult& far, RunSummary& s) {
                                       c.args.quiet ? nullptr : &c.err, c.args.terminal, c.exchange);
   s.j["hazard_reach"] = reachJson(reach.near, reach.summaries, reach.seconds);
   if (!c.args.quiet) printReach(c.err, reach.near, reach.summaries, reach.seconds);
-  c.outputs.writeReach({reach.near, *far.far, c.scene.hazard, c.info});
+  std::optional<ReachFootprint> footprint;
+  if (const std::optional<FootprintSpec>& spec = c.scene.reach.footprint) {
+    const SiteFrame site(*c.scene.site);
+    try {
+      footprint = reachFootprint(reach.near, *far.far, c.scene.hazard.atmosphere.extinction_per_m,
+                                 site, c.scene.terrain.get(), *spec);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(c.scene.source + ": /reach/footprint: " + e.what());
+    }
+    nlohmann::json f = {
+        {"radius_m", spec->radius_m},
+        {"pixel_m", footprint->grid.pixel_m},
+        {"above_ground_m", spec->above_ground_m},
+        {"area_m2", footprint->area_m2[0]},
+        {"hidden_by_ground_m2", static_cast<double>(footprint->hidden_pixels) *
+                                    footprint->grid.pixel_m * footprint->grid.pixel_m},
+        {"files",
+         {output_names::kReachFootprintTif, output_names::kReachFootprintGeoJson,
+          output_names::kReachFootprintKml}}};
+    if (footprint->area_m2.size() > 1) f["aided_area_m2"] = footprint->area_m2[1];
+    s.j["hazard_reach"]["footprint"] = f;
+  }
+  c.outputs.writeReach(
+      {reach.near, *far.far, c.scene.hazard, c.info, footprint ? &*footprint : nullptr, nullptr});
 }
 
 // The meshes' surface model against the alternatives, at the regions' peaks and the far

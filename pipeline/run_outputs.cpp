@@ -95,6 +95,42 @@ void writePlaneGeoTiff(std::ostream& out, const PlaneResults& r) {
   writeGeoTiff(out, m, channels, units, *r.site, geoInfo(r));
 }
 
+// The reach's footprint: where it covers the ground (naked eye, and aided), and the height of
+// each observer it was judged at.
+GeoInfo footprintInfo(const ReachResults& r) {
+  return {r.info.program_version, "reach_footprint", r.info.mpe_rule, r.info.wavelength_nm,
+          r.info.mpe_w_m2};
+}
+
+void writeFootprintTif(std::ostream& out, const ReachResults& r) {
+  const ReachFootprint& f = *r.footprint;
+  std::vector<std::vector<float>> masks;
+  for (const auto& inside : f.inside) masks.emplace_back(inside.begin(), inside.end());
+  std::vector<ExrChannel> channels = {{"reach", &masks[0]}};
+  std::vector<std::string> units = {"1 where the naked eye's hazard reach covers the pixel"};
+  if (masks.size() > 1) {
+    channels.push_back({"aided_reach", &masks[1]});
+    units.emplace_back("1 where the aided hazard reach covers the pixel");
+  }
+  channels.push_back({"observer_z_m", &f.ground_z_m});
+  units.emplace_back("m (each observer's height in the site's local frame)");
+  writeGeoTiff(out, f.grid, channels, units, *r.site, footprintInfo(r));
+}
+
+void writeFootprintZones(std::ostream& out, const ReachResults& r, VectorFormat format) {
+  const ReachFootprint& f = *r.footprint;
+  std::vector<ZoneMask> zones = {
+      {"reach",
+       "the naked eye's hazard reach on the ground, at eye height, where the ground does "
+       "not hide the lit centre",
+       f.inside[0]}};
+  if (f.inside.size() > 1) {
+    zones.push_back(
+        {"aided_reach", "the hazard reach through the optical aid, on the ground", f.inside[1]});
+  }
+  writeZones(out, format, f.grid, zones, *r.site, footprintInfo(r));
+}
+
 // The plane's zones: where the ratio reaches 1, naked eye and aided, and where a glint narrower
 // than the lattice may pass with a bound above the MPE (status 6), which a hazard map must not
 // leave out.
@@ -144,6 +180,7 @@ struct RunOutputs::Declared {
   bool staged_folder = false;  // the AMR data set: a folder staged beside its .vthb
   bool aided_only = false;     // written with an optical aid only
   bool geo = false;            // with a site only, of planes flat enough for a map
+  bool footprint = false;      // with reach.footprint only
   // A study's scenario writes it too, under the same name in its folder, so that a scenario's
   // map is what glint run writes of the scenario's scene (its result.json vouches for it).
   bool scenario = false;
@@ -155,6 +192,7 @@ struct RunOutputs::Declared {
 
   [[nodiscard]] bool wanted(const Scene& s) const {
     if (geo && !s.site) return false;
+    if (footprint && !s.reach.footprint) return false;
     // An engagement's run writes its planes' maps over time and its summary only: a box, the
     // far field and the reach judge one pose.
     const bool one_pose = !s.engagement.has_value();
@@ -226,6 +264,23 @@ constexpr Declared kOutputs[] = {
          [](std::ostream& out, const ReachResults& r) {
            writeReachVtp(out, reachSurface(r.near, r.far, r.hazard.atmosphere.extinction_per_m));
          }},
+    {.name = output_names::kReachFootprintTif,
+     .region = Region::Reach,
+     .reach = writeFootprintTif,
+     .geo = true,
+     .footprint = true},
+    {.name = output_names::kReachFootprintGeoJson,
+     .region = Region::Reach,
+     .reach = [](std::ostream& out,
+                 const ReachResults& r) { writeFootprintZones(out, r, VectorFormat::GeoJson); },
+     .geo = true,
+     .footprint = true},
+    {.name = output_names::kReachFootprintKml,
+     .region = Region::Reach,
+     .reach = [](std::ostream& out,
+                 const ReachResults& r) { writeFootprintZones(out, r, VectorFormat::Kml); },
+     .geo = true,
+     .footprint = true},
     {.plane_name = output_names::planeExr,
      .region = Region::Plane,
      .plane = writePlaneExr,
@@ -394,8 +449,10 @@ void RunOutputs::writeFar(const FarResults& far) {
 
 void RunOutputs::writeReach(const ReachResults& reach) {
   if (!writer_) return;
+  ReachResults placed = reach;
+  placed.site = site_.get();
   for (const Declared* d : writingOrder(Region::Reach)) {
-    if (const std::optional<std::size_t> i = slotOf(*d, 0)) d->write(files_[*i]->stream(), reach);
+    if (const std::optional<std::size_t> i = slotOf(*d, 0)) d->write(files_[*i]->stream(), placed);
   }
 }
 

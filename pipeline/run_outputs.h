@@ -22,6 +22,7 @@
 #include "observers/far_field.h"
 #include "observers/field.h"
 #include "observers/reach.h"
+#include "pipeline/reach_footprint.h"
 
 namespace glint {
 
@@ -75,6 +76,9 @@ struct ReachResults {
   const FarField& far;
   const HazardSpec& hazard;
   const RunInfo& info;
+  /// Its footprint on the ground (a scene with reach.footprint), and the site RunOutputs fills.
+  const ReachFootprint* footprint = nullptr;
+  const SiteFrame* site = nullptr;
 };
 
 /// @brief The outputs of one `glint run` (rank 0 writes; on other ranks nothing is opened): each

@@ -568,6 +568,12 @@ HorizontalBox sceneRegion(const Scene& scene) {
                           p.origin_m + u * p.u_axis + v * p.v_axis})
       take(c);
   }
+  if (scene.reach.footprint && !scene.objects.empty()) {
+    // The footprint's square about the lit centre, which lies among the objects.
+    const double r = scene.reach.footprint->radius_m;
+    for (const ObjectSpec& o : scene.objects)
+      take(o.centre_m() - Vec3(r, r, 0.0)), take(o.centre_m() + Vec3(r, r, 0.0));
+  }
   const double margin = 10.0 + 0.05 * std::hypot(hi.x - lo.x, hi.y - lo.y);
   return {lo.x - margin, lo.y - margin, hi.x + margin, hi.y + margin};
 }
@@ -624,6 +630,20 @@ ReachSettings readReach(ObjectReader r) {
   reach.layer_ratio = r.number("layer_ratio", reach.layer_ratio);
   if (!(reach.layer_ratio > 1.0 && reach.layer_ratio <= 1.5))
     r.fail("layer_ratio", "must be in (1, 1.5]");
+  if (r.has("footprint")) {
+    ObjectReader f = r.object("footprint");
+    FootprintSpec spec;
+    spec.radius_m = inRange(f, "radius_m", f.number("radius_m", spec.radius_m), 1.0, 1e5, "m");
+    if (auto pixel = f.optionalNumber("pixel_m")) {
+      spec.pixel_m = inRange(f, "pixel_m", *pixel, 0.01, 1e4, "m");
+      if (spec.radius_m / spec.pixel_m > 4096.0)
+        f.fail("pixel_m", "gives more than 8193 pixels a side");
+    }
+    spec.above_ground_m = inRange(
+        f, "above_ground_m", f.number("above_ground_m", spec.above_ground_m), 0.05, 1000.0, "m");
+    f.finish();
+    reach.footprint = spec;
+  }
   r.finish();
   return reach;
 }
@@ -805,6 +825,8 @@ Scene parseScene(std::string_view text, const std::string& source,
   if (r.has("reach")) scene.reach = readReach(r.object("reach"));
   if (r.has("engagement")) scene.engagement = readEngagement(r.object("engagement"), scene);
   if (r.has("site")) scene.site = readSite(r.object("site"));
+  if (scene.reach.footprint && !scene.site)
+    r.fail("reach", "has a footprint, which needs a site: it is drawn on the Earth");
   if (r.has("terrain")) {
     ObjectReader t = r.object("terrain");
     scene.terrain_file = base / t.string("file");

@@ -25,6 +25,7 @@
 #include "observers/exposure.h"
 #include "observers/motion.h"
 #include "pipeline/gltf_loader.h"
+#include "pipeline/reach_footprint.h"
 
 namespace glint {
 
@@ -117,6 +118,8 @@ struct ReachSettings {
   std::optional<bool> enabled;
   int face_cells = 64;        ///< rays per cube-face edge, a multiple of 16 in 16 .. 512
   double layer_ratio = 1.02;  ///< between the radial layers, in (1, 1.5]
+  /// Key `reach.footprint` (with a site): where the reach meets the ground, as polygons.
+  std::optional<FootprintSpec> footprint;
 };
 
 /// @brief An engagement in time (key `engagement`; docs/engagement.md): the motion over its span

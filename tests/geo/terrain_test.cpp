@@ -202,6 +202,33 @@ TEST_F(TerrainTest, APlaneOverTheTerrainMatchesItsDenseTwinAndThePointsAtItsObse
   EXPECT_GT(evaluated, 50);
 }
 
+// The terrain's own segment test (the reach footprint's shadow): from the sphere's stand over the
+// ridge's crest, blocked exactly where the brute-force test says.
+TEST_F(TerrainTest, SegmentsOverTheRidgeAreBlockedAsTheTrianglesSay) {
+  writeSiteDem(dir_ / "ridge.tif", ridge);
+  const SiteFrame site(kSite);
+  const auto t = Terrain::read(dir_ / "ridge.tif", site, {-100.0, -100.0, 400.0, 100.0}, 1e6);
+  const Vec3 from(0.0, 0.0, 5.0);
+  int blocked = 0, clear = 0;
+  for (double x = 20.0; x <= 380.0; x += 7.0)
+    for (double y : {-60.0, 0.0, 45.0}) {
+      const Vec3 to(x, y, *t->surfaceZ(x, y) + 1.7);
+      bool brute = false;
+      for (const auto& tri : t->mesh()->triangles) {
+        brute = crosses(from, to, t->mesh()->vertices_m[tri[0]], t->mesh()->vertices_m[tri[1]],
+                        t->mesh()->vertices_m[tri[2]]);
+        if (brute) break;
+      }
+      // Within 0.5 m of grazing the crest either answer is right (float against double).
+      const double over_crest_z = 5.0 + (20.0 - 5.0) * x / 150.0;
+      if (x > 140.0 && std::abs(to.z - over_crest_z) < 0.5) continue;
+      EXPECT_EQ(t->segmentClear(from, to), !brute) << "to (" << x << ", " << y << ")";
+      (brute ? blocked : clear) += 1;
+    }
+  EXPECT_GT(blocked, 20);
+  EXPECT_GT(clear, 20);
+}
+
 // A ridge between the laser and the target: the beam never reaches it.
 TEST_F(TerrainTest, ARidgeBeforeTheTargetMasksTheBeam) {
   writeSiteDem(dir_ / "wall.tif", [](double x, double) {
@@ -235,6 +262,13 @@ TEST_F(TerrainTest, SceneKeysAreRefusedWhereTheyCannotHold) {
   j = ridgeScene(dir_ / "dem.tif");
   j["planes"][0]["v_axis"] = {0, 0, 1};
   EXPECT_NE(test::refusalOf([&] { parseScene(j.dump(), "s.json"); }).find("horizontal plane"),
+            std::string::npos);
+  j = ridgeScene(dir_ / "dem.tif");
+  j.erase("site");
+  j.erase("terrain");
+  j["planes"][0].erase("above_terrain_m");
+  j["reach"] = {{"footprint", {{"radius_m", 500}}}};
+  EXPECT_NE(test::refusalOf([&] { parseScene(j.dump(), "s.json"); }).find("needs a site"),
             std::string::npos);
   j = ridgeScene(dir_ / "missing.tif");
   EXPECT_NE(test::refusalOf([&] { parseScene(j.dump(), "s.json"); }).find("/terrain/file"),
