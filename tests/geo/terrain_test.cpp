@@ -67,6 +67,23 @@ TEST_F(TerrainTest, AFlatModelFallsBelowTheTangentPlaneAsTheEllipsoidDoes) {
   EXPECT_NEAR(t->postSpacingM(), 5.0, 0.01) << "5 m on the map, the map's scale ≈ 1";
 }
 
+// A model given in latitude and longitude is read in that frame: 100 m above the ellipsoid
+// everywhere, posts 5e-5° apart (5.5 m north-south), around a site at 35° N, 106° W. Its
+// surface lies 100 m up, less the ellipsoid's fall (d² / 2R) away from the site.
+TEST_F(TerrainTest, AModelInLatitudeAndLongitudeIsReadInItsOwnFrame) {
+  test::writeGeographicDem(dir_ / "geographic.tif", -106.006, 35.006, 5e-5, 240, 240,
+                           [](double, double) { return 100.0; });
+  const SiteFrame site(kSite);
+  const auto t = Terrain::read(dir_ / "geographic.tif", site, {-400.0, -400.0, 400.0, 400.0}, 1e6);
+  EXPECT_NE(t->crsName().find("WGS 84"), std::string::npos) << t->crsName();
+  const double r = 6371000.0;  // the fall's radius to 0.3 %: at 400 m it moves 4e-5 m
+  for (const auto& [x, y] : {std::pair{0.0, 0.0}, {350.0, 0.0}, {0.0, -300.0}, {-250.0, 250.0}}) {
+    const std::optional<double> z = t->surfaceZ(x, y);
+    ASSERT_TRUE(z.has_value()) << x << ", " << y;
+    EXPECT_NEAR(*z, 100.0 - (x * x + y * y) / (2.0 * r), 1e-3) << x << ", " << y;
+  }
+}
+
 TEST_F(TerrainTest, AModelThatMissesTheRegionIsRefusedNamingIt) {
   writeSiteDem(dir_ / "dem.tif", [](double, double) { return 0.0; });
   const SiteFrame site(kSite);
