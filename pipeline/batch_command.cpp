@@ -207,7 +207,8 @@ void runEngagementRegion(const ScenarioWork& w, StudyLattice& r, ScenarioTally& 
   std::vector<std::string> written;
   if (r.plane) {
     const std::vector<ExrChannel> channels = e.maps.channels();
-    written = w.maps.writeEngagementPlane(r.plane_index, {e.maps.grid, channels, w.info});
+    written =
+        w.maps.writeEngagementPlane(r.plane_index, {e.maps.grid, channels, w.info, nullptr, {}});
   } else {
     const std::vector<LatticeChannel> channels = e.maps.latticeChannels();
     written = w.maps.writeEngagementBox({r.spec, channels, w.info});

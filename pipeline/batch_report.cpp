@@ -8,6 +8,7 @@
 
 #include "export/atomic_file.h"
 #include "export/exr_map.h"
+#include "export/geo_files.h"
 #include "export/lattice_vdb.h"
 #include "glint/version.h"
 #include "pipeline/engagement_report.h"
@@ -189,6 +190,59 @@ std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
   return csv;
 }
 
+namespace {
+
+// A study's plane map on the site's map: its channels as a GeoTIFF, and where some scenario, and
+// where at least half of them, are hazardous as polygons (naked eye and aided).
+void writeStudyGeoMaps(const std::filesystem::path& dir, const PlaneGrid& g,
+                       const std::vector<ExrChannel>& channels, const StudyLattice& r,
+                       const Study& study, const std::vector<float>& cover,
+                       const std::vector<float>& aided_cover, const std::string& program,
+                       std::size_t scenarios) {
+  const HazardSpec& h = study.base.hazard;
+  const SiteFrame site(*study.base.site);
+  const GeoInfo info{program, r.name, hazardCitation(h), h.wavelength_nm, h.mpe_w_m2};
+  std::vector<std::string> units;
+  for (const ExrChannel& c : channels) {
+    units.emplace_back(c.name == "max_irradiance_w_m2" ? "W/m^2" : "1");
+  }
+  AtomicFile tif(dir / output_names::planeGeoTiff(r.name));
+  writeGeoTiff(tif.stream(), g, channels, units, site, info);
+  const auto zone = [&](const char* kind, const char* description, const std::vector<float>& p,
+                        float at_least) {
+    ZoneMask z{kind, description, std::vector<unsigned char>(p.size())};
+    for (std::size_t i = 0; i < p.size(); ++i) z.inside[i] = p[i] >= at_least ? 1 : 0;
+    return z;
+  };
+  // The smallest positive coverage is 1 / scenarios: anything above half of that is some.
+  const auto some =
+      static_cast<float>(0.5 / static_cast<double>(std::max<std::size_t>(1, scenarios)));
+  std::vector<ZoneMask> zones = {
+      zone("hazardous_in_some_scenario", "the MPE is reached in at least one scenario", cover,
+           some),
+      zone("hazardous_in_half_the_scenarios", "the MPE is reached in at least half the scenarios",
+           cover, 0.5f)};
+  if (h.aid) {
+    zones.push_back(zone("aided_hazardous_in_some_scenario",
+                         "through the optical aid, in at least one scenario", aided_cover, some));
+  }
+  AtomicFile geojson(dir / output_names::planeZonesGeoJson(r.name));
+  writeZones(geojson.stream(), VectorFormat::GeoJson, g, zones, site, info);
+  AtomicFile kml(dir / output_names::planeZonesKml(r.name));
+  writeZones(kml.stream(), VectorFormat::Kml, g, zones, site, info);
+  tif.commit();
+  geojson.commit();
+  kml.commit();
+}
+
+}  // namespace
+
+bool studyMapOnTheEarth(const Study& study, const StudyLattice& r) {
+  if (!study.base.site || !r.plane) return false;
+  const PlaneSpec& p = study.base.planes[r.plane_index];
+  return mappable(p.u_axis, p.v_axis);
+}
+
 void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, const Study& study,
                    std::size_t scenarios) {
   const HazardSpec& h = study.base.hazard;
@@ -242,6 +296,10 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
     }
     writeExr(file.stream(), g, channels,
              {program, study.base.hazard.wavelength_nm, h.mpe_w_m2, hazardCitation(h)});
+    if (studyMapOnTheEarth(study, r)) {
+      writeStudyGeoMaps(path.parent_path(), g, channels, r, study, cover, aided_cover, program,
+                        scenarios);
+    }
   } else {
     LatticeMeta meta;
     meta.strings = {{"program", program},
@@ -344,6 +402,11 @@ nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLatti
         {{"name", r.name},
          {"kind", r.plane ? "plane" : "box"},
          {"file", r.studyFile()},
+         {"geo_files", studyMapOnTheEarth(study, r)
+                           ? nlohmann::json{output_names::planeGeoTiff(r.name),
+                                            output_names::planeZonesGeoJson(r.name),
+                                            output_names::planeZonesKml(r.name)}
+                           : nlohmann::json::array()},
          {"peak_hazard_ratio", quantilesJson(peak)},
          {std::string(r.plane ? "hazardous_area" : "hazard_volume") + unit, quantilesJson(extent)},
          {"scenarios_with_hazard", with_hazard},

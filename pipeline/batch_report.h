@@ -50,6 +50,10 @@ std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
                          const std::map<std::size_t, nlohmann::json>& records, bool far_field,
                          bool reach, bool aided);
 
+/// @brief Whether a study's region @p r has geo-referenced maps: a plane flat enough, in a scene
+/// with a site.
+bool studyMapOnTheEarth(const Study& study, const StudyLattice& r);
+
 /// @brief Writes one region's aggregated map to @p path (StudyLattice::studyFile()): maximum
 /// irradiance and hazard ratio, coverage probability, and with an optical aid the aided ratio
 /// and coverage, each whole or not at all.

@@ -452,7 +452,7 @@ void runEngagement(const RunContext& c, RunSummary& s) {
     const EngagementRegion m = engagementRegion(c.target.integrator, c.scene, spec, c.watch,
                                                 progress, c.args.terminal, what, c.exchange);
     const std::vector<ExrChannel> channels = m.maps.channels();
-    c.outputs.writeEngagementPlane(p, {m.maps.grid, channels, c.info});
+    c.outputs.writeEngagementPlane(p, {m.maps.grid, channels, c.info, nullptr, {}});
     planes.push_back(engagementRegionJson(plane.name, output_names::planeExr(plane.name), spec, m,
                                           c.scene.hazard));
     if (!c.args.quiet) printEngagementRegion(c.err, what, spec, m);

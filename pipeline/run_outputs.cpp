@@ -95,6 +95,46 @@ void writePlaneGeoTiff(std::ostream& out, const PlaneResults& r) {
   writeGeoTiff(out, m, channels, units, *r.site, geoInfo(r));
 }
 
+// An engagement's plane on the site's map: every channel of its EXR, and where the worst
+// window reaches the MPE (naked eye and aided) as polygons.
+const std::vector<float>* channelNamed(const EngagementPlaneResults& r, const std::string& name) {
+  for (const ExrChannel& c : r.channels) {
+    if (c.name == name) return c.values;
+  }
+  return nullptr;
+}
+
+GeoInfo engagementGeoInfo(const EngagementPlaneResults& r) {
+  return {r.info.program_version, r.plane_name, r.info.mpe_rule, r.info.wavelength_nm,
+          r.info.mpe_w_m2};
+}
+
+void writeEngagementGeoTiff(std::ostream& out, const EngagementPlaneResults& r) {
+  std::vector<std::string> units;
+  for (const ExrChannel& c : r.channels) {
+    const std::string& n = c.name;
+    units.emplace_back(n.ends_with("_w_m2")   ? "W/m^2"
+                       : n.ends_with("_j_m2") ? "J/m^2"
+                       : n.ends_with("_s")    ? "s"
+                                              : "1");
+  }
+  writeGeoTiff(out, r.grid, r.channels, units, *r.site, engagementGeoInfo(r));
+}
+
+void writeEngagementZones(std::ostream& out, const EngagementPlaneResults& r, VectorFormat format) {
+  std::vector<ZoneMask> zones;
+  const auto add = [&](const char* channel, const char* kind, const char* description) {
+    const std::vector<float>* v = channelNamed(r, channel);
+    if (v == nullptr) return;
+    ZoneMask z{kind, description, std::vector<unsigned char>(v->size())};
+    for (std::size_t i = 0; i < v->size(); ++i) z.inside[i] = (*v)[i] >= 1.0F ? 1 : 0;
+    zones.push_back(std::move(z));
+  };
+  add("hazard_ratio", "hazardous", "the worst window's exposure reaches its MPE");
+  add("aided_hazard_ratio", "aided_hazardous", "through the optical aid");
+  writeZones(out, format, r.grid, zones, *r.site, engagementGeoInfo(r));
+}
+
 // The reach's footprint: where it covers the ground (naked eye, and aided), and the height of
 // each observer it was judged at.
 GeoInfo footprintInfo(const ReachResults& r) {
@@ -306,6 +346,24 @@ constexpr Declared kOutputs[] = {
            writeExr(out, r.grid, r.channels, exrInfo(r.info));
          },
      .scenario = true},
+    {.plane_name = output_names::planeGeoTiff,
+     .region = Region::EngagementPlane,
+     .engagement_plane = writeEngagementGeoTiff,
+     .geo = true},
+    {.plane_name = output_names::planeZonesGeoJson,
+     .region = Region::EngagementPlane,
+     .engagement_plane =
+         [](std::ostream& out, const EngagementPlaneResults& r) {
+           writeEngagementZones(out, r, VectorFormat::GeoJson);
+         },
+     .geo = true},
+    {.plane_name = output_names::planeZonesKml,
+     .region = Region::EngagementPlane,
+     .engagement_plane =
+         [](std::ostream& out, const EngagementPlaneResults& r) {
+           writeEngagementZones(out, r, VectorFormat::Kml);
+         },
+     .geo = true},
     {.name = output_names::kEngagementVdb,
      .region = Region::EngagementBox,
      .engagement_box =
@@ -427,9 +485,12 @@ void RunOutputs::writePlane(std::size_t index, const PlaneResults& plane) {
 
 void RunOutputs::writeEngagementPlane(std::size_t index, const EngagementPlaneResults& plane) {
   if (!writer_) return;
+  EngagementPlaneResults placed = plane;
+  placed.site = site_.get();
+  placed.plane_name = plane_names_.at(index);
   for (const Declared* d : writingOrder(Region::EngagementPlane)) {
     if (const std::optional<std::size_t> i = slotOf(*d, index))
-      d->write(files_[*i]->stream(), plane);
+      d->write(files_[*i]->stream(), placed);
   }
 }
 

@@ -54,6 +54,9 @@ struct EngagementPlaneResults {
   const PlaneGrid& grid;
   const std::vector<ExrChannel>& channels;
   const RunInfo& info;
+  /// The scene's site and the plane's name, for the geo-referenced maps: RunOutputs fills them.
+  const SiteFrame* site = nullptr;
+  std::string plane_name;
 };
 
 /// @brief The box's maps over an engagement as its file is written from them.
