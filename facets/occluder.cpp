@@ -27,22 +27,7 @@ struct Occluder::Impl {
   }
 
   bool clear(const Vec3& from_m, const Vec3& direction, double distance_m, double skip_m) const {
-    const Vec3 o = from_m - frame_origin_m;
-    RTCRay ray{};
-    ray.org_x = static_cast<float>(o.x);
-    ray.org_y = static_cast<float>(o.y);
-    ray.org_z = static_cast<float>(o.z);
-    ray.dir_x = static_cast<float>(direction.x);
-    ray.dir_y = static_cast<float>(direction.y);
-    ray.dir_z = static_cast<float>(direction.z);
-    ray.tnear = static_cast<float>(skip_m);
-    ray.tfar = static_cast<float>(distance_m);
-    ray.mask = 0xFFFFFFFFu;
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    rtcOccluded1(scene, &context, &ray);
-    // Embree marks a blocked ray by setting tfar to -inf.
-    return ray.tfar >= 0.0f;
+    return detail::rayClear(scene, frame_origin_m, from_m, direction, skip_m, distance_m);
   }
 };
 
@@ -122,6 +107,26 @@ bool Occluder::rayClear(const Vec3& from_m, const Vec3& direction, double distan
 }
 
 namespace detail {
+
+bool rayClear(RTCScene scene, const Vec3& frame_origin_m, const Vec3& origin_m,
+              const Vec3& direction, double near_m, double far_m) {
+  const Vec3 o = origin_m - frame_origin_m;
+  RTCRay ray{};
+  ray.org_x = static_cast<float>(o.x);
+  ray.org_y = static_cast<float>(o.y);
+  ray.org_z = static_cast<float>(o.z);
+  ray.dir_x = static_cast<float>(direction.x);
+  ray.dir_y = static_cast<float>(direction.y);
+  ray.dir_z = static_cast<float>(direction.z);
+  ray.tnear = static_cast<float>(near_m);
+  ray.tfar = static_cast<float>(far_m);
+  ray.mask = 0xFFFFFFFFu;
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  rtcOccluded1(scene, &context, &ray);
+  // Embree marks a blocked ray by setting tfar to -inf.
+  return ray.tfar >= 0.0f;
+}
 
 void attachTriangles(RTCDevice device, RTCScene scene, const ShadowMesh& mesh,
                      const Vec3& origin_m) {

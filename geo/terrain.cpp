@@ -112,21 +112,8 @@ bool Terrain::segmentClear(const Vec3& from_m, const Vec3& to_m) const {
   const Vec3 d = to_m - from_m;
   const double length = glm::length(d);
   if (!(length > 2e-3)) return true;
-  const Vec3 o = from_m - heights_->origin_m, u = d / length;
-  RTCRay ray{};
-  ray.org_x = static_cast<float>(o.x);
-  ray.org_y = static_cast<float>(o.y);
-  ray.org_z = static_cast<float>(o.z);
-  ray.dir_x = static_cast<float>(u.x);
-  ray.dir_y = static_cast<float>(u.y);
-  ray.dir_z = static_cast<float>(u.z);
-  ray.tnear = 1e-3f;
-  ray.tfar = static_cast<float>(length - 1e-3);
-  ray.mask = 0xFFFFFFFFu;
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  rtcOccluded1(heights_->scene, &context, &ray);
-  return ray.tfar >= 0.0f;  // Embree marks a blocked ray by setting tfar to -inf
+  return detail::rayClear(heights_->scene, heights_->origin_m, from_m, d / length, 1e-3,
+                          length - 1e-3);
 }
 
 }  // namespace glint
