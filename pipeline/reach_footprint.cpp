@@ -42,6 +42,7 @@ ReachFootprint reachFootprint(const NearReach& near, const FarField& far, double
     const Geodetic here = site.toGeodetic({x, y, 0.0});
     return site.fromGeodetic({here.latitude_deg, here.longitude_deg, site_height}).z;
   };
+  std::vector<char> reached(thresholds, 0);  // per threshold, for the pixel at hand
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < n; ++i) {
       const double x = g.origin_m.x + i * pixel, y = g.origin_m.y + j * pixel;
@@ -50,7 +51,7 @@ ReachFootprint reachFootprint(const NearReach& near, const FarField& far, double
           static_cast<std::size_t>(j) * static_cast<std::size_t>(n) + static_cast<std::size_t>(i);
       f.ground_z_m[k] = static_cast<float>(z);
       // The reach at the pixel's centre and corners: any of them inside puts the pixel in.
-      std::vector<char> reached(thresholds, 0);
+      std::fill(reached.begin(), reached.end(), 0);
       for (const auto& [dx, dy] :
            {std::pair{0.0, 0.0}, {-0.5, -0.5}, {0.5, -0.5}, {-0.5, 0.5}, {0.5, 0.5}}) {
         const Vec3 d = Vec3(x + dx * pixel, y + dy * pixel, z) - c;
