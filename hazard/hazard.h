@@ -140,6 +140,11 @@ struct HazardSpec {
   /// below what even an undeclared 50 mm binocular (about 50× the collected power of a 7 mm
   /// pupil) could lift to 1.
   [[nodiscard]] double negligibleW_m2() const { return 1e-3 * lowestHazardousW_m2(); }
+  /// @brief The largest floor a scene may set (W/m²): a hundredth of lowestHazardousW_m2().
+  /// What is below a floor counts as nothing (a block skipped, a piece dropped, an observer's
+  /// error allowed), so a floor near a threshold could read a hazard as none; at this one an
+  /// observer at the threshold may fall short of it by at most the fields' default tolerance.
+  [[nodiscard]] double largestFloorW_m2() const { return 1e-2 * lowestHazardousW_m2(); }
   /// @brief One pulse's radiant exposure (J/m²) at mean irradiance @p irradiance_w_m2.
   [[nodiscard]] double pulseRadiantExposureJ_m2(double irradiance_w_m2) const {
     return irradiance_w_m2 * pulse_exposure_s;

@@ -411,15 +411,32 @@ ObjectSpec readObject(ObjectReader r, const std::vector<std::string>& material_n
   return o;
 }
 
+// A floor `key` of @p floor_w_m2, refused where it could read a hazard of @p hazard as none
+// (HazardSpec::largestFloorW_m2()).
+double floorBelowHazard(ObjectReader& r, const char* key, double floor_w_m2,
+                        const HazardSpec& hazard) {
+  const double largest = hazard.largestFloorW_m2();
+  if (!(floor_w_m2 <= largest)) {
+    r.fail(key, formatNumber("%.3g", floor_w_m2) +
+                    " W/m² could hide a hazard: it must be at most a hundredth of the lowest "
+                    "hazardous irradiance (the MPE" +
+                    (hazard.aidGain() > 1.0 ? " through the optical aid" : "") + ", " +
+                    formatNumber("%.3g", hazard.lowestHazardousW_m2()) + " W/m²), " +
+                    formatNumber("%.3g", largest) + " W/m²");
+  }
+  return floor_w_m2;
+}
+
 // The `accuracy` settings; the floor is @p default_floor_w_m2 unless the file gives one.
-IntegratorOptions readAccuracy(ObjectReader r, double default_floor_w_m2) {
+IntegratorOptions readAccuracy(ObjectReader r, double default_floor_w_m2,
+                               const HazardSpec& hazard) {
   IntegratorOptions a;
   a.tolerance = r.number("tolerance", a.tolerance);
   if (!(a.tolerance > 0.0 && a.tolerance < 1.0)) r.fail("tolerance", "must be in (0, 1)");
   a.floor_w_m2 = default_floor_w_m2;
   if (auto floor = r.optionalNumber("floor_w_m2")) {
     if (!(*floor >= 0.0)) r.fail("floor_w_m2", "must be ≥ 0");
-    a.floor_w_m2 = *floor;
+    a.floor_w_m2 = floorBelowHazard(r, "floor_w_m2", *floor, hazard);
   }
   const std::int64_t depth = r.integer("max_depth", a.max_depth);
   if (depth < 0 || depth > 24) r.fail("max_depth", "must be an integer in [0, 24]");
@@ -460,16 +477,17 @@ double blockSize(ObjectReader& r, const char* block_key, const char* lattice_key
 
 // The refinement's `tolerance` (kept as given when absent) and `floor_w_m2` of an observer
 // box or plane.
-void readRefinement(ObjectReader& r, double& tolerance, std::optional<double>& floor_w_m2) {
+void readRefinement(ObjectReader& r, double& tolerance, std::optional<double>& floor_w_m2,
+                    const HazardSpec& hazard) {
   tolerance = r.number("tolerance", tolerance);
   if (!(tolerance > 0.0 && tolerance < 1.0)) r.fail("tolerance", "must be in (0, 1)");
   if (auto floor = r.optionalNumber("floor_w_m2")) {
     if (!(*floor > 0.0)) r.fail("floor_w_m2", "must be > 0");
-    floor_w_m2 = *floor;
+    floor_w_m2 = floorBelowHazard(r, "floor_w_m2", *floor, hazard);
   }
 }
 
-ObserversSpec readObservers(ObjectReader r) {
+ObserversSpec readObservers(ObjectReader r, const HazardSpec& hazard) {
   ObserversSpec o;
   o.min_m = position(r, "min");
   o.max_m = position(r, "max");
@@ -484,12 +502,13 @@ ObserversSpec readObservers(ObjectReader r) {
   if (longest / o.voxel_m > 65536.0)
     r.fail("voxel_m", "gives more than 65536 voxels along an axis");
   o.block_m = blockSize(r, "block_m", "voxel_m", o.voxel_m);
-  readRefinement(r, o.tolerance, o.floor_w_m2);
+  readRefinement(r, o.tolerance, o.floor_w_m2, hazard);
   r.finish();
   return o;
 }
 
-PlaneSpec readPlane(ObjectReader r, const std::vector<PlaneSpec>& earlier) {
+PlaneSpec readPlane(ObjectReader r, const std::vector<PlaneSpec>& earlier,
+                    const HazardSpec& hazard) {
   PlaneSpec p;
   p.name = r.string("name");
   const bool safe =
@@ -528,7 +547,7 @@ PlaneSpec readPlane(ObjectReader r, const std::vector<PlaneSpec>& earlier) {
   if (std::max(p.width_m, p.height_m) / p.pixel_m > 65536.0)
     r.fail("pixel_m", "gives more than 65536 pixels along an axis");
   p.block_m = blockSize(r, "block_m", "pixel_m", p.pixel_m);
-  readRefinement(r, p.tolerance, p.floor_w_m2);
+  readRefinement(r, p.tolerance, p.floor_w_m2, hazard);
   if (auto above = r.optionalNumber("above_terrain_m")) {
     // Over the ground, from a person lying down to a mast.
     p.above_terrain_m = inRange(r, "above_terrain_m", *above, 0.05, 1000.0, "m");
@@ -740,8 +759,10 @@ EngagementSpec readEngagement(ObjectReader r, const Scene& scene) {
     e.time.tolerance = t.number("tolerance", e.time.tolerance);
     if (!(e.time.tolerance > 0.0 && e.time.tolerance < 1.0))
       t.fail("tolerance", "must be in (0, 1)");
-    if (auto floor = t.optionalNumber("floor_w_m2"))
-      e.time.floor_w_m2 = positive(t, "floor_w_m2", *floor);
+    if (auto floor = t.optionalNumber("floor_w_m2")) {
+      e.time.floor_w_m2 =
+          floorBelowHazard(t, "floor_w_m2", positive(t, "floor_w_m2", *floor), scene.hazard);
+    }
     const std::int64_t n = t.integer("initial_intervals", e.time.initial_intervals);
     if (n < 1 || n > 4096) t.fail("initial_intervals", "must be from 1 to 4096");
     e.time.initial_intervals = static_cast<int>(n);
@@ -803,22 +824,28 @@ Scene parseScene(std::string_view text, const std::string& source,
     r.fail("objects", "must be a non-empty array of objects");
   }
   // Before the objects: whether a mesh joins an occluder decides what it costs in memory.
-  const double default_floor_w_m2 = 1e-9 * scene.laser.peakIrradiance();
+  // The default floor: far below the beam (a focused beam lights its spot far above any limit)
+  // and below every threshold judged (HazardSpec::negligibleW_m2()).
+  const double default_floor_w_m2 =
+      std::min(1e-9 * scene.laser.peakIrradiance(), scene.hazard.negligibleW_m2());
   scene.accuracy.floor_w_m2 = default_floor_w_m2;
-  if (r.has("accuracy")) scene.accuracy = readAccuracy(r.object("accuracy"), default_floor_w_m2);
+  if (r.has("accuracy")) {
+    scene.accuracy = readAccuracy(r.object("accuracy"), default_floor_w_m2, scene.hazard);
+  }
   for (std::size_t i = 0; i < objects.size(); ++i) {
     scene.objects.push_back(readObject(
         ObjectReader(objects[i], "/objects/" + std::to_string(i), source), scene.material_names,
         base, mesh_limits, {memory_budget_bytes, scene.accuracy.occlusion}));
   }
 
-  if (r.has("observers")) scene.observers = readObservers(r.object("observers"));
+  if (r.has("observers")) scene.observers = readObservers(r.object("observers"), scene.hazard);
   if (r.has("planes")) {
     const json& planes = r.require("planes");
     if (!planes.is_array()) r.fail("planes", "must be an array of planes");
     for (std::size_t i = 0; i < planes.size(); ++i) {
       scene.planes.push_back(
-          readPlane(ObjectReader(planes[i], "/planes/" + std::to_string(i), source), scene.planes));
+          readPlane(ObjectReader(planes[i], "/planes/" + std::to_string(i), source), scene.planes,
+                    scene.hazard));
     }
   }
   if (r.has("far_field")) scene.far_field = readFarField(r.object("far_field"));

@@ -216,5 +216,86 @@ TEST(SceneHazard, AtmosphereFromVisibilityOrExtinctionButNotBoth) {
             std::string::npos);
 }
 
+// Issue 50 (3): the default floor was 1e-9 × the beam's peak irradiance, whatever the MPE. A
+// 1.5 kW, 450 nm welding laser focused to 0.3 mm on a copper disk lights its spot at 5.3e9 W/m²,
+// so the floor was 5.3 W/m², five times the 1 W/m² MPE of a 1000 s exposure: glint points read
+// the diffuse glow at (5, 0, 5) and (6, 0, 6) as 0. The spot is a point at these distances (its
+// radius a ten-thousandth of them), so the closed form is the BRDF at the spot times its power:
+// E = P f_r cos θi cos θr / d², f_r = ρs Ξ(θN) / (4 cos θi cos θr) + ρd / π.
+constexpr const char* kWeldingScene = R"({"laser": {"position": [0, 0, 10],
+    "direction": [0, 0, -1], "power_w": 1500, "wavelength_nm": 450, "exposure_s": 1000,
+    "beam": {"profile": "flat_top", "radius_m": 0.0003}},
+  "materials": {"copper": {"specular_reflectance": 0.4, "sigma": 0.1, "diffuse_reflectance": 0.3}},
+  "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [0, 0, 1], "radius": 0.05,
+               "material": "copper"}]})";
+
+double weldingSpotIrradiance(const Vec3& x) {
+  const double d = glm::length(x), sigma = 0.1;
+  const Vec3 wi(0.0, 0.0, 1.0), wo = x / d;
+  const double cos_r = wo.z;
+  const Vec3 h = glm::normalize(wi + wo);
+  const double tan2 = (h.x * h.x + h.y * h.y) / (h.z * h.z);
+  const double beckmann =
+      std::exp(-tan2 / (2.0 * sigma * sigma)) / (2.0 * kPi * sigma * sigma * std::pow(h.z, 4));
+  const double brdf = 0.4 * beckmann / (4.0 * cos_r) + 0.3 / kPi;
+  return 1500.0 * brdf * cos_r / (d * d);
+}
+
+TEST(Floor, TheDefaultFloorStaysBelowALowMpeBesideAFocusedBeam) {
+  const Scene s = parseScene(kWeldingScene, "welding.json");
+  ASSERT_NEAR(s.hazard.mpe_w_m2, 1.0, 1e-12) << "premise: ANSI's 1e-4 W/cm² at 450 nm, 1000 s";
+  EXPECT_LE(s.accuracy.floor_w_m2, 1e-3 * s.hazard.mpe_w_m2) << "the floor is tied to the MPE";
+  const FacetIntegrator integrator = buildIntegrator(s, s.accuracy);
+  IntegratorWorkspace ws;
+  for (const Vec3& x : {Vec3(3, 0, 3), Vec3(5, 0, 5), Vec3(6, 0, 6)}) {
+    const ObserverResult r = integrator.adaptive(x, ws);
+    const double exact = weldingSpotIrradiance(x);
+    EXPECT_TRUE(r.converged) << x.x;
+    // The integrator's tolerance (1e-3) and the spot's size against the distance (1e-8).
+    EXPECT_NEAR(r.irradiance_w_m2, exact, 2e-3 * exact)
+        << "at (" << x.x << ", 0, " << x.z << "): hazard ratio " << r.irradiance_w_m2 << " of "
+        << exact;
+  }
+}
+
+// The same with binoculars of gain 1000: the aided MPE is 1e-3 W/m², and at 0.9 × the aided
+// reach along 45° the aided hazard ratio is 1/0.81 = 1.23 (glint read 0).
+TEST(Floor, TheDefaultFloorStaysBelowTheAidedMpeOfALargeGain) {
+  nlohmann::json j = nlohmann::json::parse(kWeldingScene);
+  j["optical_aid"] = {{"gain", 1000.0}};
+  const Scene s = parseScene(j.dump(), "welding.json");
+  EXPECT_LE(s.accuracy.floor_w_m2, 1e-3 * s.hazard.aidedMpeW_m2());
+  const FacetIntegrator integrator = buildIntegrator(s, s.accuracy);
+  IntegratorWorkspace ws;
+  // The aided reach along (1, 0, 1)/√2: E(d) = E(1 m) / d² = aided MPE.
+  const Vec3 along = glm::normalize(Vec3(1.0, 0.0, 1.0));
+  const double reach_m = std::sqrt(weldingSpotIrradiance(along) / s.hazard.aidedMpeW_m2());
+  const Vec3 x = 0.9 * reach_m * along;
+  const double aided = s.hazard.aidedRatio(integrator.adaptive(x, ws).irradiance_w_m2);
+  EXPECT_NEAR(aided, 1.0 / 0.81, 3e-3) << "at 0.9 × the aided reach of " << reach_m << " m";
+}
+
+// A floor set in the scene above a hundredth of the lowest hazardous irradiance could read a
+// hazard as none: it is refused, for the integrator, the regions and an engagement's time.
+TEST(Floor, AFloorThatCouldHideAHazardIsRefused) {
+  nlohmann::json j = nlohmann::json::parse(kWeldingScene);
+  j["accuracy"] = {{"floor_w_m2", 0.02}};
+  EXPECT_EQ(test::refusalOf([&] { parseScene(j.dump(), "welding.json"); }),
+            "welding.json: /accuracy/floor_w_m2: 0.02 W/m² could hide a hazard: it must be at "
+            "most a hundredth of the lowest hazardous irradiance (the MPE, 1 W/m²), 0.01 W/m²");
+  j["accuracy"] = {{"floor_w_m2", 0.01}};
+  EXPECT_EQ(test::refusalOf([&] { parseScene(j.dump(), "welding.json"); }), "(accepted)");
+  j["optical_aid"] = {{"gain", 10.0}};
+  j["observers"] = {{"min", {-1, -1, 0}}, {"max", {1, 1, 1}}, {"voxel_m", 0.1}};
+  const std::string aided = test::refusalOf([&] { parseScene(j.dump(), "welding.json"); });
+  EXPECT_NE(aided.find("/accuracy/floor_w_m2: 0.01 W/m² could hide a hazard"), std::string::npos)
+      << aided;
+  EXPECT_NE(aided.find("the MPE through the optical aid, 0.1 W/m²"), std::string::npos) << aided;
+  j["accuracy"] = {{"floor_w_m2", 1e-4}};
+  j["observers"]["floor_w_m2"] = 0.01;
+  const std::string box = test::refusalOf([&] { parseScene(j.dump(), "welding.json"); });
+  EXPECT_NE(box.find("/observers/floor_w_m2: 0.01 W/m² could hide"), std::string::npos) << box;
+}
+
 }  // namespace
 }  // namespace glint
