@@ -46,12 +46,16 @@ BallBound FacetIntegrator::boundBall(const Vec3& centre_m, double radius_m,
       continue;
     }
     // Splitting tightens the bound only where the cone is wider than the angle under which
-    // the region sees the facet: the half vector cannot be pinned down finer than that.
+    // the region sees the facet: the half vector cannot be pinned down finer than that. A
+    // candidate larger than the region that the region reaches has no bound at all: split, its
+    // pieces the region does not reach get one (a flat mirror beside an observer, whose cone
+    // is 0, above all); one smaller than the region stays reached however it is split.
     const double d = glm::length(x - c.geometry.centre_m);
     const double reach = c.geometry.radius_m + radius_m;
     const double region_angle = d > reach ? std::asin(reach / d) : kPi;
-    if (std::isfinite(upper) && upper > options.drop_allowance_w_m2 &&
-        c.facet.depth < options.max_split_depth && c.geometry.cone_rad > 0.5 * region_angle) {
+    const bool tighter = std::isfinite(upper) ? c.geometry.cone_rad > 0.5 * region_angle
+                                              : c.geometry.radius_m > radius_m;
+    if (upper > options.drop_allowance_w_m2 && c.facet.depth < options.max_split_depth && tighter) {
       detail::withPatchModel(*target_, c.facet.coarse, [&](const auto& model) {
         const std::array<SubFacet, 4> children = model.split(c.facet);
         kept[i] = {children[0], c.object,

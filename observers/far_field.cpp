@@ -129,17 +129,11 @@ FarReach farReach(const FarField& field, double mpe_w_m2, double extinction_per_
   FarReach reach;
   reach.direction = field.peak().direction;
   reach.far_radius_m = farRadiusToward(field.spec(), reach.direction);
-  const double source_m = field.ball().radius_m;
-  double best_w_sr = 0.0;  // the distance grows with intensity: only a brighter one can beat it
   const auto consider = [&](const Vec3& d, double intensity_w_sr) {
-    const double intensity = hazardSafe(intensity_w_sr);
-    if (!(intensity > best_w_sr)) return;
-    const double nohd = hazardDistance(intensity, mpe_w_m2, extinction_per_m, source_m);
+    const double nohd = field.hazardDistanceToward(d, intensity_w_sr, mpe_w_m2, extinction_per_m);
+    if (!(nohd > reach.nohd_m)) return;
     const double far_m = farRadiusToward(field.spec(), d);
-    if (nohd >= far_m) {
-      reach = {nohd, d, far_m};
-      best_w_sr = intensity;
-    }
+    if (nohd >= far_m) reach = {nohd, d, far_m};
   };
   // The located tops first: a lattice direction beside one, as bright by its allowance, does
   // not take its place.
@@ -369,6 +363,20 @@ double FarField::narrowGlintBoundAt(int face, double x, double y) const {
   return bound;
 }
 
+double FarField::tileBrightest(int face, int i0, int j0, int i1, int j1) const {
+  const int tiles = (spec_.face_pixels + kTile - 1) / kTile;
+  const std::vector<float>& tile = tile_max_[static_cast<std::size_t>(face)];
+  double brightest = 0.0;
+  for (int b = std::max(0, j0 / kTile); b <= std::min(tiles - 1, std::max(0, j1) / kTile); ++b)
+    for (int a = std::max(0, i0 / kTile); a <= std::min(tiles - 1, std::max(0, i1) / kTile); ++a) {
+      brightest = std::max(
+          brightest,
+          static_cast<double>(tile[static_cast<std::size_t>(b) * static_cast<std::size_t>(tiles) +
+                                   static_cast<std::size_t>(a)]));
+    }
+  return brightest;
+}
+
 bool FarField::dark(int face, int i0, int j0, int i1, int j1) const {
   if (!narrow_index_[static_cast<std::size_t>(face)].empty()) return false;
   const int tiles = (spec_.face_pixels + kTile - 1) / kTile;
@@ -495,6 +503,37 @@ double FarField::upperIntensityAlong(const Vec3& a, const Vec3& b, int depth) co
 double FarField::upperIntensity(const Vec3& direction) const {
   const FaceHit h = faceHit(direction, spec_.face_pixels);
   return upperIntensityAt(h.face, h.x, h.y);
+}
+
+double FarField::hazardDistanceToward(const Vec3& direction, double upper_w_sr,
+                                      double threshold_w_m2, double extinction_per_m) const {
+  const double upper = hazardSafe(upper_w_sr);
+  const double a = ball_.radius_m;
+  if (!std::isfinite(upper)) return std::numeric_limits<double>::infinity();
+  // The brightest lattice direction in the parallax cone at the far radius (where the cone is
+  // widest), as the check sought it, one step wider for a direction between lattice points.
+  const int n = spec_.face_pixels;
+  const double far_m = farRadiusToward(spec_, direction);
+  const double parallax_rad = a / std::max(far_m - a, 1e-300);
+  const int steps =
+      std::min(kFarRadiusReferenceSteps,
+               static_cast<int>(std::min(parallax_rad * n / 2.0, static_cast<double>(n))) + 1) +
+      1;
+  const FaceHit h = faceHit(direction, n);
+  const int i = static_cast<int>(std::lround(h.x)), j = static_cast<int>(std::lround(h.y));
+  // The tiles' maxima bound the square's from above: where that is no more than the upper
+  // estimate itself (the dark sky, above all), the lattice is not read point by point.
+  double brightest = upper;
+  if (tileBrightest(h.face, i - steps, j - steps, i + steps, j + steps) > upper)
+    brightest = std::max(upper, brightestWithin(h.face, i, j, steps));
+  // E r² ≤ I + share × (tolerance × max(brightest, threshold × r²) + floor): the threshold is
+  // reached either where the brightest term rules or where its own share does.
+  const double share = 1.0 + kFarRadiusReadShare;
+  const double tolerance = share * spec_.tolerance;
+  const double floor_w_sr = share * spec_.floor_w_sr;
+  const double by_brightest = upper + floor_w_sr + tolerance * brightest;
+  const double by_threshold = (upper + floor_w_sr) / std::max(1.0 - tolerance, 1e-300);
+  return hazardDistance(std::max(by_brightest, by_threshold), threshold_w_m2, extinction_per_m, a);
 }
 
 namespace {
@@ -751,9 +790,8 @@ LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2, double
     c = std::max(c, std::min(hazardSafe(top.intensity_w_sr), field.peak().intensity_w_sr));
   }
   // The hazard distance toward the pixel where it lies beyond the far radius there, else 0.
-  const double source_m = field.ball().radius_m;
   auto reach = [&](double intensity, double threshold_w_m2, const Vec3& d) {
-    const double nohd = hazardDistance(intensity, threshold_w_m2, extinction_per_m, source_m);
+    const double nohd = field.hazardDistanceToward(d, intensity, threshold_w_m2, extinction_per_m);
     return nohd >= farRadiusToward(field.spec(), d) ? static_cast<float>(std::min(nohd, kFloatMax))
                                                     : 0.0f;
   };
@@ -854,8 +892,7 @@ HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mp
         const Vec3 dir = glm::normalize(p - centre);
         const double intensity =
             vertex[static_cast<std::size_t>(b) * row + static_cast<std::size_t>(a)];
-        const double nohd =
-            hazardDistance(intensity, mpe_w_m2, extinction_per_m, field.ball().radius_m);
+        const double nohd = field.hazardDistanceToward(dir, intensity, mpe_w_m2, extinction_per_m);
         const double far_m = farRadiusToward(field.spec(), dir);
         const bool beyond = nohd >= far_m;
         // The far radius grows without bound toward the beam's own direction: drawn capped.

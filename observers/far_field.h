@@ -94,6 +94,13 @@ struct FarFieldSpec {
   double first_order_far_radius_m = 0.0;  ///< farRadius() away from the forward cone
 };
 
+/// @brief verifyFarRadius() reads E r² with the integrator at this share of its allowance: the
+/// far field's guarantee carries that reading error besides the tolerance.
+inline constexpr double kFarRadiusReadShare = 0.1;
+/// @brief verifyFarRadius() seeks the parallax cone's brightest direction within this many
+/// lattice steps (a smaller square can only lower it, so the check only gets stricter).
+inline constexpr int kFarRadiusReferenceSteps = 32;
+
 /// @brief The far radius toward unit @p direction: the verified radius (FarRadiusCheck) where
 /// the map has one, else farRadius() at the direction's angle from the beam.
 double farRadiusToward(const FarFieldSpec& spec, const Vec3& direction);
@@ -260,6 +267,20 @@ class FarField {
   /// @p b (a map cell's edge: short).
   [[nodiscard]] double upperIntensityAlong(const Vec3& a, const Vec3& b) const;
 
+  /// @brief The hazard distance toward unit @p direction, whose intensity the map puts at
+  /// most at @p upper_w_sr, for @p threshold_w_m2 through air of @p extinction_per_m: the
+  /// distance beyond which E ≤ threshold wherever the far field speaks.
+  ///
+  /// Beyond the far radius E r² is I(ω) only to within the tolerance × the larger of the
+  /// brightest lattice direction in the parallax cone (as verifyFarRadius() seeks it) and
+  /// threshold × r², plus the floor, and the check read E r² to a tenth of that besides. A
+  /// near apparent source (a convex mirror's virtual image) sits in that allowance: with E r²
+  /// up to I + allowance, E falls to the threshold only at √((I + allowance) / threshold), about
+  /// half the tolerance farther than √(I / threshold). 0 where the allowance is 0 too; +∞ for
+  /// a non-finite intensity.
+  [[nodiscard]] double hazardDistanceToward(const Vec3& direction, double upper_w_sr,
+                                            double threshold_w_m2, double extinction_per_m) const;
+
  private:
   friend FarField computeFarField(const FacetIntegrator&, const FarFieldSpec&, WorkCounter*,
                                   PointExchange*);
@@ -276,6 +297,9 @@ class FarField {
   // is 0 and the face has no narrow glint. False may be answered for a dark region, never
   // true for a lit one.
   [[nodiscard]] bool dark(int face, int i0, int j0, int i1, int j1) const;
+  // At least the largest lattice intensity of points (i0 .. i1, j0 .. j1) of a face (clipped to
+  // it): the largest of the tiles that hold them.
+  [[nodiscard]] double tileBrightest(int face, int i0, int j0, int i1, int j1) const;
   // The interpolation allowance of lattice cell (i, j) .. (i + 1, j + 1) of a face.
   [[nodiscard]] double cellAllowance(int face, int i, int j) const;
   // The largest bound of a narrow glint's block whose closed square holds (x, y); 0 if none.
@@ -378,10 +402,10 @@ struct HazardSurface {
 HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mpe_w_m2,
                             double extinction_per_m = 0.0);
 
-/// @brief The farthest hazard the far field proves: the largest √(I/MPE) where it is at least
-/// the far radius toward its direction, over the located lobe tops, the narrow glints' bounds
-/// and the lattice directions' upperIntensity() (0 and the map's peak direction where there
-/// is none).
+/// @brief The farthest hazard the far field proves: the largest hazard distance
+/// (FarField::hazardDistanceToward()) where it is at least the far radius toward its direction,
+/// over the located lobe tops, the narrow glints' bounds and the lattice directions'
+/// upperIntensity() (0 and the map's peak direction where there is none).
 struct FarReach {
   double nohd_m = 0.0;
   Vec3 direction{1.0, 0.0, 0.0};

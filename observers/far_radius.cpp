@@ -17,13 +17,6 @@
 namespace glint {
 namespace {
 
-// E r² is read with the integrator at this share of the tolerance, so that what the check
-// measures is the near field's departure, not the integration's error.
-constexpr double kCheckAccuracyShare = 0.1;
-// The parallax cone's reference intensity is sought no farther than this many lattice steps:
-// a smaller square can only lower the reference, so the check only gets stricter.
-constexpr int kMaxReferenceSteps = 32;
-
 struct Direction {
   int face = 0;
   int i = 0, j = 0;  // lattice point; a located top has none (i < 0)
@@ -71,8 +64,8 @@ FacetIntegrator checkIntegrator(const FarField& map, const FacetIntegrator& inte
                                 double r_m) {
   const FarFieldSpec& spec = map.spec();
   return integrator
-      .withAccuracy(kCheckAccuracyShare * spec.tolerance,
-                    kCheckAccuracyShare *
+      .withAccuracy(kFarRadiusReadShare * spec.tolerance,
+                    kFarRadiusReadShare *
                         std::max(spec.floor_w_sr, spec.tolerance * hazardAt(spec, r_m)) /
                         (r_m * r_m))
       .withReturnExtinction(0.0);
@@ -90,9 +83,9 @@ Worst checkSphere(const FarField& map, const FacetIntegrator& at,
   const double parallax_rad = a / std::max(radius_m - a, 1e-300);
   // Lattice steps are 2/N rad apart at a face's centre and closer elsewhere: counting them at
   // the centre's spacing keeps the square inside the cone.
-  const int steps =
-      std::min(kMaxReferenceSteps, static_cast<int>(parallax_rad * spec.face_pixels / 2.0) + 1);
-  const bool capped = steps == kMaxReferenceSteps;
+  const int steps = std::min(kFarRadiusReferenceSteps,
+                             static_cast<int>(parallax_rad * spec.face_pixels / 2.0) + 1);
+  const bool capped = steps == kFarRadiusReferenceSteps;
   const double hazard_w_sr = hazardAt(spec, radius_m);
   const std::size_t count = dirs.size() > first ? (dirs.size() - first + stride - 1) / stride : 0;
   tbb::enumerable_thread_specific<IntegratorWorkspace> workspaces;

@@ -21,22 +21,32 @@ namespace glint {
 
 /// @brief A lattice of directions × distances about a centre, one cube face of it: lattice
 /// point (i, j, k) lies at centre_m + ρ_k (n + u_i a + v_j b), where a, b, n are the field's
-/// axes, u_i = −1 + 2i / face_cells and v_j likewise, and ρ_k = near_m × ratio^k. Lines of
-/// constant (i, j) are rays from the centre; each layer is a square on a plane ρ_k from it.
-/// Its cells grow with the distance, so one lattice spans a target's surroundings and
-/// kilometres beyond with the same relative resolution (the hazard reach's lattice).
+/// axes, u_i = −1 + 2i / face_cells and v_j likewise. Lines of constant (i, j) are rays from
+/// the centre; each layer is a square on a plane ρ_k from it.
+///
+/// The first inner_layers layers step evenly from start_m to near_m, the rest grow by a ratio
+/// (ρ_k = near_m × ratio^(k − inner_layers)), so one lattice spans a target's own surface,
+/// its surroundings and kilometres beyond with the same relative resolution (the hazard
+/// reach's lattice): near the centre, where the geometric steps would shrink to nothing, the
+/// even steps keep the radial resolution of the lit ball. Nearer the centre than start_m (the
+/// cube of that half-edge) nothing is sampled.
 /// The field's grids are then indexed by (i, j, k) alone: their transform, volumeAbove() and
 /// exceedance() assume the box's equal cells and do not apply.
 struct RadialLattice {
   Vec3 centre_m{0.0};
-  int face_cells = 64;  ///< lattice intervals along a face edge (a multiple of block_voxels)
-  double near_m = 1.0;  ///< ρ of layer 0 (m)
-  double ratio = 1.01;  ///< ρ_{k+1} / ρ_k, above 1
-  int layers = 64;      ///< lattice intervals along k (a multiple of block_voxels)
+  int face_cells = 64;   ///< lattice intervals along a face edge (a multiple of block_voxels)
+  double near_m = 1.0;   ///< ρ of layer inner_layers, where the growth by ratio begins (m)
+  double ratio = 1.01;   ///< ρ_{k+1} / ρ_k beyond near_m, above 1
+  int layers = 64;       ///< lattice intervals along k (a multiple of block_voxels)
+  int inner_layers = 0;  ///< layers from start_m to near_m in even steps (0: none)
+  double start_m = 0.0;  ///< ρ of layer 0 where inner_layers > 0, in (0, near_m) (m)
 
   /// @brief ρ_k: the distance of layer @p k's plane from the centre (m).
   [[nodiscard]] double layerDistance(int k) const {
-    return near_m * std::pow(ratio, static_cast<double>(k));
+    if (k < inner_layers) {
+      return start_m + (near_m - start_m) * static_cast<double>(k) / inner_layers;
+    }
+    return near_m * std::pow(ratio, static_cast<double>(k - inner_layers));
   }
 };
 
@@ -86,6 +96,14 @@ struct FieldSpec {
   /// whose bound reaches it while a glint narrower than its lattice may pass unseen marks its
   /// points below it VoxelStatus::Unresolved. 0: every such block marks all its points.
   double hazard_threshold_w_m2 = 0.0;
+  /// A field that only sorts its points into hazardous and not (the hazard reach), where > 0:
+  /// a block is then also skipped where its bound is below (1 − tolerance) ×
+  /// hazard_threshold_w_m2 (none of its points can count hazardous), and accepted whole, its
+  /// points interpolated, where every one of its samples is at least this (all its points
+  /// count hazardous, whatever passes between the samples, so neither its bound nor its
+  /// interpolation error matters). Values below the first or between the samples of the second
+  /// are then not resolved. 0: the field resolves its values.
+  double classify_above_w_m2 = 0.0;
   /// A plane laid over a surface (plane only): each point offset along axes[2]; null: flat.
   std::shared_ptr<const SurfaceOffsets> surface;
   /// A lattice of directions × distances instead of the box (min_m, max_m and voxel_m are then

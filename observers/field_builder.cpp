@@ -130,7 +130,14 @@ class FieldBuilder {
             break;
           case Verdict::Finest:
             ++stats_.blocks_finest;
-            final_.push_back({blk, decisions[i], unresolvedBound(blk, bounds[i])});
+            if (unevaluated(blk, bounds[i])) {
+              final_.push_back({blk, decisions[i],
+                                Unresolved{std::numeric_limits<double>::infinity(),
+                                           bounds[i].resolving_spacing_m},
+                                true});
+            } else {
+              final_.push_back({blk, decisions[i], unresolvedBound(blk, bounds[i])});
+            }
             break;
           case Verdict::Refine: {
             ++stats_.blocks_refined;
@@ -201,6 +208,7 @@ class FieldBuilder {
     Block block;
     Decision decision;
     std::optional<Unresolved> unresolved = std::nullopt;
+    bool unevaluated = false;  // see unevaluated()
   };
 
   // What a finest block's bound says that its samples (all its lattice points) cannot.
@@ -229,9 +237,16 @@ class FieldBuilder {
       const openvdb::CoordBBox box = ownedBox(f.block, lattice_);
       for (auto it = box.begin(); it; ++it) {
         const openvdb::Coord& p = *it;
-        if (status.getValue(p) != statusCode(VoxelStatus::Evaluated)) continue;
-        if (threshold > 0.0 && !(static_cast<double>(irradiance.getValue(p)) < threshold)) continue;
-        status.setValue(p, statusCode(VoxelStatus::Unresolved));
+        const float code = status.getValue(p);
+        // An unevaluated block's points were filled Unresolved, but for those that are samples
+        // of its neighbours.
+        const bool filled = f.unevaluated && code == statusCode(VoxelStatus::Unresolved);
+        if (!filled) {
+          if (code != statusCode(VoxelStatus::Evaluated)) continue;
+          if (threshold > 0.0 && !(static_cast<double>(irradiance.getValue(p)) < threshold))
+            continue;
+          status.setValue(p, statusCode(VoxelStatus::Unresolved));
+        }
         const Vec3 x = spec_.position(p[0], p[1], p[2]);
         stats_.unresolved_min_m = glm::min(stats_.unresolved_min_m, x);
         stats_.unresolved_max_m = glm::max(stats_.unresolved_max_m, x);
@@ -270,9 +285,9 @@ class FieldBuilder {
   // Whether E·r^p may be interpolated over block b for p > 0: only where the block keeps clear
   // of the centre by its own diagonal, so that no weight is near 0 and r varies smoothly.
   [[nodiscard]] bool farFromTarget(const Block& b) const {
-    // A radial lattice about the lit centre: r is the layer's distance times a smooth factor of
-    // the direction, never near 0, wherever the block lies.
-    if (spec_.radial &&
+    // A radial lattice about the lit centre, beyond its even inner layers: r is the layer's
+    // distance times a smooth factor of the direction, never near 0, wherever the block lies.
+    if (spec_.radial && b.o[2] >= spec_.radial->inner_layers &&
         glm::length(spec_.radial->centre_m - lit_centre_m_) <= 1e-9 * spec_.radial->near_m) {
       return true;
     }
@@ -451,10 +466,31 @@ class FieldBuilder {
     return out;
   }
 
-  // Only a bound proven at most the floor skips a block; NaN never does (and cannot occur:
-  // BallBound is never NaN).
+  // Only a bound proven at most the floor skips a block, or in a classifying field one below
+  // what counts as hazardous; NaN never does (and cannot occur: BallBound is never NaN).
   [[nodiscard]] bool skipped(const BallBound& bound) const {
-    return bound.upper_w_m2 <= spec_.floor_w_m2;
+    return bound.upper_w_m2 <= spec_.floor_w_m2 ||
+           (classifying() &&
+            bound.upper_w_m2 < (1.0 - spec_.tolerance) * spec_.hazard_threshold_w_m2);
+  }
+  [[nodiscard]] bool classifying() const { return spec_.classify_above_w_m2 > 0.0; }
+
+  // A classifying field's finest block whose ball reaches a lit facet: every point of it below
+  // the threshold would be marked Unresolved, so every point counts hazardous whatever it
+  // receives, and none is integrated (next to a lit surface, where integration costs most).
+  [[nodiscard]] bool unevaluated(const Block& b, const BallBound& bound) const {
+    return classifying() && splittableAxes(b.size) == 0 && !bound.bounded();
+  }
+
+  // A classifying field's block whose every sample counts hazardous (none inside the target).
+  [[nodiscard]] bool allHazardous(const Block& b) const {
+    bool all = true;
+    field::forEachSample(b.size, [&](int di, int dj, int dk) {
+      const PointValue& v = values_.at(keyAt(b, di, dj, dk));
+      all = all && !v.excluded && v.irradiance_w_m2 >= spec_.classify_above_w_m2 &&
+            std::isfinite(v.irradiance_w_m2);
+    });
+    return all;
   }
 
   // Evaluates the sample lattice points of every block not skipped that no earlier level
@@ -463,7 +499,7 @@ class FieldBuilder {
                        const std::vector<PieceList>& lists, const std::vector<BallBound>& bounds) {
     std::vector<std::pair<std::uint64_t, std::uint32_t>> wanted;  // (point, block)
     for (std::size_t i = 0; i < blocks.size(); ++i) {
-      if (skipped(bounds[i])) continue;
+      if (skipped(bounds[i]) || unevaluated(blocks[i], bounds[i])) continue;
       const Block& b = blocks[i];
       field::forEachSample(b.size, [&](int di, int dj, int dk) {
         const std::uint64_t key = keyAt(b, di, dj, dk);
@@ -597,6 +633,10 @@ class FieldBuilder {
   }
 
   [[nodiscard]] Decision decideBlock(const Block& b, const BallBound& bound) const {
+    if (skipped(bound)) return {Verdict::Skip};
+    if (unevaluated(b, bound)) return {Verdict::Finest};
+    // Hazardous at every sample: every point counts so, even where the ball reaches the target.
+    if (classifying() && allHazardous(b)) return {Verdict::Accept, 0};
     if (const std::optional<Decision> d = field::decideByBound(bound, b.size, spec_.floor_w_m2)) {
       return *d;
     }
@@ -627,7 +667,16 @@ class FieldBuilder {
         break;
       case Verdict::Finest:
         t.grids->level->tree().fill(box, static_cast<float>(b.level), true);
-        break;  // its points are all samples: written below
+        if (f.unevaluated) {  // those of its points that are nobody's samples: hazardous
+          auto status = t.grids->status->getAccessor();
+          for (auto it = box.begin(); it; ++it) {
+            const openvdb::Coord& p = *it;
+            const bool inside = excluded_ && excluded_(spec_.position(p[0], p[1], p[2]));
+            status.setValue(p,
+                            statusCode(inside ? VoxelStatus::Excluded : VoxelStatus::Unresolved));
+          }
+        }
+        break;  // its samples: written below
       case Verdict::Accept: {
         t.grids->level->tree().fill(box, static_cast<float>(b.level), true);
         t.grids->status->tree().fill(box, statusCode(VoxelStatus::Interpolated), true);

@@ -57,7 +57,8 @@ void validateFieldSpec(const FieldSpec& spec) {
   if (!(spec.voxel_m > 0.0) || !std::isfinite(spec.voxel_m) || b < 1 || (b & (b - 1)) != 0 ||
       !(spec.tolerance >= 0.0) || !std::isfinite(spec.tolerance) || !(spec.floor_w_m2 >= 0.0) ||
       !std::isfinite(spec.floor_w_m2) || !(spec.hazard_threshold_w_m2 >= 0.0) ||
-      !std::isfinite(spec.hazard_threshold_w_m2)) {
+      !std::isfinite(spec.hazard_threshold_w_m2) || !(spec.classify_above_w_m2 >= 0.0) ||
+      !std::isfinite(spec.classify_above_w_m2)) {
     throw std::invalid_argument("FieldSpec out of range");
   }
   for (std::size_t a = 0; a < 3; ++a) {
@@ -82,7 +83,9 @@ void validateFieldSpec(const FieldSpec& spec) {
   if (const std::optional<RadialLattice>& r = spec.radial) {
     if (spec.plane || r->face_cells < b || r->face_cells % b != 0 || r->layers < b ||
         r->layers % b != 0 || !(r->near_m > 0.0) || !std::isfinite(r->near_m) ||
-        !(r->ratio > 1.0) || !std::isfinite(r->layerDistance(r->layers))) {
+        !(r->ratio > 1.0) || !std::isfinite(r->layerDistance(r->layers)) || r->inner_layers < 0 ||
+        r->inner_layers > r->layers ||
+        (r->inner_layers > 0 && !(r->start_m > 0.0 && r->start_m < r->near_m))) {
       throw std::invalid_argument("FieldSpec: radial lattice out of range");
     }
   }

@@ -1,4 +1,4 @@
-// The hazard reach: six radial lattices from the lit ball out to the far radius, and the far
+// The hazard reach: six radial lattices from the target out to the far radius, and the far
 // field beyond.
 #include "observers/reach.h"
 
@@ -26,11 +26,13 @@ std::size_t rayIndex(int i, int j, int face_cells) {
 double farReachToward(const FarField& far, double threshold_w_m2, double extinction_per_m,
                       const Vec3& d) {
   const double r =
-      hazardDistance(far.upperIntensity(d), threshold_w_m2, extinction_per_m, far.ball().radius_m);
+      far.hazardDistanceToward(d, far.upperIntensity(d), threshold_w_m2, extinction_per_m);
   return r >= farRadiusToward(far.spec(), d) ? r : 0.0;
 }
 
 }  // namespace
+
+double reachStartM(const ReachSpec& spec) { return spec.near_m / (spec.inner_layers + 1); }
 
 FieldSpec reachFaceSpec(int face, const ReachSpec& spec) {
   const cube::FaceFrame& frame = cube::kFaceFrames.at(static_cast<std::size_t>(face));
@@ -44,10 +46,20 @@ FieldSpec reachFaceSpec(int face, const ReachSpec& spec) {
       spec.thresholds_w_m2.empty()
           ? 0.0
           : *std::min_element(spec.thresholds_w_m2.begin(), spec.thresholds_w_m2.end());
-  const double layers = std::ceil(std::log(spec.far_m / spec.near_m) / std::log(spec.ratio));
+  // Only whether points are hazardous is read (computeNearReach()): a block hazardous at
+  // every sample for the highest threshold is taken whole, a hair above it so that its
+  // interpolated points, rounded to float, stay so.
+  if (!spec.thresholds_w_m2.empty()) {
+    s.classify_above_w_m2 =
+        (1.0 - spec.tolerance) *
+        *std::max_element(spec.thresholds_w_m2.begin(), spec.thresholds_w_m2.end()) * (1.0 + 1e-6);
+  }
+  const int inner = spec.inner_layers;
+  const double outer = std::ceil(std::log(spec.far_m / spec.near_m) / std::log(spec.ratio));
   const int b = spec.block_voxels;
-  const int whole = std::max(b, static_cast<int>(std::ceil(layers / b)) * b);
-  s.radial = RadialLattice{spec.centre_m, spec.face_cells, spec.near_m, spec.ratio, whole};
+  const int whole = std::max(b, static_cast<int>(std::ceil((inner + outer) / b)) * b);
+  s.radial = RadialLattice{spec.centre_m, spec.face_cells, spec.near_m,      spec.ratio,
+                           whole,         inner,           reachStartM(spec)};
   return s;
 }
 
@@ -57,8 +69,19 @@ double NearReach::toward(const Vec3& direction, std::size_t t) const {
   const int i = std::clamp(static_cast<int>(std::floor(h.x)), 0, n - 1);
   const int j = std::clamp(static_cast<int>(std::floor(h.y)), 0, n - 1);
   const std::vector<float>& r = faces[static_cast<std::size_t>(h.face)].reach_m[t];
-  return std::max({r[rayIndex(i, j, n)], r[rayIndex(i + 1, j, n)], r[rayIndex(i, j + 1, n)],
-                   r[rayIndex(i + 1, j + 1, n)]});
+  // The layers are planes: a ray's reach is a layer's plane distance times its stretch, and a
+  // point of the cell between the rays lies no farther than that plane along its own direction.
+  const double step = 2.0 / n;
+  double plane_m = 0.0;
+  for (int c = 0; c < 4; ++c) {
+    const int a = i + (c & 1), b = j + (c >> 1);
+    const double u = -1.0 + step * a, v = -1.0 + step * b;
+    plane_m = std::max(plane_m,
+                       static_cast<double>(r[rayIndex(a, b, n)]) / std::sqrt(1.0 + u * u + v * v));
+  }
+  const double cos_n =
+      glm::dot(direction, cube::kFaceFrames[static_cast<std::size_t>(h.face)].normal);
+  return plane_m / cos_n;
 }
 
 double NearReach::lastLayerToward(const Vec3& direction) const {
@@ -209,7 +232,7 @@ ReachSummary summarizeReach(const NearReach& near, const FarField& far, std::siz
   for (int f = 0; f < FarField::kFaces; ++f) {
     far.forEachDirectionOfFace(f, [&](int i, int j, const Vec3& d, double intensity_w_sr) {
       const double r =
-          hazardDistance(intensity_w_sr, s.threshold_w_m2, extinction_per_m, far.ball().radius_m);
+          far.hazardDistanceToward(d, intensity_w_sr, s.threshold_w_m2, extinction_per_m);
       const double last = near.lastLayerToward(d);
       if (!(r > last) || !std::isfinite(r)) return;
       const double u = -1.0 + h * i, v = -1.0 + h * j;
@@ -218,8 +241,9 @@ ReachSummary summarizeReach(const NearReach& near, const FarField& far, std::siz
       shell_m3 += solid_angle * (r * r * r - last * last * last) / 3.0;
     });
   }
-  s.volume_m3 = near.volume_m3.at(t) + shell_m3;
-  s.lit_ball_m3 = 4.0 / 3.0 * kPi * std::pow(near.spec.near_m, 3);
+  s.unclassified_half_edge_m = reachStartM(near.spec);
+  s.unclassified_m3 = 8.0 * std::pow(s.unclassified_half_edge_m, 3);
+  s.volume_m3 = near.volume_m3.at(t) + shell_m3 + s.unclassified_m3;
   if (std::isfinite(s.distance_m))
     s.farthest_point_m = near.spec.centre_m + s.distance_m * s.direction;
   // The lattice reaches the far radius along every ray; beyond it the far field answers for

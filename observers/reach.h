@@ -1,22 +1,25 @@
 #pragma once
 /// @file
 /// @brief The hazard reach: how far the hazardous region extends in every direction from the
-/// lit centre, from the lit ball out to infinity, without an observer box.
+/// lit centre, from the target's surface out to infinity, without an observer box.
 ///
-/// Two pieces close it. From the lit ball's radius out to the far radius, six radial lattices
-/// (RadialLattice, one per cube face: rays from the lit centre, layers growing by a ratio) are
-/// computed by the field's block check, which skips by bound what cannot reach the threshold
-/// and marks Unresolved the points between which a glint narrower than the lattice may pass.
-/// Beyond the far radius, E(c + r ω) r² is I(ω) within the far field's tolerance, so the reach
-/// toward ω is the hazard distance of the map's upper intensity there. A direction's reach is
-/// the larger of the two.
+/// Two pieces close it. Out to the far radius, six radial lattices (RadialLattice, one per
+/// cube face: rays from the lit centre, layers stepping evenly from a step off the centre to
+/// the lit ball's radius and growing by a ratio beyond) are computed by the field's block
+/// check, which skips by bound what cannot reach the threshold and marks Unresolved the
+/// points between which a glint narrower than the lattice may pass. Only what lies inside
+/// the target is left out (the shapes' own inside test, no margin). Beyond the far radius,
+/// E(c + r ω) r² is I(ω) within the far field's tolerance, so the reach toward ω is the hazard
+/// distance of the map's upper intensity there. A direction's reach is the larger of the two.
 ///
 /// What it reports fails safe: a lattice point counts as hazardous at (1 − tolerance) × the
 /// threshold, and so does an Unresolved one (and an Unconverged one where the largest value
 /// plus error of those could reach it); the reach along a ray is the distance of the layer
 /// beyond its farthest hazardous point; between rays the largest of the surrounding rays; beyond
-/// the lattice the far field's upper intensity. Nearer the centre than the lit ball's radius
-/// nothing is classified: the target is there.
+/// the lattice the far field's hazard distance with its error allowance. The one region nothing
+/// classifies is the cube of half-edge start_m about the lit centre inside the first layer
+/// (two hundredths of the lit radius by default): the summary names it and counts it
+/// hazardous in the volume, and the footprint counts its circumscribed ball.
 
 #include <array>
 #include <cstdint>
@@ -30,8 +33,14 @@ class FarField;
 
 /// @brief What the reach is computed for (scene key `reach`).
 struct ReachSpec {
-  Vec3 centre_m{0.0};     ///< the lit centre (LitBall)
-  double near_m = 1.0;    ///< the first layer's distance: the lit ball's radius (m)
+  Vec3 centre_m{0.0};  ///< the lit centre (LitBall)
+  /// The lit ball's radius (m): beyond it the layers grow by ratio; inside it inner_layers
+  /// layers step evenly from near_m / (inner_layers + 1), the first, to near_m.
+  double near_m = 1.0;
+  /// Layers inside the lit ball: a share 1 / (inner_layers + 1) of its radius apart, so that a
+  /// point next to the lit surface counts hazardous within two such steps of it (a finest
+  /// block whose ball reaches a lit facet counts hazardous whole).
+  int inner_layers = 16;
   double far_m = 100.0;   ///< the last layer lies at least this far: the far radius (m)
   double ratio = 1.02;    ///< between layers: the reach's resolution along a ray
   int face_cells = 64;    ///< rays per cube-face edge (a multiple of block_voxels)
@@ -45,6 +54,10 @@ struct ReachSpec {
 
 /// @brief The radial lattice of cube face @p face (FarField order) for @p spec.
 FieldSpec reachFaceSpec(int face, const ReachSpec& spec);
+
+/// @brief The distance of the lattices' first layer from the centre (m): the half-edge of the
+/// cube about the lit centre that no lattice point samples.
+double reachStartM(const ReachSpec& spec);
 
 /// @brief The radial lattices, read per ray: for ray (i, j) of a face, row j at j (face_cells
 /// + 1), and each threshold t, the distance from the centre to the lattice point one layer
@@ -63,8 +76,9 @@ struct NearReach {
   /// corners' share), m³.
   std::vector<double> volume_m3;
 
-  /// @brief The largest reach of the rays around unit @p direction (the lattice cell that holds
-  /// it) for threshold @p t, m: what the lattice says between its rays.
+  /// @brief The reach toward unit @p direction for threshold @p t, m: what the lattice says
+  /// between its rays, the farthest layer plane of the four rays around it (the lattice cell
+  /// that holds it) taken along @p direction itself.
   [[nodiscard]] double toward(const Vec3& direction, std::size_t t) const;
   /// @brief The distance of the last layer along unit @p direction, m: the far field decides
   /// beyond it.
@@ -85,7 +99,8 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
 struct ReachSummary {
   double threshold_w_m2 = 0.0;
   /// The farthest hazardous point's distance from the lit centre (m; 0: nothing hazardous
-  /// outside the lit ball; +∞ where the far field has a glint it could not bound).
+  /// outside the target but in the unclassified cube; +∞ where the far field has a glint it
+  /// could not bound).
   double distance_m = 0.0;
   Vec3 direction{1.0, 0.0, 0.0};  ///< toward it
   Vec3 farthest_point_m{0.0};     ///< the lit centre + distance_m × direction (where finite)
@@ -93,12 +108,14 @@ struct ReachSummary {
   /// field bounds every direction beyond it.
   bool closed = false;
   bool from_far_field = false;  ///< distance_m is the far field's (else the lattice's)
-  /// The hazardous volume outside the lit ball: the lattice's, plus beyond the lattice the
-  /// shell out to each far-field direction's hazard distance (m³).
+  /// The hazardous volume (m³): the lattice's, the unclassified cube's whole volume, and
+  /// beyond the lattice the shell out to each far-field direction's hazard distance.
   double volume_m3 = 0.0;
-  /// The lit ball's volume (m³): not classified, so the hazardous volume may be up to this much
-  /// more than volume_m3 (less the target's own, which the ball holds).
-  double lit_ball_m3 = 0.0;
+  /// The cube about the lit centre inside the lattices' first layer, which no point samples:
+  /// its half-edge (m) and volume (m³), counted hazardous in volume_m3 (the target's own inside,
+  /// which it may hold, included: an over-statement of at most this volume).
+  double unclassified_half_edge_m = 0.0;
+  double unclassified_m3 = 0.0;
 };
 
 /// @brief The reach toward unit @p direction for threshold @p t: the lattice's (toward()) or,

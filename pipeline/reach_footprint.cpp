@@ -26,9 +26,9 @@ ReachFootprint reachFootprint(const NearReach& near, const FarField& far, double
   f.ground_z_m.resize(count);
   f.area_m2.assign(thresholds, 0.0);
   const double site_height = site.spec().height_m;
-  // The reach's lattice starts on the faces of a cube of half-side near_m about the lit centre:
+  // The reach's lattice starts on the faces of a small cube about the lit centre (reachStartM()):
   // nothing inside it is classified, so every point within its circumscribed ball counts.
-  const double unclassified_m = std::sqrt(3.0) * near.spec.near_m;
+  const double unclassified_m = std::sqrt(3.0) * reachStartM(near.spec);
   // The ground under local (x, y): the terrain's, or the ellipsoid's surface at the site's height.
   const auto ground = [&](double x, double y) -> double {
     if (terrain != nullptr) {

@@ -234,7 +234,7 @@ SceneReach sceneReach(const SceneTarget& target, const Scene& scene, const FarFi
   const std::uint64_t face_bytes = fieldMemoryFloorBytes(face, false);
   const std::string lattice = "6 × " + std::to_string(spec.face_cells + 1) + "² rays × " +
                               std::to_string(face.radial->layers + 1) + " layers from " +
-                              formatNumber("%.3g", spec.near_m) + " to " +
+                              formatNumber("%.3g", reachStartM(spec)) + " to " +
                               formatNumber("%.4g", spec.far_m) + " m";
   requireWithinBudget(what + " (" + lattice + ") beside the far field", far_bytes + face_bytes,
                       watch.budgetBytes(),

@@ -507,7 +507,12 @@ nlohmann::json reachEntry(const ReachSummary& r) {
       {"closed", r.closed},
       {"farthest_point_m", {r.farthest_point_m.x, r.farthest_point_m.y, r.farthest_point_m.z}},
       {"volume_m3", std::isfinite(r.volume_m3) ? nlohmann::json(r.volume_m3) : nlohmann::json()},
-      {"lit_ball_m3", r.lit_ball_m3}};
+      {"unclassified",
+       {{"half_edge_m", r.unclassified_half_edge_m},
+        {"volume_m3", r.unclassified_m3},
+        {"region",
+         "the cube of this half-edge about the lit centre, inside the lattice's first "
+         "layer: no point of it is sampled, and volume_m3 counts it hazardous"}}}};
   if (!std::isfinite(r.distance_m)) {
     j["unbounded"] = "a glint narrower than the far field's directions has no finite bound";
   }
@@ -531,6 +536,8 @@ nlohmann::json reachJson(const NearReach& near, const std::vector<ReachSummary>&
   j["lattice"] = {{"face_cells", spec.face_cells},
                   {"layer_ratio", spec.ratio},
                   {"layers", lattice.layers + 1},
+                  {"first_layer_m", lattice.layerDistance(0)},
+                  {"inner_layers", lattice.inner_layers},
                   {"near_m", spec.near_m},
                   {"last_layer_m", lattice.layerDistance(lattice.layers)},
                   {"far_radius_m", spec.far_m},
@@ -541,9 +548,12 @@ nlohmann::json reachJson(const NearReach& near, const std::vector<ReachSummary>&
                   {"seconds", seconds}};
   j["rule"] =
       "per direction from the lit centre: the lattice's farthest hazardous point (at (1 - "
-      "tolerance) x the threshold, or unresolved) one layer out, the largest of the rays "
-      "around a direction between them; beyond the far radius the far field's hazard distance. "
-      "Nearer than near_m (the lit ball, lit_ball_m3) nothing is classified";
+      "tolerance) x the threshold, or unresolved) one layer out; between the rays the farthest "
+      "of those layers of the four rays around a direction; beyond the far radius the far "
+      "field's hazard distance with its error allowance. "
+      "The lattice runs from first_layer_m (even steps to near_m, the lit ball's radius, then "
+      "growing by layer_ratio) and leaves out only the target's inside: the one region not "
+      "classified is the cube of half-edge first_layer_m about the lit centre (unclassified)";
   return j;
 }
 
@@ -555,9 +565,13 @@ void printReach(std::ostream& err, const NearReach& near, const std::vector<Reac
       err << "unbounded: a glint narrower than the far field's directions has no finite bound\n";
       return;
     }
+    const std::string unclassified = "the " + formatNumber("%.3g", r.unclassified_m3) +
+                                     " m³ cube within " +
+                                     formatNumber("%.3g", r.unclassified_half_edge_m) +
+                                     " m of the lit centre not classified, counted hazardous";
     if (!(r.distance_m > 0.0)) {
-      err << "nothing is hazardous outside the lit ball (" << formatNumber("%.3g", near.spec.near_m)
-          << " m)" << (r.closed ? ", closed" : ", NOT closed") << "\n";
+      err << "nothing is hazardous outside the target (" << unclassified << ")"
+          << (r.closed ? ", closed" : ", NOT closed") << "\n";
       return;
     }
     err << formatNumber("%.4g", r.distance_m) << " m from the lit centre toward ("
@@ -565,9 +579,8 @@ void printReach(std::ostream& err, const NearReach& near, const std::vector<Reac
         << ", " << formatNumber("%.4f", r.direction.z) << ") ("
         << (r.from_far_field ? "far field" : "lattice") << "), "
         << (r.closed ? "closed" : "NOT closed: the far radius is not verified")
-        << "; hazardous volume " << formatNumber("%.3g", r.volume_m3)
-        << " m³ outside the lit ball (its " << formatNumber("%.3g", r.lit_ball_m3)
-        << " m³ not classified)\n";
+        << "; hazardous volume " << formatNumber("%.3g", r.volume_m3) << " m³ (" << unclassified
+        << ")\n";
   };
   line(reach.at(0), "hazard reach: ");
   if (reach.size() > 1) line(reach[1], "  through the optical aid: ");

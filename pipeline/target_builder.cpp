@@ -308,8 +308,10 @@ SceneTarget sceneTarget(const Scene& scene, const FieldSpec& first, const Target
 
 FieldProblem fieldProblem(const SceneTarget& shared, const Scene& scene, const FieldSpec& field) {
   const IntegratorOptions o = fieldIntegratorOptions(scene, field);
+  // A box's lattice leaves out half a voxel about the target, which its cells cannot resolve;
+  // the reach's radial lattice only the target's inside: it classifies the rest.
   return {shared.integrator.withAccuracy(o.tolerance, o.floor_w_m2),
-          excludedRegion(scene, 0.5 * field.voxel_m), shared.mesh_stats};
+          excludedRegion(scene, field.radial ? 0.0 : 0.5 * field.voxel_m), shared.mesh_stats};
 }
 
 FieldProblem fieldProblem(const Scene& scene, const FieldSpec& field) {

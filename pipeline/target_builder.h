@@ -110,8 +110,8 @@ IntegratorOptions fieldIntegratorOptions(const Scene& scene, const FieldSpec& fi
 ExcludedFn excludedRegion(const Scene& scene, double margin_m);
 
 /// @brief What computing the scene's observer field takes besides its FieldSpec: the
-/// integrator with fieldIntegratorOptions(), and the observers excluded within half a voxel
-/// of the target (excludedRegion()).
+/// integrator with fieldIntegratorOptions(), and the observers excluded (excludedRegion()):
+/// within half a voxel of the target for a box or plane, only inside it for a radial lattice.
 struct FieldProblem {
   FacetIntegrator integrator;
   ExcludedFn excluded;

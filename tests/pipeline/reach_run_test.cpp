@@ -1,6 +1,7 @@
 // glint run's hazard reach: a scene without a box, its summary, terminal line and maps, and the
 // default example's reach against its box.
 #include <gtest/gtest.h>
+#include <openvdb/openvdb.h>
 #include <vtkDataArray.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
@@ -15,6 +16,7 @@
 #include <string>
 
 #include "export/exr_map.h"
+#include "observers/detail/cube_faces.h"
 #include "pipeline/input_error.h"
 #include "pipeline/memory_budget.h"
 #include "pipeline/run_command.h"
@@ -42,21 +44,78 @@ RunResult runScene(const fs::path& scene, const std::string& name) {
   return r;
 }
 
+// The reach per direction as reach.vtp keeps it, read between its rays as the reach reads them
+// (NearReach::toward()): a ray's distance is a layer plane's distance times the ray's stretch
+// (distance per unit along the face's normal); toward a direction, the farthest plane of the
+// four rays around it, along the direction itself.
+class ReachRays {
+ public:
+  ReachRays(const fs::path& vtp, const nlohmann::json& reach)
+      : n_(reach.at("lattice").at("face_cells").get<int>()) {
+    const auto c = reach.at("centre_m").get<std::vector<double>>();
+    centre_ = Vec3(c[0], c[1], c[2]);
+    unclassified_m_ = reach.at("unclassified").at("half_edge_m").get<double>();
+    auto reader = vtkSmartPointer<vtkXMLPolyDataReader>::New();
+    reader->SetFileName(vtp.string().c_str());
+    reader->Update();
+    vtkDataArray* d = reader->GetOutput()->GetPointData()->GetArray("distance_m");
+    if (d == nullptr) return;
+    for (vtkIdType p = 0; p < d->GetNumberOfTuples(); ++p) distance_m_.push_back(d->GetTuple1(p));
+  }
+  [[nodiscard]] bool complete() const {
+    return distance_m_.size() == 6u * static_cast<std::size_t>((n_ + 1) * (n_ + 1));
+  }
+  [[nodiscard]] const Vec3& centre() const { return centre_; }
+  /// @brief Whether @p x lies in the cube about the centre that the lattice does not sample.
+  [[nodiscard]] bool unclassified(const Vec3& x) const {
+    const Vec3 v = glm::abs(x - centre_);
+    return std::max({v.x, v.y, v.z}) <= unclassified_m_;
+  }
+  [[nodiscard]] double toward(const Vec3& direction) const {
+    const cube::FaceHit h = cube::faceHit(direction, n_);
+    const int i = std::clamp(static_cast<int>(std::floor(h.x)), 0, n_ - 1);
+    const int j = std::clamp(static_cast<int>(std::floor(h.y)), 0, n_ - 1);
+    double plane_m = 0.0;
+    for (int c = 0; c < 4; ++c) {
+      const int a = i + (c & 1), b = j + (c >> 1);
+      const double u = -1.0 + 2.0 * a / n_, v = -1.0 + 2.0 * b / n_;
+      const std::size_t ray = static_cast<std::size_t>((h.face * (n_ + 1) + b) * (n_ + 1) + a);
+      plane_m = std::max(plane_m, distance_m_[ray] / std::sqrt(1.0 + u * u + v * v));
+    }
+    return plane_m /
+           glm::dot(direction, cube::kFaceFrames[static_cast<std::size_t>(h.face)].normal);
+  }
+
+ private:
+  int n_;
+  Vec3 centre_{0.0};
+  double unclassified_m_ = 0.0;
+  std::vector<double> distance_m_;
+};
+
 // tests/data/reach_pencil.json: a thin oblique pencil about 420 m long, and no box or plane.
-TEST(ReachRun, ASceneWithNeitherBoxNorPlanesFindsThePencilAndWritesItsMaps) {
+// Issue 50 (1): the reach is followed from the mirror's face. Before, the lattice left out
+// everything within 0.5 m of the mirror and began on a cube about the lit centre, and reach.exr
+// read 0 toward azimuth 111.5°, elevation 39°, where glint points gives 14 327 × the MPE 0.3 m
+// out: every point of the pencil's first metre that glint points finds hazardous now lies
+// within the reach in its direction.
+TEST(ReachRun, ASceneWithNeitherBoxNorPlanesFollowsThePencilFromTheMirrorOn) {
   const RunResult r =
       runScene(fs::path(GLINT_TEST_DATA_DIR) / "reach_pencil.json", "glint_reach_pencil_run");
   ASSERT_EQ(r.outcome.status, 0) << r.outcome.err;
   const nlohmann::json& reach = r.summary.at("hazard_reach");
   const double distance = reach.at("distance_m").get<double>();
   // I = 8.95e6 W/sr along the pencil (glint points at 100 m to 2.7 km: E r² within 1e-3),
-  // √(I / 50 W/m²) = 423.1 m; the far field's map is within its tolerance of I.
+  // √(I / 50 W/m²) = 423.1 m; the far field's map is within its tolerance of I, and the
+  // distance carries the far field's allowance (1.1 × the tolerance of I).
   EXPECT_GT(distance, 423.0) << reach.dump();
-  EXPECT_LT(distance, 423.1 * std::sqrt(1.01)) << reach.dump();
+  EXPECT_LT(distance, 423.1 * std::sqrt(1.01 * 1.011)) << reach.dump();
   EXPECT_TRUE(reach.at("closed").get<bool>()) << reach.dump();
   EXPECT_EQ(reach.at("from"), "far field");
   EXPECT_GT(reach.at("volume_m3").get<double>(), 0.0);
-  EXPECT_NE(r.outcome.err.find("hazard reach: 423"), std::string::npos) << r.outcome.err;
+  char line[64];
+  std::snprintf(line, sizeof line, "hazard reach: %.4g m", distance);
+  EXPECT_NE(r.outcome.err.find(line), std::string::npos) << r.outcome.err;
   EXPECT_EQ(r.summary.at("files"), nlohmann::json({"summary.json", "far_field.exr", "far_field.vtp",
                                                    "reach.exr", "reach.vtp"}));
 
@@ -87,6 +146,44 @@ TEST(ReachRun, ASceneWithNeitherBoxNorPlanesFindsThePencilAndWritesItsMaps) {
   d->GetRange(range);
   EXPECT_LE(range[1], distance * (1.0 + 1e-6)) << "no vertex beyond the reach";
   EXPECT_GT(range[1], 0.0);
+
+  // Probes about the pencil's first metre, the issue's point among them: each that glint
+  // points would find hazardous lies within the reach toward it.
+  const ReachRays rays(r.out / "reach.vtp", reach);
+  ASSERT_TRUE(rays.complete());
+  const Scene scene = loadScene(fs::path(GLINT_TEST_DATA_DIR) / "reach_pencil.json");
+  const FacetIntegrator integrator = buildIntegrator(scene, scene.accuracy);
+  IntegratorWorkspace ws;
+  const Vec3 pencil = glm::normalize(Vec3(-0.3158, 0.7895, 0.5263));
+  const Vec3 e1 = glm::normalize(glm::cross(pencil, Vec3(0.0, 0.0, 1.0)));
+  const Vec3 e2 = glm::cross(pencil, e1);
+  std::vector<Vec3> probes = {Vec3(-0.0854, 0.2169, 0.1888)};
+  for (int a = -6; a <= 6; ++a)
+    for (int b = -6; b <= 6; ++b)
+      for (const double r_m : {0.02, 0.05, 0.1, 0.2, 0.3, 0.45, 0.7, 1.0}) {
+        const double off = std::tan(4.0 * kPi / 180.0);  // 4° steps, out to 24°
+        const Vec3 tilt = static_cast<double>(a) * e1 + static_cast<double>(b) * e2;
+        probes.push_back(rays.centre() + r_m * glm::normalize(pencil + off * tilt));
+      }
+  const double mpe = r.summary.at("hazard").at("mpe_w_m2").get<double>();
+  int hazardous = 0, beyond = 0;
+  for (const Vec3& x : probes) {
+    if (rays.unclassified(x)) continue;
+    const ObserverResult e = integrator.adaptive(x, ws);
+    if (!(e.irradiance_w_m2 >= mpe)) continue;
+    ++hazardous;
+    const Vec3 v = x - rays.centre();
+    const double reach_m = rays.toward(glm::normalize(v));
+    if (!(glm::length(v) <= reach_m * (1.0 + 1e-6))) {
+      ++beyond;
+      ADD_FAILURE() << "(" << x.x << ", " << x.y << ", " << x.z << "), hazard ratio "
+                    << e.irradiance_w_m2 / mpe << ", lies " << glm::length(v)
+                    << " m from the lit centre, beyond the reach of " << reach_m << " m toward it";
+    }
+  }
+  EXPECT_GT(hazardous, 200) << "premise: the pencil's first metre is hazardous";
+  std::printf("[ reach ] pencil: %d hazardous probes of %zu, %d beyond the reach\n", hazardous,
+              probes.size(), beyond);
   fs::remove_all(r.out);
 }
 
@@ -108,6 +205,41 @@ TEST(ReachRun, TheDefaultExamplesReachIsItsBoxsHazardZoneWithinOneVoxel) {
   EXPECT_EQ(reach.at("from"), "lattice");
   std::printf("[ reach ] default example: reach %.4g m from the target centre, box %.4g m\n",
               from_centre, box);
+
+  // Issue 50 (1): every hazardous voxel of the box lies within the reach in its direction
+  // (before, 614 of the 9 033 outside the lit ball lay beyond it: the lattice began on a cube
+  // about the lit centre and left out 0.5 m about the target).
+  const ReachRays rays(r.out / "reach.vtp", reach);
+  ASSERT_TRUE(rays.complete());
+  openvdb::initialize();
+  openvdb::io::File file((r.out / "irradiance.vdb").string());
+  file.open();
+  const auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("irradiance_w_m2"));
+  file.close();
+  ASSERT_NE(grid, nullptr);
+  grid->tree().voxelizeActiveTiles();  // a tile stands for many voxels: each read alone
+  const double mpe = r.summary.at("hazard").at("mpe_w_m2").get<double>();
+  std::int64_t hazardous = 0, beyond = 0;
+  for (auto v = grid->cbeginValueOn(); v; ++v) {
+    if (!(static_cast<double>(*v) >= mpe)) continue;
+    const openvdb::Vec3d w = grid->indexToWorld(v.getCoord());
+    const Vec3 x(w.x(), w.y(), w.z());
+    if (rays.unclassified(x)) continue;
+    ++hazardous;
+    const Vec3 d = x - rays.centre();
+    const double reach_m = rays.toward(glm::normalize(d));
+    if (!(glm::length(d) <= reach_m * (1.0 + 1e-6))) {
+      if (++beyond <= 5) {
+        ADD_FAILURE() << "(" << x.x << ", " << x.y << ", " << x.z << "), hazard ratio "
+                      << static_cast<double>(*v) / mpe << ", " << glm::length(d)
+                      << " m from the lit centre, beyond the reach of " << reach_m << " m";
+      }
+    }
+  }
+  EXPECT_EQ(beyond, 0) << "of " << hazardous << " hazardous voxels";
+  EXPECT_GT(hazardous, 5000) << "premise: the box's zone is 13.8 m³ of 1e-3 m³ voxels";
+  std::printf("[ reach ] default example: %lld hazardous voxels, %lld beyond the reach\n",
+              static_cast<long long>(hazardous), static_cast<long long>(beyond));
   fs::remove_all(r.out);
 }
 
@@ -174,7 +306,7 @@ TEST(ReachRun, AStudyGivesEachScenariosReachAndTheirQuantiles) {
 // builders' watch stops a lattice whose grids outgrow a larger one.)
 TEST(ReachRun, ALatticeBeyondTheMemoryBudgetIsRefusedBeforeItIsAllocated) {
   Scene scene = loadScene(fs::path(GLINT_TEST_DATA_DIR) / "reach_pencil.json");
-  scene.reach.face_cells = 512;  // 6 × 513² rays × 337 layers
+  scene.reach.face_cells = 512;  // 6 × 513² rays × 353 layers
   const SceneTarget target = sceneTarget(scene, reachAccuracy(scene));
   const FarField far =
       computeFarField(target.integrator, checkedFarFieldSpec(scene, target.integrator));
@@ -185,7 +317,7 @@ TEST(ReachRun, ALatticeBeyondTheMemoryBudgetIsRefusedBeforeItIsAllocated) {
     ADD_FAILURE() << "a lattice beyond the budget was computed";
   } catch (const InputError& e) {
     const std::string m = e.what();
-    EXPECT_NE(m.find("the hazard reach (6 × 513² rays × 337 layers"), std::string::npos) << m;
+    EXPECT_NE(m.find("the hazard reach (6 × 513² rays × 353 layers"), std::string::npos) << m;
     EXPECT_NE(m.find("beside the far field"), std::string::npos) << m;
     EXPECT_NE(m.find("reach.face_cells"), std::string::npos) << "it says what to lower: " << m;
   }
