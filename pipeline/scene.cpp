@@ -1,6 +1,7 @@
 #include "pipeline/scene.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -578,6 +579,37 @@ HorizontalBox sceneRegion(const Scene& scene) {
   return {lo.x - margin, lo.y - margin, hi.x + margin, hi.y + margin};
 }
 
+// Why a terrain.file cannot be read, if it names something other than a file on this machine:
+// a URL or one of GDAL's virtual file systems (/vsicurl/, /vsis3/, ...; the local ones too,
+// /vsistdin/ among them). A scene file opens no connection (the GDAL module cannot either).
+std::optional<std::string> nonLocalVerdict(const std::string& name) {
+  std::string lower = name;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  static constexpr std::array<std::string_view, 10> kNetwork = {
+      "/vsicurl", "/vsis3",    "/vsigs",   "/vsiaz",      "/vsiadls",
+      "/vsioss",  "/vsiswift", "/vsihdfs", "/vsiwebhdfs", "/vsihttp"};
+  for (std::string_view prefix : kNetwork) {
+    if (lower.starts_with(prefix)) {
+      return "is a network path (" + std::string(prefix.substr(1)) +
+             "): a scene file opens no connection; download the elevation model and name the "
+             "local file";
+    }
+  }
+  if (lower.starts_with("/vsi")) {
+    return "is a path in one of GDAL's virtual file systems: name the elevation model's own "
+           "file (unpacked, if it is in an archive)";
+  }
+  // A URL: a scheme (RFC 3986: a letter, then letters, digits, +, -, .) and "://".
+  const std::size_t colon = lower.find("://");
+  if (colon != std::string::npos && colon > 0 &&
+      std::isalpha(static_cast<unsigned char>(lower[0])) &&
+      lower.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789+-.") >= colon) {
+    return "is a URL: a scene file opens no connection; download the elevation model and name "
+           "the local file";
+  }
+  return std::nullopt;
+}
+
 // Each lattice point of a plane laid over the terrain, raised to its height above the ground.
 std::shared_ptr<const SurfaceOffsets> surfaceOffsets(const PlaneSpec& p, const Terrain& terrain,
                                                      const std::string& at) {
@@ -829,7 +861,9 @@ Scene parseScene(std::string_view text, const std::string& source,
     r.fail("reach", "has a footprint, which needs a site: it is drawn on the Earth");
   if (r.has("terrain")) {
     ObjectReader t = r.object("terrain");
-    scene.terrain_file = base / t.string("file");
+    const std::string file = t.string("file");
+    if (const auto why = nonLocalVerdict(file)) t.fail("file", *why);
+    scene.terrain_file = base / file;
     const std::int64_t max_posts = t.integer("max_posts", 4'000'000);
     if (max_posts < 4 || max_posts > 100'000'000) t.fail("max_posts", "must be from 4 to 1e8");
     t.finish();
