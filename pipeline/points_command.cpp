@@ -335,9 +335,13 @@ void runPoints(const PointsArgs& requested, std::ostream& out, std::ostream& err
 
   // The workspaces grow with what each observer sees, not with the scene: the watch covers
   // them (and whatever the estimate leaves out), stopping the points before their next one.
-  const MemoryWatch watch(budget);
-  const FacetIntegrator integrator = buildIntegrator(
-      scene, options, {budget, held_bytes, std::to_string(points.size()) + " observer points"});
+  MemoryWatch watch(budget);
+  noteTerrain(watch, scene);
+  const FacetIntegrator integrator =
+      buildIntegrator(scene, options,
+                      {budget, held_bytes + terrainMemoryBytes(scene),
+                       std::to_string(points.size()) + " observer points" +
+                           (scene.terrain ? " and " + terrainMemoryWhat(scene) : "")});
   watch.check("building the target", kAdvice);
   if (scene.engagement) {
     const EngagementResults results =

@@ -141,11 +141,19 @@ TargetBudget checkRunMemory(const Scene& scene, const RunArgs& args, std::uint64
           << formatBytes(static_cast<double>(budget)) << " budget\n";
     }
   }
+  // The terrain was read with the scene and is held throughout.
+  const std::uint64_t terrain_bytes = terrainMemoryBytes(scene);
+  if (scene.terrain && !args.quiet) {
+    err << "glint run: " << terrainMemoryWhat(scene) << "; memory: at least "
+        << formatBytes(static_cast<double>(terrain_bytes)) << " of the "
+        << formatBytes(static_cast<double>(budget)) << " budget\n";
+  }
   const TargetMemory target_memory =
       targetMemory(scene, fieldIntegratorOptions(scene, firstRegion(scene)));
   const TargetBudget target_budget{
-      budget, far_bytes + region_bytes,
-      far_bytes > 0 ? "the far field and the largest region" : "the largest region"};
+      budget, far_bytes + region_bytes + terrain_bytes,
+      std::string(scene.terrain ? "the terrain, " : "") +
+          (far_bytes > 0 ? "the far field and the largest region" : "the largest region")};
   requireTargetWithinBudget(target_memory, target_budget);
   if (!args.quiet) {
     err << "glint run: target, " << target_memory.facets << " coarse facets; memory: at least "
@@ -580,7 +588,8 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   const RunInfo info = runInfo(scene, args.scene_path, readUserFile(args.scene_path, "scene file"),
                                args.uniform ? "uniform" : "adaptive");
   const TargetBudget target_budget = checkRunMemory(scene, args, budget, writer, err);
-  const MemoryWatch watch(budget);
+  MemoryWatch watch(budget);
+  noteTerrain(watch, scene);
 
   // Built and culled once, shared by the box and the planes.
   const SceneTarget target = sceneTarget(scene, firstRegion(scene), target_budget);

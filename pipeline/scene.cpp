@@ -871,9 +871,24 @@ Scene parseScene(std::string_view text, const std::string& source,
     if (scene.engagement) {
       r.fail("terrain", "cannot join an engagement yet: the target moves and the ground does not");
     }
+    // The terrain's memory, with the target's that the run holds beside it, is held to the
+    // budget before a height is read.
+    const auto within_budget = [&](std::size_t posts) {
+      if (memory_budget_bytes == 0) return;
+      const std::uint64_t target_bytes = targetMemory(scene, scene.accuracy).floor_bytes;
+      requireWithinBudget(
+          "the terrain (" + std::to_string(posts) + " posts over the scene's region" +
+              (target_bytes > 0
+                   ? ", with the target's " + formatBytes(static_cast<double>(target_bytes))
+                   : std::string()) +
+              ")",
+          Terrain::memoryBytes(posts) + target_bytes, memory_budget_bytes,
+          "crop the elevation model or resample it to a coarser post spacing, shrink the "
+          "scene's region, or raise --memory");
+    };
     try {
       scene.terrain = Terrain::read(scene.terrain_file, SiteFrame(*scene.site), sceneRegion(scene),
-                                    static_cast<std::size_t>(max_posts));
+                                    static_cast<std::size_t>(max_posts), within_budget);
     } catch (const std::runtime_error& e) {
       throw InputError(source + ": /terrain/file: " + e.what());
     }
@@ -888,6 +903,21 @@ Scene parseScene(std::string_view text, const std::string& source,
   }
   r.finish();
   return scene;
+}
+
+std::uint64_t terrainMemoryBytes(const Scene& scene) {
+  return scene.terrain ? scene.terrain->memoryBytes() : 0;
+}
+
+std::string terrainMemoryWhat(const Scene& scene) {
+  return scene.terrain ? "the terrain (" + std::to_string(scene.terrain->windowPosts()) + " posts)"
+                       : std::string();
+}
+
+void noteTerrain(MemoryWatch& watch, const Scene& scene) {
+  if (!scene.terrain) return;
+  watch.noteHeld(terrainMemoryWhat(scene), terrainMemoryBytes(scene),
+                 "crop the elevation model or resample it to a coarser post spacing");
 }
 
 std::string readUserFile(const std::filesystem::path& path, const std::string& what,
