@@ -36,6 +36,7 @@
 #include "pipeline/study.h"
 #include "pipeline/study_maps.h"
 #include "pipeline/target_builder.h"
+#include "pipeline/unlit_warning.h"
 
 namespace glint {
 namespace {
@@ -312,6 +313,12 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
       record["hazard_reach"] = reachSummaryJson(reach.summaries);
       tally.evaluations += reach.near.evaluations();
     }
+  }
+  // Over an engagement the target moves through the beam: its pose at the start says nothing.
+  if (!scene.engagement) {
+    const std::vector<std::string> warnings =
+        unlitTargetWarnings(scene, target.integrator.cullStats());
+    if (!warnings.empty()) record["warnings"] = warnings;
   }
   record["evaluations"] = tally.evaluations;
   record["unconverged_points"] = tally.unconverged;
@@ -653,7 +660,13 @@ void writeStudy(const BatchArgs& args, const Study& study,
   AtomicFile summary_file(out_dir / output_names::kSummary);
   summary_file.stream() << summary.dump(2) << "\n";
   summary_file.commit();
-  if (!args.quiet) printBatchSummary(err, summary, lattices, out_dir, wall_s);
+  if (!args.quiet) {
+    printBatchSummary(err, summary, lattices, out_dir, wall_s);
+  } else {
+    // Even when quiet: empty maps that are not safe ones must not pass unremarked.
+    for (const nlohmann::json& w : summary.at("warnings"))
+      err << "glint batch: warning: " << w.get<std::string>() << "\n";
+  }
 }
 
 }  // namespace

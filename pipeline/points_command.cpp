@@ -25,6 +25,7 @@
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
 #include "pipeline/test_pause.h"
+#include "pipeline/unlit_warning.h"
 
 namespace glint {
 namespace {
@@ -361,6 +362,9 @@ void runPoints(const PointsArgs& requested, std::ostream& out, std::ostream& err
   if (!writer) return;
   writeTable(file.get(), out, points, evaluated.results, scene.hazard);
   if (!args.quiet) report(err, args, scene, integrator, points, evaluated, threads);
+  // Even when quiet: an empty result that is not a safe one must not pass unremarked.
+  for (const std::string& w : unlitTargetWarnings(scene, integrator.cullStats()))
+    err << "glint points: warning: " << w << "\n";
 }
 
 }  // namespace glint

@@ -20,6 +20,7 @@
 #include "observers/field_compare.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
+#include "pipeline/unlit_warning.h"
 #include "support/cli.h"
 #include "support/dem.h"
 #include "support/files.h"
@@ -433,6 +434,26 @@ TEST_F(TerrainTest, TheGdalModuleOpensNoConnectionWhateverItIsGiven) {
     EXPECT_EQ(port.connections(), 0) << name << " connected to " << at;
   }
   for (const auto& [key, value] : config) CPLSetConfigOption(key, nullptr);
+}
+
+// issue 50 (6.4): a target under the ground is lit by nothing, and says so, and why.
+TEST_F(TerrainTest, ATargetUnderTheGroundIsWarnedOfAsUnlit) {
+  writeSiteDem(dir_ / "high.tif", [](double, double) { return 20.0; });
+  json j = ridgeScene(dir_ / "high.tif");
+  j["planes"][0]["above_terrain_m"] = 1.7;
+  const Scene scene = parseScene(j.dump(), "buried.json");
+  const FacetIntegrator integrator(buildTarget(scene), scene.laser, scene.accuracy);
+  ASSERT_EQ(integrator.cullStats().lit, 0u) << "premise: the sphere at z = 5 m is 15 m down";
+  const std::vector<std::string> w = unlitTargetWarnings(scene, integrator.cullStats());
+  ASSERT_EQ(w.size(), 1u);
+  for (const char* part : {"no facet of the target is lit: ", "are in the terrain's shadow",
+                           "object 0's centre lies 15 m below the ground", "not a safe one"})
+    EXPECT_NE(w[0].find(part), std::string::npos) << w[0];
+  // The open sphere on its stand over flat ground is lit: no warning.
+  writeSiteDem(dir_ / "flat.tif", [](double, double) { return 0.0; });
+  const Scene open = parseScene(ridgeScene(dir_ / "flat.tif").dump(), "open.json");
+  const FacetIntegrator lit(buildTarget(open), open.laser, open.accuracy);
+  EXPECT_TRUE(unlitTargetWarnings(open, lit.cullStats()).empty());
 }
 
 TEST_F(TerrainTest, SceneKeysAreRefusedWhereTheyCannotHold) {
