@@ -585,9 +585,9 @@ HorizontalBox sceneRegion(const Scene& scene) {
 std::optional<std::string> nonLocalVerdict(const std::string& name) {
   std::string lower = name;
   for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  static constexpr std::array<std::string_view, 10> kNetwork = {
-      "/vsicurl", "/vsis3",    "/vsigs",   "/vsiaz",      "/vsiadls",
-      "/vsioss",  "/vsiswift", "/vsihdfs", "/vsiwebhdfs", "/vsihttp"};
+  static constexpr std::array<std::string_view, 9> kNetwork = {
+      "/vsicurl", "/vsis3",    "/vsigs",   "/vsiaz",     "/vsiadls",
+      "/vsioss",  "/vsiswift", "/vsihdfs", "/vsiwebhdfs"};
   for (std::string_view prefix : kNetwork) {
     if (lower.starts_with(prefix)) {
       return "is a network path (" + std::string(prefix.substr(1)) +
