@@ -62,9 +62,12 @@ void FacetIntegrator::cull() {
       ++cull_.degenerate;
       continue;
     }
-    switch (lightVerdict(g, object_beams_[obj])) {
+    const Beam& beam = object_beams_[obj];
+    switch (lightVerdict(g, beam)) {
       case LightVerdict::OutsideBeam:
         ++cull_.outside_beam;
+        if (glm::dot(g.centre_m - beam.origin_m, beam.direction) + g.radius_m < 0.0)
+          ++cull_.behind_laser;
         break;
       case LightVerdict::FacesAway:
         ++cull_.facing_away;

@@ -88,7 +88,8 @@ struct CullStats {
   std::size_t degenerate = 0;    ///< zero area: nothing to reflect
   std::size_t facing_away = 0;   ///< no normal of the facet can see the laser
   std::size_t outside_beam = 0;  ///< no point of the facet is inside the beam
-  std::size_t shadowed = 0;      ///< its centre's ray to the laser hits the target
+  std::size_t behind_laser = 0;  ///< of those, the facet lies wholly behind the laser
+  std::size_t shadowed = 0;      ///< its centre's ray to the laser hits the target or terrain
   std::size_t lit = 0;           ///< kept for the observers
   bool occlusion = false;        ///< occlusion rays are traced (see IntegratorOptions)
 };

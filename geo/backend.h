@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -70,9 +71,11 @@ class GeoBackend {
   virtual ~GeoBackend() = default;
   virtual std::unique_ptr<SiteConversions> conversions(const SiteSpec& site) const = 0;
   /// @brief Band 1 of the model at @p path over the posts that cover @p region and one more on
-  /// each side, in @p site's frame (DemPosts::local_m).
+  /// each side, in @p site's frame (DemPosts::local_m). @p before_reading, if given, is told
+  /// the window's posts (columns × rows) before any height is read, and may throw.
   virtual DemPosts readDem(const std::string& path, const SiteSpec& site,
-                           const HorizontalBox& region, std::size_t max_posts) const = 0;
+                           const HorizontalBox& region, std::size_t max_posts,
+                           const std::function<void(std::size_t)>& before_reading) const = 0;
   /// @brief The bytes of a GeoTIFF of @p raster.
   virtual std::string geoTiff(const GeoRaster& raster) const = 0;
   /// @brief The bytes of the zones' GeoJSON or KML.

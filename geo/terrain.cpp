@@ -12,6 +12,13 @@
 #include "geo/backend.h"
 
 namespace glint {
+namespace {
+
+// What a post of the window costs the run (bytes), a floor under the measured figure
+// (docs/terrain.md, "Memory").
+constexpr std::uint64_t kBytesPerPost = 400;
+
+}  // namespace
 
 // The surface's triangles in an Embree scene of their own, about the surface's centre, for the
 // vertical queries of surfaceZ(); the double-precision vertices answer them.
@@ -29,14 +36,19 @@ struct Terrain::Heights {
 Terrain::Terrain() = default;
 Terrain::~Terrain() = default;
 
-std::shared_ptr<const Terrain> Terrain::read(const std::filesystem::path& dem_file,
-                                             const SiteFrame& site, const HorizontalBox& region,
-                                             std::size_t max_posts) {
+std::uint64_t Terrain::memoryBytes(std::size_t window_posts) {
+  return static_cast<std::uint64_t>(window_posts) * kBytesPerPost;
+}
+
+std::shared_ptr<const Terrain> Terrain::read(
+    const std::filesystem::path& dem_file, const SiteFrame& site, const HorizontalBox& region,
+    std::size_t max_posts, const std::function<void(std::size_t)>& before_reading) {
   const std::string name = dem_file.string();
   const auto fail = [&](const std::string& what) { throw std::runtime_error(name + ": " + what); };
-  const DemPosts posts = geoBackend().readDem(name, site.spec(), region, max_posts);
+  const DemPosts posts = geoBackend().readDem(name, site.spec(), region, max_posts, before_reading);
   const std::size_t nc = posts.columns, nr = posts.rows;
   std::shared_ptr<Terrain> t(new Terrain());
+  t->window_posts_ = nc * nr;
   t->crs_name_ = posts.crs_name;
   auto mesh = std::make_shared<ShadowMesh>();
   constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();

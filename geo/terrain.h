@@ -6,7 +6,9 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -34,12 +36,23 @@ class Terrain {
   /// @brief Reads band 1 of @p dem_file (any raster GDAL reads with a geotransform and a
   /// coordinate system: a GeoTIFF in UTM or in latitude and longitude, ...), only the posts that
   /// cover @p region and one more on each side.
-  /// @param max_posts refuse a window of more posts than this (memory: about 100 bytes each).
+  /// @param max_posts refuse a window of more posts than this (`terrain.max_posts`).
+  /// @param before_reading told the window's posts once they are known, before any height is
+  /// read (or any of memoryBytes() allocated): the memory budget's check, which may throw.
   /// @throw std::runtime_error naming the file: unreadable, without a coordinate system or a
   /// geotransform, not covering the region, or too large.
-  static std::shared_ptr<const Terrain> read(const std::filesystem::path& dem_file,
-                                             const SiteFrame& site, const HorizontalBox& region,
-                                             std::size_t max_posts);
+  static std::shared_ptr<const Terrain> read(
+      const std::filesystem::path& dem_file, const SiteFrame& site, const HorizontalBox& region,
+      std::size_t max_posts, const std::function<void(std::size_t)>& before_reading = {});
+
+  /// @brief Bytes a terrain over a window of @p window_posts posts holds for the whole run, or
+  /// more: its triangles and heights, and their shares of the height queries' and the
+  /// occluder's Embree scenes (docs/terrain.md, "Memory"). A floor, as the target's estimate is.
+  static std::uint64_t memoryBytes(std::size_t window_posts);
+  /// @brief memoryBytes() of this terrain's window.
+  [[nodiscard]] std::uint64_t memoryBytes() const { return memoryBytes(window_posts_); }
+  /// @brief The posts of the window read (columns × rows, holes included).
+  [[nodiscard]] std::size_t windowPosts() const { return window_posts_; }
 
   ~Terrain();
   Terrain(const Terrain&) = delete;
@@ -71,6 +84,7 @@ class Terrain {
   std::shared_ptr<ShadowMesh> mesh_;
   std::unique_ptr<Heights> heights_;  // an Embree scene for the vertical queries
   std::size_t posts_ = 0;
+  std::size_t window_posts_ = 0;
   double post_spacing_m_ = 0.0;
   double min_z_ = 0.0, max_z_ = 0.0;
   std::string crs_name_;

@@ -36,6 +36,7 @@
 #include "pipeline/study.h"
 #include "pipeline/study_maps.h"
 #include "pipeline/target_builder.h"
+#include "pipeline/unlit_warning.h"
 
 namespace glint {
 namespace {
@@ -313,6 +314,12 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
       tally.evaluations += reach.near.evaluations();
     }
   }
+  // Over an engagement the target moves through the beam: its pose at the start says nothing.
+  if (!scene.engagement) {
+    const std::vector<std::string> warnings =
+        unlitTargetWarnings(scene, target.integrator.cullStats());
+    if (!warnings.empty()) record["warnings"] = warnings;
+  }
   record["evaluations"] = tally.evaluations;
   record["unconverged_points"] = tally.unconverged;
   record["seconds"] = std::chrono::duration<double>(Clock::now() - start).count();
@@ -480,7 +487,9 @@ void checkStudyMemory(const Study& study, const std::vector<StudyLattice>& latti
       study.base.far_field.enabled ? farFieldMemoryFloorBytes(farFieldLattice(study.base)) : 0;
   requireTargetWithinBudget(
       targetMemory(study.base, fieldIntegratorOptions(study.base, lattices.front().spec)),
-      {budget, floor_bytes + far_bytes, "the study's regions and far field"});
+      {budget, floor_bytes + far_bytes + terrainMemoryBytes(study.base),
+       std::string("the study's regions and far field") +
+           (study.base.terrain ? " and " + terrainMemoryWhat(study.base) : "")});
 }
 
 // What the study's scenarios come to on rank 0 (besides the aggregates, in the lattices).
@@ -651,7 +660,13 @@ void writeStudy(const BatchArgs& args, const Study& study,
   AtomicFile summary_file(out_dir / output_names::kSummary);
   summary_file.stream() << summary.dump(2) << "\n";
   summary_file.commit();
-  if (!args.quiet) printBatchSummary(err, summary, lattices, out_dir, wall_s);
+  if (!args.quiet) {
+    printBatchSummary(err, summary, lattices, out_dir, wall_s);
+  } else {
+    // Even when quiet: empty maps that are not safe ones must not pass unremarked.
+    for (const nlohmann::json& w : summary.at("warnings"))
+      err << "glint batch: warning: " << w.get<std::string>() << "\n";
+  }
 }
 
 }  // namespace
@@ -660,7 +675,9 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   const auto wall_start = Clock::now();
   const bool root = cluster.rank() == 0;
   const bool talk = root && !args.quiet;
-  const Study study = loadStudy(args.study_path);
+  const std::uint64_t budget =
+      args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
+  const Study study = loadStudy(args.study_path, budget);
   fs::path out_dir = args.out_dir;
   if (out_dir.empty()) out_dir = fs::path("out") / fs::path(args.study_path).stem();
 
@@ -672,11 +689,10 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
 
   std::vector<StudyLattice> lattices = studyLattices(study.base);
   for (StudyLattice& r : lattices) r.combinations = jitterSharingCombinations(study);
-  const std::uint64_t budget =
-      args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
   checkStudyMemory(study, lattices, budget);
   for (StudyLattice& r : lattices) r.allocate();
-  const MemoryWatch watch(budget);
+  MemoryWatch watch(budget);
+  noteTerrain(watch, study.base);
   // Rank 0 holds the folder for the whole run (the other ranks write only the scenarios it hands
   // them), and on failure takes away the folders the run made, if nothing in them is worth
   // resuming from.

@@ -372,6 +372,25 @@ nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLatti
   }
   j["evaluations"] = quantilesJson(evaluations);
   j["scenario_seconds"] = quantilesJson(seconds);
+  // Scenarios whose target the beam does not light (their result.json's warnings say why):
+  // their empty maps are no evidence of safety, and the study's quantiles count them as 0.
+  std::vector<std::size_t> unlit;
+  for (const auto& [index, rec] : records) {
+    if (rec.contains("warnings") && !rec.at("warnings").empty()) unlit.push_back(index);
+  }
+  j["scenarios"]["unlit"] = unlit.size();
+  j["warnings"] = nlohmann::json::array();
+  if (!unlit.empty()) {
+    std::string list;
+    for (std::size_t k = 0; k < unlit.size() && k < 10; ++k)
+      list += (k == 0 ? "" : ", ") + std::to_string(unlit[k]);
+    if (unlit.size() > 10) list += ", …";
+    j["warnings"].push_back(
+        "no facet of the target is lit in " + std::to_string(unlit.size()) + " of " +
+        std::to_string(n) + " scenarios (" + list +
+        "): nothing reflects there, so their empty maps say nothing of the hazard and are not "
+        "safe ones; each one's result.json says why");
+  }
   nlohmann::json rs = nlohmann::json::array();
   for (std::size_t k = 0; k < lattices.size(); ++k) {
     const StudyLattice& r = lattices[k];
@@ -554,6 +573,8 @@ void printBatchSummary(std::ostream& err, const nlohmann::json& summary,
                        const std::vector<StudyLattice>& lattices,
                        const std::filesystem::path& out_dir, double wall_s) {
   const std::size_t n = summary.at("scenarios").at("count").get<std::size_t>();
+  for (const nlohmann::json& w : summary.at("warnings"))
+    err << "  warning: " << w.get<std::string>() << "\n";
   if (summary.contains("precision")) {
     const nlohmann::json& p = summary.at("precision");
     const bool reached = p.at("reached").get<bool>();

@@ -128,12 +128,22 @@ MemoryWatch::~MemoryWatch() {
   thread_.join();
 }
 
+void MemoryWatch::noteHeld(std::string what, std::uint64_t bytes, std::string advice) {
+  held_.push_back({std::move(what), bytes, std::move(advice)});
+}
+
 void MemoryWatch::check(const std::string& what, std::string_view advice) const {
   if (!exceeded()) return;
+  std::string held;
+  for (const Held& h : held_) {
+    if (h.bytes < peakBytes() / 4) continue;
+    held += " Of that, " + h.what + " holds about " + formatBytes(static_cast<double>(h.bytes)) +
+            " from the start: " + h.advice + ".";
+  }
   throw InputError(what + ": stopped when the resident memory reached " +
                    formatBytes(static_cast<double>(peakBytes())) + ", beyond the budget of " +
                    formatBytes(static_cast<double>(budget_bytes_)) +
-                   " (--memory); nothing was written. " + std::string(advice));
+                   " (--memory); nothing was written." + held + " " + std::string(advice));
 }
 
 }  // namespace glint

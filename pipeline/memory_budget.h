@@ -10,6 +10,7 @@
 #include <string>
 #include <string_view>
 #include <thread>
+#include <vector>
 
 namespace glint {
 
@@ -53,8 +54,12 @@ class MemoryWatch {
   [[nodiscard]] std::uint64_t peakBytes() const { return peak_bytes_.load(); }
   /// @brief How many samples have been taken (the constructor's first among them).
   [[nodiscard]] std::uint64_t samples() const { return samples_.load(); }
-  /// @throw InputError if the budget was passed, naming @p what was being computed and ending
-  /// with @p advice.
+  /// @brief Names something the command holds throughout (the terrain) and its estimate: a stop
+  /// where it is a quarter or more of the resident memory says so, with @p advice, so that the
+  /// message does not blame only what was being computed. Call before the work starts.
+  void noteHeld(std::string what, std::uint64_t bytes, std::string advice);
+  /// @throw InputError if the budget was passed, naming @p what was being computed, then what
+  /// noteHeld() named where it counts, and ending with @p advice.
   void check(const std::string& what, std::string_view advice =
                                           "Raise --memory, or coarsen voxel_m or pixel_m, or "
                                           "shrink the box") const;
@@ -68,6 +73,12 @@ class MemoryWatch {
   std::atomic<std::uint64_t> peak_bytes_{0};
   std::atomic<std::uint64_t> samples_{0};
   std::thread thread_;
+  struct Held {
+    std::string what;
+    std::uint64_t bytes = 0;
+    std::string advice;
+  };
+  std::vector<Held> held_;
 };
 
 }  // namespace glint

@@ -25,6 +25,7 @@
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
 #include "pipeline/test_pause.h"
+#include "pipeline/unlit_warning.h"
 
 namespace glint {
 namespace {
@@ -335,9 +336,13 @@ void runPoints(const PointsArgs& requested, std::ostream& out, std::ostream& err
 
   // The workspaces grow with what each observer sees, not with the scene: the watch covers
   // them (and whatever the estimate leaves out), stopping the points before their next one.
-  const MemoryWatch watch(budget);
-  const FacetIntegrator integrator = buildIntegrator(
-      scene, options, {budget, held_bytes, std::to_string(points.size()) + " observer points"});
+  MemoryWatch watch(budget);
+  noteTerrain(watch, scene);
+  const FacetIntegrator integrator =
+      buildIntegrator(scene, options,
+                      {budget, held_bytes + terrainMemoryBytes(scene),
+                       std::to_string(points.size()) + " observer points" +
+                           (scene.terrain ? " and " + terrainMemoryWhat(scene) : "")});
   watch.check("building the target", kAdvice);
   if (scene.engagement) {
     const EngagementResults results =
@@ -357,6 +362,9 @@ void runPoints(const PointsArgs& requested, std::ostream& out, std::ostream& err
   if (!writer) return;
   writeTable(file.get(), out, points, evaluated.results, scene.hazard);
   if (!args.quiet) report(err, args, scene, integrator, points, evaluated, threads);
+  // Even when quiet: an empty result that is not a safe one must not pass unremarked.
+  for (const std::string& w : unlitTargetWarnings(scene, integrator.cullStats()))
+    err << "glint points: warning: " << w << "\n";
 }
 
 }  // namespace glint

@@ -31,6 +31,7 @@
 #include "pipeline/surface_check.h"
 #include "pipeline/target_builder.h"
 #include "pipeline/test_pause.h"
+#include "pipeline/unlit_warning.h"
 
 namespace glint {
 namespace {
@@ -141,11 +142,19 @@ TargetBudget checkRunMemory(const Scene& scene, const RunArgs& args, std::uint64
           << formatBytes(static_cast<double>(budget)) << " budget\n";
     }
   }
+  // The terrain was read with the scene and is held throughout.
+  const std::uint64_t terrain_bytes = terrainMemoryBytes(scene);
+  if (scene.terrain && !args.quiet) {
+    err << "glint run: " << terrainMemoryWhat(scene) << "; memory: at least "
+        << formatBytes(static_cast<double>(terrain_bytes)) << " of the "
+        << formatBytes(static_cast<double>(budget)) << " budget\n";
+  }
   const TargetMemory target_memory =
       targetMemory(scene, fieldIntegratorOptions(scene, firstRegion(scene)));
   const TargetBudget target_budget{
-      budget, far_bytes + region_bytes,
-      far_bytes > 0 ? "the far field and the largest region" : "the largest region"};
+      budget, far_bytes + region_bytes + terrain_bytes,
+      std::string(scene.terrain ? "the terrain, " : "") +
+          (far_bytes > 0 ? "the far field and the largest region" : "the largest region")};
   requireTargetWithinBudget(target_memory, target_budget);
   if (!args.quiet) {
     err << "glint run: target, " << target_memory.facets << " coarse facets; memory: at least "
@@ -328,6 +337,7 @@ struct RunContext {
 struct RunSummary {
   nlohmann::json j;
   std::vector<std::pair<std::string, Vec3>> probes;
+  std::vector<std::string> warnings;  // summary.json's, said again on the terminal at the end
 
   // The target as the first region's problem describes it (all share the same one).
   void describeTarget(const Scene& scene, const FieldProblem& problem) {
@@ -513,9 +523,12 @@ void finishRun(const RunContext& c, const std::filesystem::path& dir,
   if (c.scene.site) s.j["site"] = siteJson(SiteFrame(*c.scene.site));
   s.j["files"] = c.outputs.names();
   if (!stale.empty()) s.j["earlier_files_kept"] = stale;
+  s.j["warnings"] = s.warnings;
   *c.outputs.summary() << s.j.dump(2) << "\n";
   c.watch.check("writing the outputs");  // a file written short of memory is not committed
   c.outputs.commit();
+  // Even when quiet: an empty result that is not a safe one must not pass unremarked.
+  for (const std::string& w : s.warnings) c.err << "glint run: warning: " << w << "\n";
   if (c.args.quiet) return;
   std::string list;
   for (const std::string& w : c.outputs.names()) list += (list.empty() ? "" : ", ") + w;
@@ -580,7 +593,8 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   const RunInfo info = runInfo(scene, args.scene_path, readUserFile(args.scene_path, "scene file"),
                                args.uniform ? "uniform" : "adaptive");
   const TargetBudget target_budget = checkRunMemory(scene, args, budget, writer, err);
-  const MemoryWatch watch(budget);
+  MemoryWatch watch(budget);
+  noteTerrain(watch, scene);
 
   // Built and culled once, shared by the box and the planes.
   const SceneTarget target = sceneTarget(scene, firstRegion(scene), target_budget);
@@ -594,6 +608,12 @@ void runField(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     far.hazard = farHazard(*far.far, scene.hazard);
   }
   RunSummary summary;
+  // Over an engagement the target moves through the beam: its pose at the start says nothing.
+  if (!scene.engagement)
+    summary.warnings = unlitTargetWarnings(scene, target.integrator.cullStats());
+  if (!args.quiet) {
+    for (const std::string& w : summary.warnings) err << "glint run: warning: " << w << "\n";
+  }
   if (scene.engagement) {
     summary.j = runJson(info);
     summary.j["hazard"] = hazardJson(scene.hazard, nullptr);

@@ -1,6 +1,7 @@
 #include "pipeline/scene.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -597,6 +598,37 @@ HorizontalBox sceneRegion(const Scene& scene) {
   return {lo.x - margin, lo.y - margin, hi.x + margin, hi.y + margin};
 }
 
+// Why a terrain.file cannot be read, if it names something other than a file on this machine:
+// a URL or one of GDAL's virtual file systems (/vsicurl/, /vsis3/, ...; the local ones too,
+// /vsistdin/ among them). A scene file opens no connection (the GDAL module cannot either).
+std::optional<std::string> nonLocalVerdict(const std::string& name) {
+  std::string lower = name;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  static constexpr std::array<std::string_view, 9> kNetwork = {
+      "/vsicurl", "/vsis3",    "/vsigs",   "/vsiaz",     "/vsiadls",
+      "/vsioss",  "/vsiswift", "/vsihdfs", "/vsiwebhdfs"};
+  for (std::string_view prefix : kNetwork) {
+    if (lower.starts_with(prefix)) {
+      return "is a network path (" + std::string(prefix.substr(1)) +
+             "): a scene file opens no connection; download the elevation model and name the "
+             "local file";
+    }
+  }
+  if (lower.starts_with("/vsi")) {
+    return "is a path in one of GDAL's virtual file systems: name the elevation model's own "
+           "file (unpacked, if it is in an archive)";
+  }
+  // A URL: a scheme (RFC 3986: a letter, then letters, digits, +, -, .) and "://".
+  const std::size_t colon = lower.find("://");
+  if (colon != std::string::npos && colon > 0 &&
+      std::isalpha(static_cast<unsigned char>(lower[0])) &&
+      lower.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789+-.") >= colon) {
+    return "is a URL: a scene file opens no connection; download the elevation model and name "
+           "the local file";
+  }
+  return std::nullopt;
+}
+
 // Each lattice point of a plane laid over the terrain, raised to its height above the ground.
 std::shared_ptr<const SurfaceOffsets> surfaceOffsets(const PlaneSpec& p, const Terrain& terrain,
                                                      const std::string& at) {
@@ -856,7 +888,9 @@ Scene parseScene(std::string_view text, const std::string& source,
     r.fail("reach", "has a footprint, which needs a site: it is drawn on the Earth");
   if (r.has("terrain")) {
     ObjectReader t = r.object("terrain");
-    scene.terrain_file = base / t.string("file");
+    const std::string file = t.string("file");
+    if (const auto why = nonLocalVerdict(file)) t.fail("file", *why);
+    scene.terrain_file = base / file;
     const std::int64_t max_posts = t.integer("max_posts", 4'000'000);
     if (max_posts < 4 || max_posts > 100'000'000) t.fail("max_posts", "must be from 4 to 1e8");
     t.finish();
@@ -864,9 +898,24 @@ Scene parseScene(std::string_view text, const std::string& source,
     if (scene.engagement) {
       r.fail("terrain", "cannot join an engagement yet: the target moves and the ground does not");
     }
+    // The terrain's memory, with the target's that the run holds beside it, is held to the
+    // budget before a height is read.
+    const auto within_budget = [&](std::size_t posts) {
+      if (memory_budget_bytes == 0) return;
+      const std::uint64_t target_bytes = targetMemory(scene, scene.accuracy).floor_bytes;
+      requireWithinBudget(
+          "the terrain (" + std::to_string(posts) + " posts over the scene's region" +
+              (target_bytes > 0
+                   ? ", with the target's " + formatBytes(static_cast<double>(target_bytes))
+                   : std::string()) +
+              ")",
+          Terrain::memoryBytes(posts) + target_bytes, memory_budget_bytes,
+          "crop the elevation model or resample it to a coarser post spacing, shrink the "
+          "scene's region, or raise --memory");
+    };
     try {
       scene.terrain = Terrain::read(scene.terrain_file, SiteFrame(*scene.site), sceneRegion(scene),
-                                    static_cast<std::size_t>(max_posts));
+                                    static_cast<std::size_t>(max_posts), within_budget);
     } catch (const std::runtime_error& e) {
       throw InputError(source + ": /terrain/file: " + e.what());
     }
@@ -881,6 +930,21 @@ Scene parseScene(std::string_view text, const std::string& source,
   }
   r.finish();
   return scene;
+}
+
+std::uint64_t terrainMemoryBytes(const Scene& scene) {
+  return scene.terrain ? scene.terrain->memoryBytes() : 0;
+}
+
+std::string terrainMemoryWhat(const Scene& scene) {
+  return scene.terrain ? "the terrain (" + std::to_string(scene.terrain->windowPosts()) + " posts)"
+                       : std::string();
+}
+
+void noteTerrain(MemoryWatch& watch, const Scene& scene) {
+  if (!scene.terrain) return;
+  watch.noteHeld(terrainMemoryWhat(scene), terrainMemoryBytes(scene),
+                 "crop the elevation model or resample it to a coarser post spacing");
 }
 
 std::string readUserFile(const std::filesystem::path& path, const std::string& what,

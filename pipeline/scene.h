@@ -29,6 +29,8 @@
 
 namespace glint {
 
+class MemoryWatch;
+
 /// @brief Where a mesh's model frame sits in the scene (key `transform`): a point p of the
 /// model is at translation_m + rotation (scale ∘ p).
 struct MeshTransform {
@@ -181,9 +183,21 @@ struct Scene {
 /// its extent and pixel, its coarsest blocks and its surface over the terrain.
 FieldSpec planeLattice(const PlaneSpec& plane);
 
+/// @brief The memory the scene's terrain holds for the whole run (Terrain::memoryBytes()), 0
+/// without one.
+std::uint64_t terrainMemoryBytes(const Scene& scene);
+
+/// @brief "the terrain (N posts)", for the memory messages; empty without one.
+std::string terrainMemoryWhat(const Scene& scene);
+
+/// @brief Tells @p watch what the scene's terrain holds (MemoryWatch::noteHeld()), if it has
+/// one, so that a stop it caused names it.
+void noteTerrain(MemoryWatch& watch, const Scene& scene);
+
 /// @brief Reads and validates a scene file, and the mesh files it names. With
 /// @p memory_budget_bytes > 0 (`--memory`), a mesh whose target would need more
-/// (meshMemoryFloorBytes()) is refused before it is decoded.
+/// (meshMemoryFloorBytes()) is refused before it is decoded, and a terrain whose posts over the
+/// scene's region would need more, with the target (Terrain::memoryBytes()), before they are read.
 /// @throw InputError naming the file and the JSON pointer of the first problem, e.g.
 /// `scene.json: /materials/polished/sigma: must be > 0`.
 Scene loadScene(const std::filesystem::path& path, std::uint64_t memory_budget_bytes = 0);

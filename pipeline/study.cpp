@@ -193,8 +193,8 @@ Vec3 rotateYawPitchRoll(const Vec3& v, double yaw_deg, double pitch_deg, double 
   return yawPitchRoll(yaw_deg, pitch_deg, roll_deg) * v;
 }
 
-Study parseStudy(std::string_view text, const std::string& source,
-                 const std::filesystem::path& dir) {
+Study parseStudy(std::string_view text, const std::string& source, const std::filesystem::path& dir,
+                 std::uint64_t memory_budget_bytes) {
   const json root = parseJson(text, source);
   Study study;
   study.source = source;
@@ -204,7 +204,8 @@ Study parseStudy(std::string_view text, const std::string& source,
   study.scene_path = dir / scene_name;
   try {
     study.scene_text = readUserFile(study.scene_path, "scene file");
-    study.base = parseScene(study.scene_text, study.scene_path.string());
+    study.base = parseScene(study.scene_text, study.scene_path.string(), std::nullopt, {},
+                            memory_budget_bytes);
     if (study.base.engagement) {
       // Each scenario is the engagement integrated over the scene's box and planes, as glint
       // run integrates it: the far field and the reach judge one pose.
@@ -383,8 +384,9 @@ std::vector<std::size_t> studyRounds(const Study& study) {
   }
 }
 
-Study loadStudy(const std::filesystem::path& path) {
-  return parseStudy(readUserFile(path, "study file"), path.string(), path.parent_path());
+Study loadStudy(const std::filesystem::path& path, std::uint64_t memory_budget_bytes) {
+  return parseStudy(readUserFile(path, "study file"), path.string(), path.parent_path(),
+                    memory_budget_bytes);
 }
 
 std::string scenarioSceneJson(const Study& study, const Scenario& s) {

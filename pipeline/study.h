@@ -88,12 +88,14 @@ std::vector<std::size_t> studyRounds(const Study& study);
 
 /// @brief Reads a study file and its base scene, expands its scenarios and validates every
 /// scenario's scene, so that a bad value stops the study before any work.
+/// With @p memory_budget_bytes > 0 the base scene's meshes and terrain are held to it as
+/// loadScene() holds them.
 /// @throw InputError naming the file and JSON pointer (or the scenario) of the first problem.
-Study loadStudy(const std::filesystem::path& path);
+Study loadStudy(const std::filesystem::path& path, std::uint64_t memory_budget_bytes = 0);
 
 /// @brief Validates study JSON text; @p dir is where its `scene` path starts from.
 Study parseStudy(std::string_view json_text, const std::string& source,
-                 const std::filesystem::path& dir);
+                 const std::filesystem::path& dir, std::uint64_t memory_budget_bytes = 0);
 
 /// @brief The scene file of one scenario: the base scene's JSON with objects turned and moved,
 /// materials and the laser's direction changed, the record a scenario's folder keeps

@@ -42,7 +42,8 @@ std::vector<Vec3> outline(const HorizontalBox& b) {
 }  // namespace
 
 DemPosts gdalReadDem(const std::string& path, const SiteSpec& site_spec,
-                     const HorizontalBox& region, std::size_t max_posts) {
+                     const HorizontalBox& region, std::size_t max_posts,
+                     const std::function<void(std::size_t)>& before_reading) {
   const GdalErrors quiet;
   const auto fail = [&](const std::string& what) {
     throw std::runtime_error(GdalErrors::explain(path + ": " + what));
@@ -103,8 +104,9 @@ DemPosts gdalReadDem(const std::string& path, const SiteSpec& site_spec,
   const std::size_t n = posts.columns * posts.rows;
   if (n > max_posts) {
     fail("its posts over the scene's region number " + std::to_string(n) + ", more than " +
-         std::to_string(max_posts) + " (about 100 bytes each): crop or resample it");
+         std::to_string(max_posts) + " (terrain.max_posts): crop or resample it");
   }
+  if (before_reading) before_reading(n);
   std::vector<double> h(n);
   GDALRasterBand* band = d->GetRasterBand(1);
   if (band->RasterIO(GF_Read, wc0, wr0, static_cast<int>(posts.columns),

@@ -9,7 +9,10 @@ namespace glint::detail {
 
 GdalErrors::GdalErrors() {
   static std::once_flag once;
-  std::call_once(once, [] { GDALAllRegister(); });
+  std::call_once(once, [] {
+    GDALAllRegister();
+    keepGdalOffline();
+  });
   CPLPushErrorHandler(CPLQuietErrorHandler);
   CPLErrorReset();
 }

@@ -149,6 +149,10 @@ std::string gdalZones(const GeoZones& z) {
     if (layer->CreateField(&area) != OGRERR_NONE) fail("GDAL cannot make the field area_m2");
 
     GDALRasterBand* band = mask->GetRasterBand(1);
+    const std::unique_ptr<char*, void (*)(char**)> wrap_options(
+        CSLSetNameValue(nullptr, "WRAPDATELINE", "YES"), CSLDestroy);
+    char** wrap = wrap_options.get();
+    const OGRGeometryFactory::TransformWithOptionsCache cache;
     for (const GeoZones::Zone& zone : z.zones) {
       if (band->RasterIO(GF_Write, 0, 0, g.width, g.height,
                          const_cast<std::uint8_t*>(zone.inside.data()), g.width, g.height, GDT_Byte,
@@ -166,14 +170,17 @@ std::string gdalZones(const GeoZones& z) {
         // The plane's own area: the map's, in pixels, times the plane's pixel (the map shrinks
         // a plane above the ellipsoid and scales by the projection's factor).
         const double area_m2 = geometry->toPolygon()->get_Area() / map_pixel_m2 * z.pixel_area_m2;
-        if (geometry->transform(to_wgs84.get()) != OGRERR_NONE)
-          fail("GDAL cannot carry a zone's outline to WGS 84");
+        // A zone across the antimeridian is cut there into the pieces on either side (RFC 7946
+        // §3.1.9, and KML alike): one ring from 179.9° to −179.9° would run the long way round.
+        std::unique_ptr<OGRGeometry> on_earth(
+            OGRGeometryFactory::transformWithOptions(geometry.get(), to_wgs84.get(), wrap, cache));
+        if (!on_earth) fail("GDAL cannot carry a zone's outline to WGS 84");
         OGRFeature feature(layer->GetLayerDefn());
         feature.SetField("kind", zone.kind.c_str());
         feature.SetField("description", zone.description.c_str());
         for (const auto& [key, v] : z.properties) feature.SetField(key.c_str(), v.c_str());
         feature.SetField("area_m2", area_m2);
-        feature.SetGeometryDirectly(geometry.release());
+        feature.SetGeometryDirectly(on_earth.release());
         feature.SetStyleString(zone.kind == "hazardous" ? "BRUSH(fc:#FF000080);PEN(c:#FF0000)"
                                                         : "BRUSH(fc:#FFA50080);PEN(c:#FFA500)");
         if (layer->CreateFeature(&feature) != OGRERR_NONE) fail("GDAL cannot write a zone");

@@ -12,8 +12,9 @@ class Backend final : public GeoBackend {
     return projConversions(site);
   }
   DemPosts readDem(const std::string& path, const SiteSpec& site, const HorizontalBox& region,
-                   std::size_t max_posts) const override {
-    return gdalReadDem(path, site, region, max_posts);
+                   std::size_t max_posts,
+                   const std::function<void(std::size_t)>& before_reading) const override {
+    return gdalReadDem(path, site, region, max_posts, before_reading);
   }
   std::string geoTiff(const GeoRaster& raster) const override { return gdalGeoTiff(raster); }
   std::string zones(const GeoZones& zones) const override { return gdalZones(zones); }

@@ -3,7 +3,12 @@
 // below the tangent plane, and a brute-force segment test against every triangle of the model.
 #include "geo/terrain.h"
 
+#include <arpa/inet.h>
+#include <cpl_conv.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -15,6 +20,8 @@
 #include "observers/field_compare.h"
 #include "pipeline/scene.h"
 #include "pipeline/target_builder.h"
+#include "pipeline/unlit_warning.h"
+#include "support/cli.h"
 #include "support/dem.h"
 #include "support/files.h"
 #include "support/refusal.h"
@@ -264,6 +271,189 @@ TEST_F(TerrainTest, ARidgeBeforeTheTargetMasksTheBeam) {
   j["planes"][0].erase("above_terrain_m");
   const Scene open = parseScene(j.dump(), "open.json");
   EXPECT_GT(FacetIntegrator(buildTarget(open), open.laser, open.accuracy).cullStats().lit, 0u);
+}
+
+// issue 50 (6.1): a terrain took about 430 bytes a post where 100 were documented, outside
+// the memory budget: 3.9 M posts reached 1.69 GB under --memory 1G and the stop blamed the
+// meshes. Its posts over the scene's region are now held to the budget, with the target's,
+// before a height is read: here the model's heights cannot be read at all (its VRT's source is
+// gone), and the refusal comes first, naming the terrain and what to change.
+TEST_F(TerrainTest, ATerrainBeyondTheBudgetIsRefusedBeforeAHeightIsRead) {
+  writeSiteDem(dir_ / "dem.tif", [](double, double) { return 0.0; });
+  {
+    GDALDataset* source =
+        GDALDataset::FromHandle(GDALOpen((dir_ / "dem.tif").c_str(), GA_ReadOnly));
+    ASSERT_NE(source, nullptr);
+    GDALDriver* vrt = GetGDALDriverManager()->GetDriverByName("VRT");
+    GDALClose(GDALDataset::ToHandle(
+        vrt->CreateCopy((dir_ / "dem.vrt").c_str(), source, FALSE, nullptr, nullptr, nullptr)));
+    GDALClose(GDALDataset::ToHandle(source));
+  }
+  fs::copy_file(dir_ / "dem.tif", dir_ / "kept.tif");
+  fs::remove(dir_ / "dem.tif");
+  const std::string scene = ridgeScene(dir_ / "dem.vrt").dump();
+  // Premise: without a budget the heights are read, and cannot be.
+  EXPECT_NE(test::refusalOf([&] { parseScene(scene, "s.json"); }).find("cannot be read"),
+            std::string::npos);
+  const std::string refusal =
+      test::refusalOf([&] { parseScene(scene, "s.json", std::nullopt, {}, 1 << 20); });
+  for (const char* part : {"s.json: /terrain/file: the terrain (", " posts over the scene's region",
+                           "of memory, more than the budget of 1 MB (--memory); crop the "
+                           "elevation model or resample it to a coarser post spacing"})
+    EXPECT_NE(refusal.find(part), std::string::npos) << refusal;
+  // Within the budget it is read, and holds what was reckoned for its window.
+  const Scene read = parseScene(ridgeScene(dir_ / "kept.tif").dump(), "s.json", std::nullopt, {},
+                                std::uint64_t{1} << 30);
+  ASSERT_TRUE(read.terrain);
+  EXPECT_GE(read.terrain->windowPosts(), read.terrain->posts());
+  EXPECT_EQ(read.terrain->memoryBytes(), Terrain::memoryBytes(read.terrain->windowPosts()));
+  EXPECT_GE(read.terrain->memoryBytes(), 400 * read.terrain->windowPosts())
+      << "the measured cost of a post (docs/terrain.md, Memory)";
+}
+
+// Each command reads the scene (the study's base scene too) within its --memory.
+TEST_F(TerrainTest, EveryCommandRefusesATerrainBeyondItsBudgetAndWritesNothing) {
+  writeSiteDem(dir_ / "dem.tif", [](double, double) { return 0.0; });
+  std::ofstream(dir_ / "scene.json") << ridgeScene(dir_ / "dem.tif").dump();
+  std::ofstream(dir_ / "p.csv") << "x,y,z\n100,0,2\n";
+  std::ofstream(dir_ / "study.json") << R"({"scene": "scene.json", "sweep": {"yaw_deg": [0, 10]}})";
+  const std::string scene = (dir_ / "scene.json").string();
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"run", scene, "-o", (dir_ / "out").string()},
+        std::vector<std::string>{"points", scene, "--points", (dir_ / "p.csv").string(), "--out",
+                                 (dir_ / "p_out.csv").string()},
+        std::vector<std::string>{"batch", (dir_ / "study.json").string(), "-o",
+                                 (dir_ / "out").string()}}) {
+    std::vector<std::string> with_budget = args;
+    with_budget.insert(with_budget.end(), {"--memory", "1M"});
+    const test::Outcome r = test::glint(with_budget);
+    EXPECT_EQ(r.status, 2) << args[0] << ": " << r.err;
+    EXPECT_NE(r.err.find("/terrain/file: the terrain ("), std::string::npos)
+        << args[0] << ": " << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out")) << args[0];
+    EXPECT_FALSE(fs::exists(dir_ / "p_out.csv")) << args[0];
+  }
+}
+
+// issue 50 (6.2): terrain.file took GDAL's network paths, so a scene file could make glint open
+// connections. The scene reader refuses them, naming the key (exit status 2).
+TEST_F(TerrainTest, ANetworkPathIsRefusedByTheSceneReader) {
+  writeSiteDem(dir_ / "dem.tif", [](double, double) { return 0.0; });
+  for (const auto& [name, says] : std::vector<std::pair<std::string, std::string>>{
+           {"/vsicurl/http://127.0.0.1:9/dem.tif", "is a network path (vsicurl)"},
+           {"/vsicurl?url=http://127.0.0.1:9/dem.tif", "is a network path (vsicurl)"},
+           {"/vsis3/bucket/dem.tif", "is a network path (vsis3)"},
+           {"/VSIGS/bucket/dem.tif", "is a network path (vsigs)"},
+           {"/vsiaz/container/dem.tif", "is a network path (vsiaz)"},
+           {"/vsiadls/fs/dem.tif", "is a network path (vsiadls)"},
+           {"/vsioss/bucket/dem.tif", "is a network path (vsioss)"},
+           {"/vsiswift/c/dem.tif", "is a network path (vsiswift)"},
+           {"/vsihdfs/hdfs://h:9/dem.tif", "is a network path (vsihdfs)"},
+           {"/vsiwebhdfs/http://h:9/dem.tif", "is a network path (vsiwebhdfs)"},
+           {"/vsizip//vsicurl/http://h/a.zip/dem.tif",
+            "is a path in one of GDAL's virtual file systems"},
+           {"/vsistdin/", "is a path in one of GDAL's virtual file systems"},
+           {"http://127.0.0.1:9/dem.tif", "is a URL"},
+           {"HTTPS://example.org/dem.tif", "is a URL"},
+           {"ftp://example.org/dem.tif", "is a URL"}}) {
+    json j = ridgeScene(dir_ / "dem.tif");
+    j["terrain"]["file"] = name;
+    const std::string refusal = test::refusalOf([&] { parseScene(j.dump(), "s.json"); });
+    EXPECT_NE(refusal.find("s.json: /terrain/file: " + says), std::string::npos)
+        << name << ": " << refusal;
+  }
+  json j = ridgeScene(dir_ / "dem.tif");
+  j["terrain"]["file"] = "/vsicurl/http://127.0.0.1:9/dem.tif";
+  std::ofstream(dir_ / "net.json") << j.dump();
+  const test::Outcome r =
+      test::glint({"run", (dir_ / "net.json").string(), "-o", (dir_ / "out").string(), "--quiet"});
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("a scene file opens no connection"), std::string::npos) << r.err;
+}
+
+// A loopback port that accepts connections without answering, and counts them.
+class Listener {
+ public:
+  Listener() {
+    fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t length = sizeof a;
+    if (fd_ < 0 || ::bind(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 ||
+        ::listen(fd_, 64) != 0 || ::getsockname(fd_, reinterpret_cast<sockaddr*>(&a), &length) != 0)
+      throw std::runtime_error("cannot listen on the loopback");
+    port_ = ntohs(a.sin_port);
+  }
+  ~Listener() { ::close(fd_); }
+  Listener(const Listener&) = delete;
+  Listener& operator=(const Listener&) = delete;
+  [[nodiscard]] int port() const { return port_; }
+  // The connections made since the last call.
+  int connections() {
+    int n = 0;
+    for (int c; (c = ::accept(fd_, nullptr, nullptr)) >= 0; ++n) ::close(c);
+    return n;
+  }
+
+ private:
+  int fd_ = -1;
+  int port_ = 0;
+};
+
+// Whatever name reaches the GDAL module (a file the scene reader lets through, such as a VRT
+// whose source is a URL), it opens no connection: every name here connected to the port (and
+// waited for an answer) before GDAL was kept off the network.
+TEST_F(TerrainTest, TheGdalModuleOpensNoConnectionWhateverItIsGiven) {
+  Listener port;
+  const std::string at = "127.0.0.1:" + std::to_string(port.port());
+  // Should a connection be made, it is not waited on for long, and S3 is this port too.
+  const std::vector<std::pair<const char*, std::string>> config = {
+      {"GDAL_HTTP_TIMEOUT", "2"}, {"GDAL_HTTP_MAX_RETRY", "0"},
+      {"AWS_S3_ENDPOINT", at},    {"AWS_NO_SIGN_REQUEST", "YES"},
+      {"AWS_HTTPS", "NO"},        {"AWS_VIRTUAL_HOSTING", "FALSE"}};
+  for (const auto& [key, value] : config) CPLSetConfigOption(key, value.c_str());
+  // A model over the region (1 km square about the site, 1 m posts), its heights at the port:
+  // GDAL fetches a VRT's source when the heights are read.
+  const SiteFrame site(kSite);
+  const MapPoint o = site.toMap(Vec3(0.0));
+  std::ofstream(dir_ / "net.vrt")
+      << "<VRTDataset rasterXSize=\"1000\" rasterYSize=\"1000\"><SRS>EPSG:" << site.mapEpsg()
+      << "</SRS><GeoTransform>" << std::to_string(o.easting_m - 500.0) << ", 1, 0, "
+      << std::to_string(o.northing_m + 500.0) << ", 0, -1</GeoTransform>"
+      << "<VRTRasterBand dataType=\"Float32\" band=\"1\"><SimpleSource><SourceFilename>"
+      << "/vsicurl/http://" << at << "/dem.tif</SourceFilename><SourceBand>1</SourceBand>"
+      << "</SimpleSource></VRTRasterBand></VRTDataset>";
+  for (const std::string& name : std::vector<std::string>{
+           (dir_ / "net.vrt").string(), "/vsicurl/http://" + at + "/dem.tif",
+           "/vsicurl?url=http://" + at + "/dem.tif", "http://" + at + "/dem.tif",
+           "/vsis3/bucket/dem.tif", "/vsizip//vsicurl/http://" + at + "/a.zip/dem.tif"}) {
+    EXPECT_THROW((void)Terrain::read(name, site, {-100.0, -100.0, 100.0, 100.0}, 1e6),
+                 std::runtime_error)
+        << name;
+    EXPECT_EQ(port.connections(), 0) << name << " connected to " << at;
+  }
+  for (const auto& [key, value] : config) CPLSetConfigOption(key, nullptr);
+}
+
+// issue 50 (6.4): a target under the ground is lit by nothing, and says so, and why.
+TEST_F(TerrainTest, ATargetUnderTheGroundIsWarnedOfAsUnlit) {
+  writeSiteDem(dir_ / "high.tif", [](double, double) { return 20.0; });
+  json j = ridgeScene(dir_ / "high.tif");
+  j["planes"][0]["above_terrain_m"] = 1.7;
+  const Scene scene = parseScene(j.dump(), "buried.json");
+  const FacetIntegrator integrator(buildTarget(scene), scene.laser, scene.accuracy);
+  ASSERT_EQ(integrator.cullStats().lit, 0u) << "premise: the sphere at z = 5 m is 15 m down";
+  const std::vector<std::string> w = unlitTargetWarnings(scene, integrator.cullStats());
+  ASSERT_EQ(w.size(), 1u);
+  for (const char* part : {"no facet of the target is lit: ", "are in the terrain's shadow",
+                           "object 0's centre lies 15 m below the ground", "not a safe one"})
+    EXPECT_NE(w[0].find(part), std::string::npos) << w[0];
+  // The open sphere on its stand over flat ground is lit: no warning.
+  writeSiteDem(dir_ / "flat.tif", [](double, double) { return 0.0; });
+  const Scene open = parseScene(ridgeScene(dir_ / "flat.tif").dump(), "open.json");
+  const FacetIntegrator lit(buildTarget(open), open.laser, open.accuracy);
+  EXPECT_TRUE(unlitTargetWarnings(open, lit.cullStats()).empty());
 }
 
 TEST_F(TerrainTest, SceneKeysAreRefusedWhereTheyCannotHold) {

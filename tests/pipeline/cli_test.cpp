@@ -448,6 +448,55 @@ TEST_F(CliTest, PointsThatOutgrowTheBudgetStopAndWriteNothing) {
   EXPECT_EQ(filesInDir(), 2u) << "the scene and err.txt; no output, no temporary";
 }
 
+// issue 50 (6.4): a target the beam does not light reflects nothing, and its empty result read
+// "nothing is hazardous" with no word that nothing was lit. Now run, points and batch warn on
+// the terminal (even with --quiet), run in summary.json's `warnings`, batch in each scenario's
+// result.json and in the study's summary.json, counted.
+TEST_F(CliTest, ATargetTheBeamDoesNotLightIsWarnedOfAndNotPassedAsSafe) {
+  const fs::path data = GLINT_TEST_DATA_DIR;
+  nlohmann::json scene = nlohmann::json::parse(readFile(data / "study_scene.json"));
+  scene["far_field"] = {{"enabled", false}};
+  const std::string lit = write("lit.json", scene.dump());
+  // The laser at x = −100 m turned round: the cylinder at the origin lies behind it.
+  scene["laser"]["direction"] = {-1, 0, 0};
+  const std::string unlit = write("study_scene.json", scene.dump());
+  const std::string kWarning =
+      "no facet of the target is lit: 192 of its 192 coarse facets lie "
+      "behind the laser";
+
+  const Outcome run = glint({"run", unlit, "-o", path("run"), "--quiet"});
+  ASSERT_EQ(run.status, 0) << run.err;
+  EXPECT_NE(run.err.find("glint run: warning: " + kWarning), std::string::npos) << run.err;
+  const nlohmann::json summary = nlohmann::json::parse(readFile(path("run/summary.json")));
+  ASSERT_EQ(summary.at("warnings").size(), 1u) << summary.dump(2);
+  EXPECT_NE(summary["warnings"][0].get<std::string>().find(kWarning), std::string::npos);
+  EXPECT_NE(summary["warnings"][0].get<std::string>().find("not a safe one"), std::string::npos);
+  const Outcome lit_run = glint({"run", lit, "-o", path("lit"), "--quiet"});
+  ASSERT_EQ(lit_run.status, 0) << lit_run.err;
+  EXPECT_EQ(lit_run.err, "") << "a lit target: no warning";
+  EXPECT_TRUE(nlohmann::json::parse(readFile(path("lit/summary.json"))).at("warnings").empty());
+
+  const std::string points = write("p.csv", "x,y,z\n-3,0,0.1\n");
+  const Outcome p = glint({"points", unlit, "--points", points, "--quiet"});
+  ASSERT_EQ(p.status, 0) << p.err;
+  EXPECT_NE(p.err.find("glint points: warning: " + kWarning), std::string::npos) << p.err;
+
+  fs::copy_file(data / "study.json", dir_ / "study.json");
+  const Outcome batch = glint({"batch", path("study.json"), "-o", path("batch"), "--quiet"});
+  ASSERT_EQ(batch.status, 0) << batch.err;
+  EXPECT_NE(batch.err.find("glint batch: warning: no facet of the target is lit in 4 of 4 "
+                           "scenarios (0, 1, 2, 3)"),
+            std::string::npos)
+      << batch.err;
+  const nlohmann::json study = nlohmann::json::parse(readFile(path("batch/summary.json")));
+  EXPECT_EQ(study.at("scenarios").at("unlit"), 4) << study.at("scenarios").dump();
+  EXPECT_EQ(study.at("warnings").size(), 1u) << study.at("warnings").dump();
+  const nlohmann::json record =
+      nlohmann::json::parse(readFile(path("batch/scenarios/s000000/result.json")));
+  ASSERT_EQ(record.at("warnings").size(), 1u) << record.dump(2);
+  EXPECT_NE(record["warnings"][0].get<std::string>().find("behind the laser"), std::string::npos);
+}
+
 TEST_F(CliTest, TheBuiltCommandExitsTwoOnBadInput) {
   const std::string cmd = std::string(GLINT_EXE) + " points " + path("missing.json") +
                           " --points " + path("missing.csv") + " 2> " + path("err.txt");
