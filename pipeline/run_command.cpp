@@ -506,7 +506,7 @@ void checkSurfaces(const RunContext& c, const FarResult& far, RunSummary& s) {
   if (!c.args.quiet) printSurfaceCheck(c.err, c.scene, check);
 }
 
-// summary.json, and every output committed together (rank 0).
+// summary.json, and every output committed together, summary.json last (rank 0).
 void finishRun(const RunContext& c, const std::filesystem::path& dir,
                const std::vector<std::string>& stale, RunSummary& s) {
   s.j["scene_path"] = sceneIdentity(c.args.scene_path);
@@ -515,7 +515,7 @@ void finishRun(const RunContext& c, const std::filesystem::path& dir,
   if (!stale.empty()) s.j["earlier_files_kept"] = stale;
   *c.outputs.summary() << s.j.dump(2) << "\n";
   c.watch.check("writing the outputs");  // a file written short of memory is not committed
-  c.outputs.commit();
+  c.outputs.commit([&] { pauseForTestsAfterFirstOutput(c.err); });
   if (c.args.quiet) return;
   std::string list;
   for (const std::string& w : c.outputs.names()) list += (list.empty() ? "" : ", ") + w;
