@@ -436,45 +436,37 @@ void writeReachVtp(std::ostream& out, const ReachSurface& surface) {
 // --- The AMR data set.
 
 StagedAmr::StagedAmr(std::filesystem::path staging, std::filesystem::path vthb_path)
-    : staging_(std::move(staging)), target_(std::move(vthb_path)) {}
+    : staging_(std::move(staging)),
+      target_(std::move(vthb_path)),
+      interrupt_slot_(removeOnInterrupt(staging_, InterruptCleanup::RemoveTree)) {}
 
 StagedAmr::StagedAmr(StagedAmr&& other) noexcept
-    : staging_(std::move(other.staging_)), target_(std::move(other.target_)), done_(other.done_) {
-  other.done_ = true;
+    : staging_(std::move(other.staging_)),
+      target_(std::move(other.target_)),
+      interrupt_slot_(other.interrupt_slot_) {
+  other.staging_.clear();
+  other.interrupt_slot_ = -1;
 }
 
 StagedAmr::~StagedAmr() {
-  if (done_) return;
+  if (staging_.empty()) return;  // moved from
+  // Whatever is left: the uncommitted data set, or the earlier one it replaced.
   std::error_code ignored;
   std::filesystem::remove_all(staging_, ignored);
+  forgetOnInterrupt(interrupt_slot_);
 }
 
-void StagedAmr::commit() {
-  if (done_) throw std::logic_error("StagedAmr::commit: already committed");
-  namespace fs = std::filesystem;
-  const fs::path folder = fs::path(target_).replace_extension();  // VTK's name for the blocks
-  const fs::path staged_folder = staging_ / folder.filename();
-  const fs::path staged_vthb = staging_ / target_.filename();
-  // rename(2) replaces a file but not a folder that holds files: the old folder (or a link in
-  // its place, itself and not its target) moves into the staging folder first, and goes with it.
-  std::error_code ec;
-  const fs::path old = staging_ / ".previous";
-  const bool had_folder = fs::exists(fs::symlink_status(folder));
-  if (had_folder) fs::rename(folder, old, ec);
-  if (!ec) fs::rename(staged_folder, folder, ec);
-  if (!ec) fs::rename(staged_vthb, target_, ec);
-  if (ec) {
-    // Put the previous folder back if it was moved and the new one did not take its place.
-    std::error_code ignored;
-    if (had_folder && fs::exists(fs::symlink_status(old)) &&
-        !fs::exists(fs::symlink_status(folder))) {
-      fs::rename(old, folder, ignored);
-    }
-    throw OutputError("cannot write " + target_.string() + " and its folder " + folder.string() +
-                      ": " + ec.message());
-  }
-  done_ = true;
-  fs::remove_all(staging_, ec);  // the previous blocks; what cannot go is only litter
+void StagedAmr::addTo(OutputSet& outputs) const {
+  // VTK names the block folder after the .vthb's stem.
+  const std::filesystem::path folder = std::filesystem::path(target_).replace_extension();
+  outputs.addStaged(staging_ / folder.filename(), folder, staging_);
+  outputs.addStaged(staging_ / target_.filename(), target_, staging_);
+}
+
+void StagedAmr::commit() const {
+  OutputSet alone;
+  addTo(alone);
+  alone.commit();
 }
 
 StagedAmr writeAmr(const std::filesystem::path& vthb_path, const ObserverField& field,

@@ -55,10 +55,12 @@ void writeHazardSurfaceVtp(std::ostream& out, const HazardSurface& surface);
 /// @throw OutputError when VTK's writer fails.
 void writeReachVtp(std::ostream& out, const ReachSurface& surface);
 
-/// @brief An AMR data set written under a temporary name beside its target: commit() moves
-/// it into place, and one dropped uncommitted is removed, so that a failed run leaves
-/// neither the .vthb nor its folder (an interrupted one leaves a hidden
-/// `.<name>.glint-<pid>-<random>` folder, which the next AtomicFile in that folder removes).
+class OutputSet;
+
+/// @brief An AMR data set written whole into a staging folder beside its target (a hidden
+/// `.<name>.glint-<pid>-<random>` folder, which removeStaleTemporaries() knows): addTo() has an
+/// OutputSet move it into place with the command's other outputs. The staging folder goes with
+/// this object, and with an interrupted run.
 class StagedAmr {
  public:
   StagedAmr(std::filesystem::path staging, std::filesystem::path vthb_path);
@@ -68,14 +70,18 @@ class StagedAmr {
   StagedAmr& operator=(const StagedAmr&) = delete;
   ~StagedAmr();
 
-  /// @brief Replaces the block folder, then the .vthb (the index that names the blocks).
-  /// @throw OutputError when a rename fails.
-  void commit();
+  /// @brief Adds the block folder, then the .vthb (the index that names the blocks), to
+  /// @p outputs; this object must outlive its commit.
+  void addTo(OutputSet& outputs) const;
+
+  /// @brief Moves the data set into place alone (an OutputSet of its own).
+  /// @throw OutputError when a move fails; the earlier data set, if any, is then in place.
+  void commit() const;
 
  private:
-  std::filesystem::path staging_;  ///< the temporary folder: `<stem>.vthb` and `<stem>/`
+  std::filesystem::path staging_;  ///< the staging folder: `<stem>.vthb` and `<stem>/`
   std::filesystem::path target_;   ///< the .vthb's final path
-  bool done_ = false;              ///< committed, or moved from
+  int interrupt_slot_ = -1;        ///< the staging folder goes with an interrupted run
 };
 
 /// @brief The adaptive field as a VTK overlapping AMR data set (vtkOverlappingAMR, written

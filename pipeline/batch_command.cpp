@@ -36,6 +36,7 @@
 #include "pipeline/study.h"
 #include "pipeline/study_maps.h"
 #include "pipeline/target_builder.h"
+#include "pipeline/test_pause.h"
 #include "pipeline/unlit_warning.h"
 
 namespace glint {
@@ -643,23 +644,26 @@ bool studyMayStop(const Study& study, const std::vector<StudyLattice>& lattices,
 }
 
 // The study's own files (rank 0): scenarios.csv, each region's aggregated map and summary.json
-// (with the run's time until then), then its summary on the terminal unless quiet.
+// (with the run's time until then), all in place together, summary.json last, or none; then its
+// summary on the terminal unless quiet.
 void writeStudy(const BatchArgs& args, const Study& study,
                 const std::vector<StudyLattice>& lattices, const StudyResults& results,
                 const fs::path& out_dir, int ranks, Clock::time_point wall_start,
                 std::ostream& err) {
-  AtomicFile csv(out_dir / output_names::kScenariosCsv);
-  csv.stream() << scenariosCsv(lattices, results.records, study.base.far_field.enabled,
-                               study.base.wantsReach(), study.base.hazard.aid.has_value());
-  csv.commit();
+  OutputSet outputs;
+  outputs.open(out_dir / output_names::kScenariosCsv).write([&](std::ostream& out) {
+    out << scenariosCsv(lattices, results.records, study.base.far_field.enabled,
+                        study.base.wantsReach(), study.base.hazard.aid.has_value());
+  });
   for (const StudyLattice& r : lattices)
-    writeStudyMap(out_dir / r.studyFile(), r, study, results.records.size());
+    writeStudyMap(outputs, out_dir / r.studyFile(), r, study, results.records.size());
   const double wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
   const nlohmann::json summary =
       batchSummaryJson(study, lattices, results.records, results.resumed, ranks, wall_s);
-  AtomicFile summary_file(out_dir / output_names::kSummary);
-  summary_file.stream() << summary.dump(2) << "\n";
-  summary_file.commit();
+  outputs.open(out_dir / output_names::kSummary, true).write([&](std::ostream& out) {
+    out << summary.dump(2) << "\n";
+  });
+  outputs.commit([&] { pauseForTestsAfterFirstOutput(err); });
   if (!args.quiet) {
     printBatchSummary(err, summary, lattices, out_dir, wall_s);
   } else {

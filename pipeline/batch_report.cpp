@@ -194,7 +194,7 @@ namespace {
 
 // A study's plane map on the site's map: its channels as a GeoTIFF, and where some scenario, and
 // where at least half of them, are hazardous as polygons (naked eye and aided).
-void writeStudyGeoMaps(const std::filesystem::path& dir, const PlaneGrid& g,
+void writeStudyGeoMaps(OutputSet& outputs, const std::filesystem::path& dir, const PlaneGrid& g,
                        const std::vector<ExrChannel>& channels, const StudyLattice& r,
                        const Study& study, const std::vector<float>& cover,
                        const std::vector<float>& aided_cover, const std::string& program,
@@ -206,8 +206,9 @@ void writeStudyGeoMaps(const std::filesystem::path& dir, const PlaneGrid& g,
   for (const ExrChannel& c : channels) {
     units.emplace_back(c.name == "max_irradiance_w_m2" ? "W/m^2" : "1");
   }
-  AtomicFile tif(dir / output_names::planeGeoTiff(r.name));
-  writeGeoTiff(tif.stream(), g, channels, units, site, info);
+  outputs.open(dir / output_names::planeGeoTiff(r.name)).write([&](std::ostream& out) {
+    writeGeoTiff(out, g, channels, units, site, info);
+  });
   const auto zone = [&](const char* kind, const char* description, const std::vector<float>& p,
                         float at_least) {
     ZoneMask z{kind, description, std::vector<unsigned char>(p.size())};
@@ -226,13 +227,13 @@ void writeStudyGeoMaps(const std::filesystem::path& dir, const PlaneGrid& g,
     zones.push_back(zone("aided_hazardous_in_some_scenario",
                          "through the optical aid, in at least one scenario", aided_cover, some));
   }
-  AtomicFile geojson(dir / output_names::planeZonesGeoJson(r.name));
-  writeZones(geojson.stream(), VectorFormat::GeoJson, g, zones, site, info);
-  AtomicFile kml(dir / output_names::planeZonesKml(r.name));
-  writeZones(kml.stream(), VectorFormat::Kml, g, zones, site, info);
-  tif.commit();
-  geojson.commit();
-  kml.commit();
+  for (const auto& [name, format] :
+       {std::pair{output_names::planeZonesGeoJson(r.name), VectorFormat::GeoJson},
+        std::pair{output_names::planeZonesKml(r.name), VectorFormat::Kml}}) {
+    outputs.open(dir / name).write([&](std::ostream& out) {
+      writeZones(out, format, g, zones, site, info);
+    });
+  }
 }
 
 }  // namespace
@@ -243,8 +244,8 @@ bool studyMapOnTheEarth(const Study& study, const StudyLattice& r) {
   return mappable(p.u_axis, p.v_axis);
 }
 
-void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, const Study& study,
-                   std::size_t scenarios) {
+void writeStudyMap(OutputSet& outputs, const std::filesystem::path& path, const StudyLattice& r,
+                   const Study& study, std::size_t scenarios) {
   const HazardSpec& h = study.base.hazard;
   // A pose's ratio is its irradiance's, so the largest follows from the largest irradiance;
   // an engagement's worst windows were kept apart (StudyLattice::max_ratio).
@@ -272,7 +273,7 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
     aided_bounds = r.coverageBounds(true, scenarios, alpha_each_side);
   }
   const std::string program = std::string("glint ") + GLINT_VERSION;
-  AtomicFile file(path);
+  AtomicFile& file = outputs.open(path);
   if (r.plane) {
     const PlaneSpec& p = study.base.planes[r.plane_index];
     PlaneGrid g;
@@ -294,11 +295,13 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
       channels.push_back({"aided_coverage_lower", &aided_bounds.lower});
       channels.push_back({"aided_coverage_upper", &aided_bounds.upper});
     }
-    writeExr(file.stream(), g, channels,
-             {program, study.base.hazard.wavelength_nm, h.mpe_w_m2, hazardCitation(h)});
+    file.write([&](std::ostream& out) {
+      writeExr(out, g, channels,
+               {program, study.base.hazard.wavelength_nm, h.mpe_w_m2, hazardCitation(h)});
+    });
     if (studyMapOnTheEarth(study, r)) {
-      writeStudyGeoMaps(path.parent_path(), g, channels, r, study, cover, aided_cover, program,
-                        scenarios);
+      writeStudyGeoMaps(outputs, path.parent_path(), g, channels, r, study, cover, aided_cover,
+                        program, scenarios);
     }
   } else {
     LatticeMeta meta;
@@ -334,9 +337,8 @@ void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, con
       channels.push_back(
           {"aided_coverage_upper", "1 (Clopper-Pearson upper bound, aided)", &aided_bounds.upper});
     }
-    writeLatticeVdb(file.stream(), r.spec, channels, meta);
+    file.write([&](std::ostream& out) { writeLatticeVdb(out, r.spec, channels, meta); });
   }
-  file.commit();
 }
 
 nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLattice>& lattices,

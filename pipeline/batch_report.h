@@ -20,6 +20,8 @@
 
 namespace glint {
 
+class OutputSet;
+
 /// @brief A scenario's `parameters` in its result.json (and so its row of scenarios.csv).
 nlohmann::json scenarioParametersJson(const Scenario& s);
 
@@ -56,10 +58,11 @@ bool studyMapOnTheEarth(const Study& study, const StudyLattice& r);
 
 /// @brief Writes one region's aggregated map to @p path (StudyLattice::studyFile()): maximum
 /// irradiance and hazard ratio, coverage probability, and with an optical aid the aided ratio
-/// and coverage, each whole or not at all.
-/// @throw OutputError when the file cannot be written.
-void writeStudyMap(const std::filesystem::path& path, const StudyLattice& r, const Study& study,
-                   std::size_t scenarios);
+/// and coverage; on the Earth, its geo-referenced maps beside it. Each file is opened in
+/// @p outputs, and appears when they are committed.
+/// @throw OutputError when a file cannot be written.
+void writeStudyMap(OutputSet& outputs, const std::filesystem::path& path, const StudyLattice& r,
+                   const Study& study, std::size_t scenarios);
 
 /// @brief summary.json of a study: the limits, quantiles over the scenarios of each region's
 /// peak ratio and extent, the areas or volumes hazardous in any and in half the scenarios, the

@@ -169,11 +169,11 @@ std::vector<Vec3> loadObserverPoints(const std::string& path, std::uint64_t budg
   return points;
 }
 
-// The output file, opened before the work: a missing folder, a device or an input named as the
-// output should stop the run before the work, not after. None for standard output.
+// An output file in @p outputs, opened before the work: a missing folder, a device or an input
+// named as the output should stop the run before the work, not after.
 // @throw OutputError for such a path.
-std::unique_ptr<AtomicFile> openOutputFile(const std::string& path, const PointsArgs& args,
-                                           const Scene& scene) {
+AtomicFile* openOutputFile(OutputSet& outputs, const std::string& path, const PointsArgs& args,
+                           const Scene& scene) {
   if (const auto kind = nonRegularKind(path)) {
     throw OutputError(path + " is " + *kind +
                       ", not a regular file: glint never replaces one; name a new or regular "
@@ -183,17 +183,18 @@ std::unique_ptr<AtomicFile> openOutputFile(const std::string& path, const Points
   inputs.addScene(args.scene_path, scene);
   inputs.add(args.points_path, "points file");
   inputs.requireNotAnInput(path);
-  return std::make_unique<AtomicFile>(path);
+  return &outputs.open(path);
 }
 
-std::unique_ptr<AtomicFile> openOutput(const PointsArgs& args, const Scene& scene) {
+// The table's file; none for standard output.
+AtomicFile* openOutput(OutputSet& outputs, const PointsArgs& args, const Scene& scene) {
   if (args.out_path == "-") return nullptr;
-  return openOutputFile(args.out_path, args, scene);
+  return openOutputFile(outputs, args.out_path, args, scene);
 }
 
 // The time series' file (with an engagement and --time-series), opened before the work as the
 // table's is; it may not be the table's own file.
-std::unique_ptr<AtomicFile> openTimeSeries(const PointsArgs& args, const Scene& scene) {
+AtomicFile* openTimeSeries(OutputSet& outputs, const PointsArgs& args, const Scene& scene) {
   if (!args.time_series_path) return nullptr;
   if (!scene.engagement) {
     throw InputError("--time-series: " + scene.source +
@@ -203,7 +204,7 @@ std::unique_ptr<AtomicFile> openTimeSeries(const PointsArgs& args, const Scene& 
                                   std::filesystem::path(args.out_path).lexically_normal()) {
     throw InputError("--time-series names the table's own file (--out)");
   }
-  return openOutputFile(*args.time_series_path, args, scene);
+  return openOutputFile(outputs, *args.time_series_path, args, scene);
 }
 
 // Every observer's result and the seconds they took.
@@ -250,13 +251,12 @@ Evaluated evaluateObservers(const FacetIntegrator& integrator, const std::vector
   return e;
 }
 
-// The table: to its file, committed, or to standard output.
-// Writes through @p write to @p file, committed, or to @p out.
+// Writes through @p write to @p file (committed with the command's other outputs), or to
+// @p out.
 template <class Write>
 void writeTo(AtomicFile* file, std::ostream& out, Write write) {
   if (file != nullptr) {
-    write(file->stream());
-    file->commit();
+    file->write(write);
   } else {
     write(out);
     out.flush();
@@ -319,13 +319,16 @@ void runPoints(const PointsArgs& requested, std::ostream& out, std::ostream& err
                         "split the points file, lower engagement.time.initial_intervals or raise "
                         "--memory");
   }
-  std::unique_ptr<AtomicFile> file;
-  std::unique_ptr<AtomicFile> series;
+  // The table and the time series appear together or not at all.
+  OutputSet outputs;
+  AtomicFile* file = nullptr;
+  AtomicFile* series = nullptr;
   if (writer) {
-    file = openOutput(args, scene);
-    series = openTimeSeries(args, scene);
+    file = openOutput(outputs, args, scene);
+    series = openTimeSeries(outputs, args, scene);
   }
-  if (file || series) pauseForTestsAfterTemporaries(err);
+  if (file != nullptr || series != nullptr) pauseForTestsAfterTemporaries(err);
+  const auto commit = [&] { outputs.commit([&] { pauseForTestsAfterFirstOutput(err); }); };
 
   std::unique_ptr<tbb::global_control> thread_limit;
   if (args.threads > 0) {
@@ -350,17 +353,16 @@ void runPoints(const PointsArgs& requested, std::ostream& out, std::ostream& err
                          args.terminal, "the observers", exchange);
     if (!writer) return;
     const std::vector<CsvColumn> columns = engagementColumns(results, scene.hazard);
-    // Both are written before either is committed: a value that cannot be written leaves
-    // neither file.
-    if (series) writeTimeSeriesCsv(series->stream(), results);
-    writeTo(file.get(), out, [&](std::ostream& s) { writeColumnsCsv(s, points, columns); });
-    if (series) series->commit();
+    if (series != nullptr) series->write([&](std::ostream& s) { writeTimeSeriesCsv(s, results); });
+    writeTo(file, out, [&](std::ostream& s) { writeColumnsCsv(s, points, columns); });
+    commit();
     if (!args.quiet) printEngagementSummary(err, scene, points, results, threads);
     return;
   }
   const Evaluated evaluated = evaluateObservers(integrator, points, args, watch, err, exchange);
   if (!writer) return;
-  writeTable(file.get(), out, points, evaluated.results, scene.hazard);
+  writeTable(file, out, points, evaluated.results, scene.hazard);
+  commit();
   if (!args.quiet) report(err, args, scene, integrator, points, evaluated, threads);
   // Even when quiet: an empty result that is not a safe one must not pass unremarked.
   for (const std::string& w : unlitTargetWarnings(scene, integrator.cullStats()))

@@ -516,7 +516,7 @@ void checkSurfaces(const RunContext& c, const FarResult& far, RunSummary& s) {
   if (!c.args.quiet) printSurfaceCheck(c.err, c.scene, check);
 }
 
-// summary.json, and every output committed together (rank 0).
+// summary.json, and every output committed together, summary.json last (rank 0).
 void finishRun(const RunContext& c, const std::filesystem::path& dir,
                const std::vector<std::string>& stale, RunSummary& s) {
   s.j["scene_path"] = sceneIdentity(c.args.scene_path);
@@ -526,7 +526,7 @@ void finishRun(const RunContext& c, const std::filesystem::path& dir,
   s.j["warnings"] = s.warnings;
   *c.outputs.summary() << s.j.dump(2) << "\n";
   c.watch.check("writing the outputs");  // a file written short of memory is not committed
-  c.outputs.commit();
+  c.outputs.commit([&] { pauseForTestsAfterFirstOutput(c.err); });
   // Even when quiet: an empty result that is not a safe one must not pass unremarked.
   for (const std::string& w : s.warnings) c.err << "glint run: warning: " << w << "\n";
   if (c.args.quiet) return;

@@ -429,7 +429,8 @@ RunOutputs::RunOutputs(const Scene& scene, const std::filesystem::path& dir,
       return;
     }
     inputs.requireNotAnInput(dir_ / name);  // a hard link to an input, named otherwise
-    files_.push_back(std::make_unique<AtomicFile>(dir_ / name));
+    // summary.json, which says the run finished, appears after every other output.
+    files_.push_back(&set_.open(dir_ / name, d.region == Region::Run));
   };
   for (const Declared& d : kOutputs) {
     if (!d.wanted(scene)) continue;
@@ -466,8 +467,9 @@ void RunOutputs::writeBox(BoxResults& box) {
     if (!i) continue;
     if (d->staged_folder) {
       amr_ = std::make_unique<StagedAmr>(writeAmr(dir_ / names_[*i], box.field, box.info.scaled));
+      amr_->addTo(set_);
     } else {
-      d->write(files_[*i]->stream(), box);
+      files_[*i]->write([&](std::ostream& out) { d->write(out, box); });
     }
   }
 }
@@ -479,7 +481,7 @@ void RunOutputs::writePlane(std::size_t index, const PlaneResults& plane) {
   placed.plane_name = plane_names_.at(index);
   for (const Declared* d : writingOrder(Region::Plane)) {
     if (const std::optional<std::size_t> i = slotOf(*d, index))
-      d->write(files_[*i]->stream(), placed);
+      files_[*i]->write([&](std::ostream& out) { d->write(out, placed); });
   }
 }
 
@@ -490,21 +492,23 @@ void RunOutputs::writeEngagementPlane(std::size_t index, const EngagementPlaneRe
   placed.plane_name = plane_names_.at(index);
   for (const Declared* d : writingOrder(Region::EngagementPlane)) {
     if (const std::optional<std::size_t> i = slotOf(*d, index))
-      d->write(files_[*i]->stream(), placed);
+      files_[*i]->write([&](std::ostream& out) { d->write(out, placed); });
   }
 }
 
 void RunOutputs::writeEngagementBox(const EngagementBoxResults& box) {
   if (!writer_) return;
   for (const Declared* d : writingOrder(Region::EngagementBox)) {
-    if (const std::optional<std::size_t> i = slotOf(*d, 0)) d->write(files_[*i]->stream(), box);
+    if (const std::optional<std::size_t> i = slotOf(*d, 0))
+      files_[*i]->write([&](std::ostream& out) { d->write(out, box); });
   }
 }
 
 void RunOutputs::writeFar(const FarResults& far) {
   if (!writer_) return;
   for (const Declared* d : writingOrder(Region::Far)) {
-    if (const std::optional<std::size_t> i = slotOf(*d, 0)) d->write(files_[*i]->stream(), far);
+    if (const std::optional<std::size_t> i = slotOf(*d, 0))
+      files_[*i]->write([&](std::ostream& out) { d->write(out, far); });
   }
 }
 
@@ -513,16 +517,12 @@ void RunOutputs::writeReach(const ReachResults& reach) {
   ReachResults placed = reach;
   placed.site = site_.get();
   for (const Declared* d : writingOrder(Region::Reach)) {
-    if (const std::optional<std::size_t> i = slotOf(*d, 0)) d->write(files_[*i]->stream(), placed);
+    if (const std::optional<std::size_t> i = slotOf(*d, 0))
+      files_[*i]->write([&](std::ostream& out) { d->write(out, placed); });
   }
 }
 
-void RunOutputs::commit() {
-  for (const auto& f : files_) {
-    if (f) f->commit();
-  }
-  if (amr_) amr_->commit();
-}
+void RunOutputs::commit(const std::function<void()>& after_first) { set_.commit(after_first); }
 
 namespace {
 
@@ -537,7 +537,7 @@ std::vector<std::string> writeScenarioMaps(const Scene& scene, const std::filesy
     if (!d->scenario || !d->wanted(scene)) continue;
     names.push_back(d->fileName(plane));
     AtomicFile file(dir / names.back());
-    d->write(file.stream(), results);
+    file.write([&](std::ostream& out) { d->write(out, results); });
     file.commit();
   }
   return names;

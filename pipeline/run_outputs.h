@@ -8,12 +8,14 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
 
+#include "export/atomic_file.h"
 #include "export/exr_map.h"
 #include "export/field_files.h"
 #include "export/lattice_vdb.h"
@@ -26,7 +28,6 @@
 
 namespace glint {
 
-class AtomicFile;
 class FacetIntegrator;
 class InputFiles;
 class StagedAmr;
@@ -88,7 +89,8 @@ struct ReachResults {
 /// is opened before the work (so that an unwritable folder or a path that must not be replaced
 /// stops the run at once), written from its region's results when that region is done (one
 /// region's field in memory at a time), and all are committed together once every check has
-/// passed.
+/// passed, as one OutputSet: all appear, summary.json last, or none does and the folder is as
+/// it was.
 class RunOutputs {
  public:
   /// @brief Opens every output @p scene's run writes into @p dir (none unless @p writer).
@@ -115,9 +117,10 @@ class RunOutputs {
   /// @brief Where summary.json is written (none unless a writer).
   [[nodiscard]] std::ostream* summary();
 
-  /// @brief Renames every output over its final name.
-  /// @throw OutputError when one cannot be written.
-  void commit();
+  /// @brief Moves every output over its final name, summary.json last (OutputSet::commit(),
+  /// which calls @p after_first once the first is in place).
+  /// @throw OutputError when one cannot be written; then none is in place.
+  void commit(const std::function<void()>& after_first = {});
 
   /// @brief An entry of the list of outputs (run_outputs.cpp).
   struct Declared;
@@ -131,11 +134,12 @@ class RunOutputs {
   bool writer_;
   std::vector<std::string> names_;
   std::vector<std::string> far_names_;
-  // By the index of names_: each output's entry, its plane (a plane's) and its file (null for a
-  // staged folder, or when not the writer).
+  OutputSet set_;  ///< every file, committed together
+  // By the index of names_: each output's entry, its plane (a plane's) and its file in set_
+  // (null for a staged folder, or when not the writer).
   std::vector<const Declared*> declared_;
   std::vector<std::size_t> planes_;
-  std::vector<std::unique_ptr<AtomicFile>> files_;
+  std::vector<AtomicFile*> files_;
   std::unique_ptr<StagedAmr> amr_;
   std::vector<std::string> plane_names_;  ///< the scene's planes, by index
   std::unique_ptr<SiteFrame> site_;       ///< the scene's site, where it has one

@@ -1,21 +1,27 @@
 #pragma once
 /// @file
-/// @brief A pause point for tests: with GLINT_TEST_PAUSE_AFTER=temporaries in its environment,
-/// glint stops once its output temporaries exist and waits for a signal, so that a test can
-/// interrupt it there however fast or loaded the machine is (tests/pipeline/interrupt_test.sh).
+/// @brief Pause points for tests: with GLINT_TEST_PAUSE_AFTER set in its environment, glint stops
+/// at the point it names and waits for a signal, so that a test can interrupt it there however
+/// fast or loaded the machine is (tests/pipeline/interrupt_test.sh).
 
 #include <ostream>
 
 namespace glint {
 
-/// @brief The environment variable, and the value that pauses after the outputs' temporaries
-/// are created.
+/// @brief The environment variable, and its values: pause once the outputs' temporaries are
+/// created, or once the first of a command's outputs is in place and the others are not yet.
 inline constexpr const char* kTestPauseVariable = "GLINT_TEST_PAUSE_AFTER";
 inline constexpr const char* kTestPauseAfterTemporaries = "temporaries";
+inline constexpr const char* kTestPauseAfterFirstOutput = "first-output";
 
 /// @brief If GLINT_TEST_PAUSE_AFTER is `temporaries`, says so on @p err (a line starting
 /// "glint: paused") and blocks until a signal ends the process; otherwise returns at once.
 /// Call it right after the run has created all its output temporaries.
 void pauseForTestsAfterTemporaries(std::ostream& err);
+
+/// @brief If GLINT_TEST_PAUSE_AFTER is `first-output`, says so on @p err (a line starting
+/// "glint: paused") and blocks until a signal ends the process; otherwise returns at once.
+/// For OutputSet::commit()'s `after_first`: one output is then in place, the others not.
+void pauseForTestsAfterFirstOutput(std::ostream& err);
 
 }  // namespace glint

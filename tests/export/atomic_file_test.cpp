@@ -1,9 +1,11 @@
 // Output files in a folder others may write to: the temporary cannot be predicted or
 // redirected, a target that is not a regular file (a link, a device, a FIFO) is refused
-// rather than replaced or followed, and temporaries of processes that died are swept.
+// rather than replaced or followed, and temporaries of processes that died are swept. A set of
+// outputs appears together or not at all, however its commit is cut short.
 #include "export/atomic_file.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 #include <sys/wait.h>
@@ -13,10 +15,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
+
+#include "support/files.h"
 
 namespace glint {
 namespace {
@@ -268,6 +273,187 @@ TEST(AtomicFile, ASignalOnAnyThreadDuringCreationLeavesNoTemporary) {
   EXPECT_GE(mid_creation, kTrials / 3)
       << "only " << mid_creation << " of " << kTrials
       << " signals landed while a file was being created: the test did not test that";
+}
+
+// An earlier run's outputs: a folder of blocks, its index, a map and a summary.
+void plantEarlierRun(const fs::path& dir) {
+  fs::create_directories(dir / "blocks");
+  std::ofstream(dir / "blocks" / "old_0.vti") << "earlier block";
+  std::ofstream(dir / "index.vthb") << "earlier index";
+  std::ofstream(dir / "map.exr") << "earlier map";
+  std::ofstream(dir / "summary.json") << "earlier summary";
+}
+
+// A folder of blocks and its index written whole into @p scratch, as VTK writes an AMR data set
+// (export/vtk_files.h), for @p set to move beside its files.
+void stageBlocks(OutputSet& set, const fs::path& dir, const fs::path& scratch) {
+  fs::create_directories(scratch / "blocks");
+  std::ofstream(scratch / "blocks" / "new_0.vti") << "new block";
+  std::ofstream(scratch / "index.vthb") << "new index";
+  set.addStaged(scratch / "blocks", dir / "blocks", scratch);
+  set.addStaged(scratch / "index.vthb", dir / "index.vthb", scratch);
+}
+
+TEST(OutputSet, EveryOutputAppearsTogetherSummaryLastAndNothingIsLeftAside) {
+  const fs::path dir = freshFolder("set_commit");
+  plantEarlierRun(dir);
+  const fs::path scratch = dir / (".index.vthb.glint-" + std::to_string(::getpid()) + "-Abcdefgh");
+  {
+    OutputSet set;
+    set.open(dir / "summary.json", true).stream() << "new summary";
+    set.open(dir / "map.exr").stream() << "new map";
+    set.open(dir / "new.csv").stream() << "new table";
+    stageBlocks(set, dir, scratch);
+    bool paused = false;
+    set.commit([&] {
+      paused = true;
+      EXPECT_EQ(contents(dir / "map.exr"), "new map") << "the first output is in place";
+      EXPECT_EQ(contents(dir / "summary.json"), "earlier summary") << "summary.json comes last";
+    });
+    EXPECT_TRUE(paused) << "after_first is called between the first move and the next";
+  }
+  fs::remove_all(scratch);  // the caller's (StagedAmr's), emptied of the earlier blocks
+  const std::map<std::string, std::string> expected = {
+      {"blocks", "/"},        {"blocks/new_0.vti", "new block"}, {"index.vthb", "new index"},
+      {"map.exr", "new map"}, {"new.csv", "new table"},          {"summary.json", "new summary"}};
+  EXPECT_EQ(test::folderContents(dir), expected)
+      << "every output replaced, no earlier file kept aside";
+  fs::remove_all(dir);
+}
+
+TEST(OutputSet, AMoveThatFailsHalfWayPutsBackEveryEarlierFile) {
+  const fs::path dir = freshFolder("set_half_way");
+  plantEarlierRun(dir);
+  const std::map<std::string, std::string> before = test::folderContents(dir);
+  const fs::path scratch = dir / (".index.vthb.glint-" + std::to_string(::getpid()) + "-Abcdefgh");
+  {
+    OutputSet set;
+    set.open(dir / "summary.json", true).stream() << "new summary";
+    stageBlocks(set, dir, scratch);
+    set.open(dir / "new.csv").stream() << "new table";
+    AtomicFile& map = set.open(dir / "map.exr");
+    map.stream() << "new map";
+    try {
+      // The blocks go first; then the index, the table; the map's temporary is gone by then,
+      // so its rename fails with three outputs in place, two of them over earlier ones.
+      set.commit([&] { fs::remove(map.temporaryPath()); });
+      ADD_FAILURE() << "a move failed and the commit said nothing";
+    } catch (const OutputError& e) {
+      const std::string said = e.what();
+      EXPECT_NE(said.find("cannot write " + (dir / "map.exr").string()), std::string::npos) << said;
+      EXPECT_NE(said.find("the outputs already in place were taken back"), std::string::npos)
+          << said;
+    }
+  }
+  fs::remove_all(scratch);
+  EXPECT_EQ(test::folderContents(dir), before)
+      << "the folder is as it was: the earlier files back, the "
+         "new ones gone, nothing aside";
+  fs::remove_all(dir);
+}
+
+// SIGTERM lands after the first output (a folder replacing an earlier one) is in place: the
+// handler puts the earlier folder back and takes away the rest.
+TEST(OutputSet, AnInterruptBetweenTwoMovesLeavesTheFolderAsItWas) {
+  const fs::path dir = freshFolder("set_interrupt");
+  plantEarlierRun(dir);
+  const std::map<std::string, std::string> before = test::folderContents(dir);
+  int ready[2], err[2];
+  ASSERT_EQ(::pipe(ready), 0);
+  ASSERT_EQ(::pipe(err), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    if (::dup2(err[1], STDERR_FILENO) < 0) ::_exit(5);
+    installInterruptCleanup();
+    try {
+      const fs::path scratch =
+          dir / (".index.vthb.glint-" + std::to_string(::getpid()) + "-Abcdefgh");
+      fs::create_directories(scratch);
+      removeOnInterrupt(scratch, InterruptCleanup::RemoveTree);  // as StagedAmr does
+      OutputSet set;
+      stageBlocks(set, dir, scratch);
+      set.open(dir / "map.exr").stream() << "new map";
+      set.open(dir / "summary.json", true).stream() << "new summary";
+      set.commit([&] {
+        const char byte = 1;
+        if (::write(ready[1], &byte, 1) != 1) ::_exit(4);
+        for (;;) ::pause();
+      });
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s\n", e.what());
+    }
+    ::_exit(3);
+  }
+  ::close(err[1]);
+  ::close(ready[1]);
+  char byte = 0;
+  ASSERT_EQ(::read(ready[0], &byte, 1), 1) << "the child paused after its first move";
+  ::close(ready[0]);
+  EXPECT_EQ(contents(dir / "blocks" / "new_0.vti"), "new block") << "the first move was made";
+  ::kill(child, SIGTERM);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  std::string message;
+  char chunk[256];
+  for (ssize_t n; (n = ::read(err[0], chunk, sizeof chunk)) > 0;)
+    message.append(chunk, static_cast<std::size_t>(n));
+  ::close(err[0]);
+  ASSERT_TRUE(WIFEXITED(status)) << status;
+  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGTERM) << message;
+  // The two temporaries, the staging folder (with the new index in it) and the earlier
+  // blocks back.
+  EXPECT_NE(message.find("interrupted by SIGTERM; removed 3 unfinished output file(s) and put "
+                         "back 1 earlier one(s)"),
+            std::string::npos)
+      << message;
+  EXPECT_EQ(test::folderContents(dir), before) << "the folder is as it was";
+  fs::remove_all(dir);
+}
+
+// A file system that refuses a byte (here EFBIG: a file-size limit, which needs no mount) in
+// the middle of a library's writer: one OutputError naming the file and the reason, whatever the
+// library made of it, and no temporary left.
+TEST(AtomicFile, AWriteTheFileSystemRefusesIsAnOutputErrorNamingTheFileAndTheReason) {
+  const fs::path dir = freshFolder("refused");
+  int err[2];
+  ASSERT_EQ(::pipe(err), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::close(err[0]);
+    std::string said = "no exception";
+    ::signal(SIGXFSZ, SIG_IGN);  // the write fails with EFBIG instead of ending the process
+    const rlimit limit{200000, 200000};
+    if (::setrlimit(RLIMIT_FSIZE, &limit) != 0) ::_exit(4);
+    try {
+      AtomicFile f(dir / "map.exr");
+      f.write([](std::ostream& out) {
+        const std::string block(1 << 16, 'x');
+        for (int i = 0; i < 8; ++i)
+          out.write(block.data(), static_cast<std::streamsize>(block.size()));
+        if (!out) throw std::runtime_error("the library's own words for a bad stream");
+      });
+    } catch (const OutputError& e) {
+      said = std::string("OutputError: ") + e.what();
+    } catch (const std::exception& e) {
+      said = std::string("another exception: ") + e.what();
+    }
+    if (::write(err[1], said.data(), said.size()) < 0) ::_exit(5);
+    ::_exit(0);
+  }
+  ::close(err[1]);
+  std::string said;
+  char chunk[256];
+  for (ssize_t n; (n = ::read(err[0], chunk, sizeof chunk)) > 0;)
+    said.append(chunk, static_cast<std::size_t>(n));
+  ::close(err[0]);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+  EXPECT_EQ(said, "OutputError: cannot write " + (dir / "map.exr").string() + ": File too large");
+  EXPECT_TRUE(fs::is_empty(dir)) << "the temporary is removed";
+  fs::remove_all(dir);
 }
 
 }  // namespace

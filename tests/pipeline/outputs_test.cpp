@@ -1,6 +1,7 @@
 // What an output may replace: never a device, a FIFO or a link (the system's /dev/full was
 // once left a regular file), never one of the command's own inputs, whatever name it is given,
-// and no output folder that holds an input.
+// and no output folder that holds an input. A command whose disk fills leaves its folder as it
+// was, with one message naming the file.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
@@ -8,6 +9,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -15,6 +17,7 @@
 #include "pipeline/output_folder.h"
 #include "support/cli.h"
 #include "support/files.h"
+#include "support/small_disk.h"
 
 namespace glint {
 namespace {
@@ -24,6 +27,11 @@ using test::glint;
 using test::Outcome;
 
 using test::readFile;
+
+using test::folderContents;
+using test::SmallDisk;
+using test::tmpfsPages;
+using test::tmpfsPagesUnder;
 
 std::size_t entries(const fs::path& dir) {
   return static_cast<std::size_t>(
@@ -205,6 +213,104 @@ TEST_F(Outputs, RunHoldsItsFolderAndAFailedRunTakesAwayOnlyTheFoldersItMade) {
   EXPECT_EQ(failed_in_held.status, 2) << failed_in_held.err;
   EXPECT_TRUE(fs::is_directory(held)) << "a folder the run did not make stays";
   EXPECT_EQ(entries(held), 0u) << "and holds no temporary or lock file";
+}
+
+// The full-disk tests fill a tmpfs of their own, mounted in the test's folder.
+#define REQUIRE_MOUNTED(disk)                                   \
+  if (!(disk).mounted())                                        \
+  GTEST_SKIP() << "cannot mount a tmpfs here (" << (disk).why() \
+               << "): the full-disk tests need root and CAP_SYS_ADMIN"
+
+// The message a full disk must give: one line, exit status 2, the file and the reason.
+void expectFullDiskMessage(const Outcome& r, const fs::path& file) {
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_EQ(r.err, "glint: error: cannot write " + file.string() + ": No space left on device\n");
+}
+
+TEST_F(Outputs, AFullDiskLeavesNoFileOfTheRun) {
+  // Two coarse planes and a coarse far field: five files, about 2 s a run.
+  nlohmann::json scene =
+      nlohmann::json::parse(readFile(fs::path(GLINT_EXAMPLES_DIR) / "cylinder_planes.json"));
+  scene["planes"][0]["pixel_m"] = 0.5;
+  scene["planes"][0]["block_m"] = 4.0;
+  scene["planes"][0]["name"] = "first";
+  scene["planes"][1] = scene["planes"][0];
+  scene["planes"][1]["name"] = "second";
+  scene["planes"][1]["origin"][2] = 0.0;
+  scene["far_field"] = {{"face_pixels", 32}};
+  const fs::path tiny = dir_ / "tiny.json";
+  std::ofstream(tiny) << scene.dump();
+  const fs::path measured = dir_ / "measured";
+  const Outcome first = glint({"run", tiny.string(), "-o", measured.string(), "--quiet"});
+  ASSERT_EQ(first.status, 0) << first.err;
+  const nlohmann::json files = nlohmann::json::parse(readFile(measured / "summary.json"))["files"];
+  ASSERT_EQ(files.size(), 5u) << files.dump();
+
+  // Room for the lock file and all the run's outputs but one page: the disk fills as the run
+  // closes summary.json, its last, with every other output whole.
+  SmallDisk disk(dir_ / "disk", 1 + tmpfsPagesUnder(measured) - 1);
+  REQUIRE_MOUNTED(disk);
+  const fs::path out = dir_ / "disk" / "out";
+  fs::create_directories(out);
+  const Outcome full = glint({"run", tiny.string(), "-o", out.string(), "--quiet"});
+  expectFullDiskMessage(full, out / "summary.json");
+  EXPECT_EQ(folderContents(out), (std::map<std::string, std::string>{}))
+      << "no output, no temporary, no lock file";
+}
+
+TEST_F(Outputs, AFullDiskLeavesNeitherThePointsTableNorTheTimeSeries) {
+  const fs::path data = GLINT_TEST_DATA_DIR;
+  const auto run = [&](const fs::path& table, const fs::path& series) {
+    return glint({"points", (data / "engagement_mpi.json").string(), "--points",
+                  (data / "engagement_points.csv").string(), "--out", table.string(),
+                  "--time-series", series.string(), "--quiet"});
+  };
+  const Outcome measured = run(dir_ / "table.csv", dir_ / "series.csv");
+  ASSERT_EQ(measured.status, 0) << measured.err;
+  // Room for the table and all of the time series but its last page.
+  SmallDisk disk(dir_ / "disk", tmpfsPages(fs::file_size(dir_ / "table.csv")) +
+                                    tmpfsPages(fs::file_size(dir_ / "series.csv")) - 1);
+  REQUIRE_MOUNTED(disk);
+  const Outcome full = run(dir_ / "disk" / "table.csv", dir_ / "disk" / "series.csv");
+  expectFullDiskMessage(full, dir_ / "disk" / "series.csv");
+  EXPECT_TRUE(fs::is_empty(dir_ / "disk")) << "neither file, nor a temporary";
+}
+
+TEST_F(Outputs, AFullDiskLeavesNoStudyFileAndTheStudyResumesItsScenarios) {
+  // The batch tests' study, coarse, one scenario: about 3 s.
+  nlohmann::json base =
+      nlohmann::json::parse(readFile(fs::path(GLINT_TEST_DATA_DIR) / "study_scene.json"));
+  base["observers"]["voxel_m"] = 0.8;
+  base["planes"][0]["pixel_m"] = 0.4;
+  base["far_field"] = {{"enabled", false}};
+  std::ofstream(dir_ / "base.json") << base.dump();
+  const fs::path study = dir_ / "study.json";
+  std::ofstream(study) << R"({"scene": "base.json", "sweep": {"pitch_deg": [4]}})";
+  const fs::path measured = dir_ / "measured";
+  const Outcome first = glint({"batch", study.string(), "-o", measured.string(), "--quiet"});
+  ASSERT_EQ(first.status, 0) << first.err;
+
+  // Room for the scenario, the lock file, scenarios.csv and half of box.vdb.
+  SmallDisk disk(dir_ / "disk", tmpfsPagesUnder(measured / "scenarios") + 1 +
+                                    tmpfsPages(fs::file_size(measured / "scenarios.csv")) +
+                                    tmpfsPages(fs::file_size(measured / "box.vdb")) / 2);
+  REQUIRE_MOUNTED(disk);
+  const fs::path out = dir_ / "disk" / "out";
+  const Outcome full = glint({"batch", study.string(), "-o", out.string(), "--quiet"});
+  expectFullDiskMessage(full, out / "box.vdb");
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(out)) left.push_back(e.path().filename().string());
+  EXPECT_EQ(left, std::vector<std::string>{"scenarios"})
+      << "no scenarios.csv, map or summary.json; the finished scenario stays";
+  EXPECT_TRUE(fs::exists(out / "scenarios" / "s000000" / "result.json"));
+
+  // With room, the next run takes the scenario up and writes the study's files.
+  ASSERT_TRUE(disk.resize(4096));
+  const Outcome resumed = glint({"batch", study.string(), "-o", out.string()});
+  ASSERT_EQ(resumed.status, 0) << resumed.err;
+  EXPECT_NE(resumed.err.find("(1 done before, 0 to run)"), std::string::npos) << resumed.err;
+  for (const char* name : {"scenarios.csv", "box.vdb", "ground.exr", "summary.json"})
+    EXPECT_TRUE(fs::is_regular_file(out / name)) << name;
 }
 
 }  // namespace

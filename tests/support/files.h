@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 
@@ -16,6 +17,17 @@ inline std::string readFile(const std::filesystem::path& path) {
   std::ostringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+/// @brief Everything under @p dir: each file's bytes and each folder (as "/"), by path relative
+/// to @p dir; what a test compares to say a folder is as it was.
+inline std::map<std::string, std::string> folderContents(const std::filesystem::path& dir) {
+  std::map<std::string, std::string> all;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir)) {
+    all[std::filesystem::relative(e.path(), dir).string()] =
+        e.is_directory() ? std::string("/") : readFile(e.path());
+  }
+  return all;
 }
 
 /// @brief An empty folder named @p prefix and the running test's name in the temporary folder
