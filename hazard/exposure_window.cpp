@@ -147,17 +147,6 @@ WindowHazard worstWindow(std::span<const double> time_s, std::span<const double>
   return worst;
 }
 
-ExposureVerdict judgeExposure(std::span<const double> time_s,
-                              std::span<const double> irradiance_w_m2, double peak_w_m2,
-                              const HazardSpec& hazard, double longest_s) {
-  ExposureVerdict v;
-  v.window = worstWindow(time_s, irradiance_w_m2, hazard, longest_s);
-  v.aided_ratio = v.window.ratio * hazard.aidGain();
-  v.time_above_mpe_s = timeAtOrAbove(time_s, irradiance_w_m2, hazard.mpe_w_m2);
-  v.stare_ratio = hazard.ratio(peak_w_m2);
-  return v;
-}
-
 double timeAtOrAbove(std::span<const double> time_s, std::span<const double> irradiance_w_m2,
                      double threshold_w_m2) {
   CompensatedSum above;

@@ -3,7 +3,9 @@
 /// @brief The hazard of an exposure that varies in time (an engagement: a glint sweeping past an
 /// eye), judged as the standards judge a varying exposure: for every exposure duration t, the
 /// largest radiant exposure any window of length t collects, against the MPE for t
-/// (ANSI Z136.1-2014 8.2.3 applies the same to the windows of a pulse train; docs/hazard.md).
+/// (ANSI Z136.1-2014 8.2.3 applies the same to the windows of a pulse train; docs/hazard.md):
+/// rules 1 and 2 of the repetitive-pulse rules. Rule 3 and the verdict that joins them are
+/// hazard/exposure_train.h's.
 
 #include <span>
 
@@ -38,24 +40,6 @@ struct WindowExposure {
 };
 WindowExposure largestWindowExposure(std::span<const double> time_s,
                                      std::span<const double> irradiance_w_m2, double duration_s);
-
-/// @brief What an engagement's irradiance history at one observer means for the eye.
-struct ExposureVerdict {
-  WindowHazard window;  ///< the worst window, unaided
-  /// The worst window through the optical aid: its gain scales every window's exposure alike,
-  /// so the ratio is the gain times the unaided one (the unaided ratio without an aid).
-  double aided_ratio = 0.0;
-  double time_above_mpe_s = 0.0;  ///< at or above the stare MPE (HazardSpec::mpe_w_m2)
-  /// The per-pose verdict: the peak irradiance as if stared at for the whole exposure
-  /// (peak / HazardSpec::mpe_w_m2), what judging each pose alone would report.
-  double stare_ratio = 0.0;
-};
-
-/// @brief The verdict of the history (@p time_s, @p irradiance_w_m2) whose peak is
-/// @p peak_w_m2, windows up to @p longest_s.
-ExposureVerdict judgeExposure(std::span<const double> time_s,
-                              std::span<const double> irradiance_w_m2, double peak_w_m2,
-                              const HazardSpec& hazard, double longest_s);
 
 /// @brief How long (s) the piecewise-linear irradiance is at or above @p threshold_w_m2.
 double timeAtOrAbove(std::span<const double> time_s, std::span<const double> irradiance_w_m2,

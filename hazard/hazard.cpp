@@ -8,10 +8,6 @@
 namespace glint {
 namespace {
 
-// t_min of ANSI Z136.1-2014 (IEC 60825-1:2014: T_i): the break point of the single-pulse rows
-// of Table 5a, below which the retina integrates a pulse's energy as if it were one instant.
-double tMinS(double wavelength_nm) { return wavelength_nm < 1050.0 ? 5e-6 : 13e-6; }
-
 // The retinal hazard region, where rule 3 and the grouping of close pulses apply.
 bool retinal(double wavelength_nm) { return wavelength_nm < 1400.0; }
 
@@ -28,39 +24,43 @@ double defaultExposureS(double wavelength_nm, Tissue tissue) {
   return wavelength_nm <= 700.0 ? 0.25 : 10.0;
 }
 
-namespace {
+double pulseGroupingS(double wavelength_nm, Tissue tissue) {
+  if (tissue != Tissue::Eye || !retinal(wavelength_nm)) return 0.0;
+  return wavelength_nm < 1050.0 ? 5e-6 : 13e-6;
+}
 
-// Rule 3's reduction of the single pulse's limit for @p groups pulses (or groups) of
-// @p duration_s each over @p exposure_s.
-double ruleThreeReduction(const PulseTrainMpe& r, double wavelength_nm, double duration_s,
-                          double rate_hz, double exposure_s, SafetyStandard standard,
-                          double& counted) {
-  if (standard == SafetyStandard::AnsiZ136_1_2014) {
-    counted = r.pulses;
-    return std::pow(r.pulses, -0.25);  // ANSI Z136.1-2014 8.2.3.3: C_P = n^-0.25
-  }
+bool ruleThreeApplies(double wavelength_nm, Tissue tissue, MpeLimit limit) {
+  return tissue == Tissue::Eye && retinal(wavelength_nm) && limit == MpeLimit::Thermal;
+}
+
+double ruleThreeCountingS(SafetyStandard standard, double exposure_s) {
   // IEC 60825-1:2014 A.3 (4.3 f) 3)) for α ≤ α_min: N counts the pulses within T2 (10 s for a
-  // point source) or the exposure if shorter. Pulses no longer than T_i reduce the limit only
-  // beyond 600 of them, to 5 N^-0.25 and never below 0.4; longer pulses, for sources smaller
-  // than 5 mrad, not at all.
-  counted = rate_hz * std::min(exposure_s, 10.0);
-  if (duration_s > tMinS(wavelength_nm) * (1.0 + 1e-12)) return 1.0;
+  // point source) or the exposure if shorter; ANSI Z136.1-2014 8.2.3.3 the n of the exposure.
+  return standard == SafetyStandard::AnsiZ136_1_2014 ? exposure_s : std::min(exposure_s, 10.0);
+}
+
+double ruleThreeReduction(SafetyStandard standard, double wavelength_nm, double duration_s,
+                          double counted) {
+  if (standard == SafetyStandard::AnsiZ136_1_2014) {
+    return std::pow(counted, -0.25);  // ANSI Z136.1-2014 8.2.3.3: C_P = n^-0.25
+  }
+  // IEC: pulses no longer than T_i reduce the limit only beyond 600 of them, to 5 N^-0.25 and
+  // never below 0.4; longer pulses, for sources smaller than 5 mrad, not at all.
+  if (duration_s > pulseGroupingS(wavelength_nm) * (1.0 + 1e-12)) return 1.0;
   if (counted <= 600.0) return 1.0;
   return std::max(5.0 * std::pow(counted, -0.25), 0.4);
 }
 
-}  // namespace
-
 PulseTrainMpe pulseTrainMpe(double wavelength_nm, const PulseSpec& pulse, double exposure_s,
                             SafetyStandard standard, Tissue tissue) {
   const double f = *pulse.repetition_rate_hz;
-  const bool eye_retina = tissue == Tissue::Eye && retinal(wavelength_nm);
+  const double grouping_s = pulseGroupingS(wavelength_nm, tissue);
   PulseTrainMpe r;
   double duration_s = pulse.duration_s;
   double rate_hz = f;
-  if (eye_retina && 1.0 / f < tMinS(wavelength_nm)) {
+  if (1.0 / f < grouping_s) {
     r.grouped = true;
-    duration_s = tMinS(wavelength_nm);
+    duration_s = grouping_s;
     rate_hz = 1.0 / duration_s;
   }
   r.pulses = rate_hz * exposure_s;
@@ -76,9 +76,9 @@ PulseTrainMpe pulseTrainMpe(double wavelength_nm, const PulseSpec& pulse, double
   }
   // Rule 3 guards against the additive heating of the retina by many pulses: the eye's
   // thermal limit only.
-  if (eye_retina && single.limit == MpeLimit::Thermal) {
-    r.c_p = ruleThreeReduction(r, wavelength_nm, duration_s, rate_hz, exposure_s, standard,
-                               r.reduction_pulses);
+  if (ruleThreeApplies(wavelength_nm, tissue, single.limit)) {
+    r.reduction_pulses = rate_hz * ruleThreeCountingS(standard, exposure_s);
+    r.c_p = ruleThreeReduction(standard, wavelength_nm, duration_s, r.reduction_pulses);
     r.reduced_j_m2 = r.single_pulse_j_m2 * r.c_p;
     if (r.reduced_j_m2 < limit) {
       limit = r.reduced_j_m2;

@@ -52,6 +52,29 @@ struct PulseTrainMpe {
   int rule = 1;                   ///< which of the three set it
 };
 
+/// @brief t_min of ANSI Z136.1-2014 (IEC 60825-1:2014: T_i) at @p wavelength_nm for @p tissue:
+/// 5 µs below 1050 nm, 13 µs to 1400 nm, for the eye's retina only (0 beyond 1400 nm and for
+/// the skin). Pulses closer than this act as one pulse of this duration carrying their summed
+/// energy, and IEC's C5 reduces only pulses no longer than it.
+double pulseGroupingS(double wavelength_nm, Tissue tissue = Tissue::Eye);
+
+/// @brief Whether rule 3 applies to a pulse whose single-pulse MPE is limited by @p limit: the
+/// eye's retinal thermal limits (400–1400 nm), which guard against the additive heating of the
+/// retina by many pulses.
+bool ruleThreeApplies(double wavelength_nm, Tissue tissue, MpeLimit limit);
+
+/// @brief The span over which rule 3 counts pulses for an exposure of @p exposure_s: the whole
+/// exposure under ANSI (its n), T2 = 10 s (a point source) or the exposure if shorter under IEC
+/// (its N).
+double ruleThreeCountingS(SafetyStandard standard, double exposure_s);
+
+/// @brief Rule 3's reduction of the single-pulse limit of pulses of @p duration_s when
+/// @p counted pulses (ruleThreeCountingS()) are counted: ANSI's C_P = n^-0.25; IEC's C5, for
+/// pulses no longer than T_i 1 up to 600 pulses and 5 N^-0.25 (at least 0.4) beyond, and 1 for
+/// longer pulses. The caller checks ruleThreeApplies().
+double ruleThreeReduction(SafetyStandard standard, double wavelength_nm, double duration_s,
+                          double counted);
+
 /// @brief The MPE per pulse of @p pulse repeated over @p exposure_s at @p wavelength_nm, for
 /// @p tissue under @p standard.
 /// @pre the pulse has a repetition rate, duration × rate ≤ 1 and rate × exposure ≥ 1; the MPE

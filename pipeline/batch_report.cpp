@@ -536,7 +536,7 @@ nlohmann::json scenarioEngagementRegionJson(const StudyLattice& r, const Engagem
   j.erase("file");
   double peak = 0.0, aided_peak = 0.0;
   for (const ExposureVerdict& v : region.results.verdicts) {
-    peak = std::max(peak, v.window.ratio);
+    peak = std::max(peak, v.ratio);
     aided_peak = std::max(aided_peak, v.aided_ratio);
   }
   const std::string extent = r.plane ? "hazardous_area_m2" : "hazard_volume_m3";

@@ -150,7 +150,7 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
   CLI::Option* time_series_opt = points_cmd->add_option(
       "--time-series", time_series,
       "With an engagement: every observer's irradiance samples to this CSV file "
-      "(observer,time_s,irradiance_w_m2)");
+      "(observer,time_s,irradiance_w_m2,pulse: the pulse rule 3 counted it in, 0 between)");
 
   RunArgs run;
   CLI::App* run_cmd = app.add_subcommand(

@@ -23,13 +23,33 @@ namespace {
 constexpr std::string_view kEngagementAdvice =
     "Raise --memory, or loosen engagement.time.tolerance, or give fewer observer points";
 
-// The row of @p results with the largest worst-window ratio (0 when empty).
+// The row of @p results with the largest verdict (0 when empty).
 std::size_t worstRow(const EngagementResults& results) {
   std::size_t worst = 0;
   for (std::size_t i = 0; i < results.verdicts.size(); ++i) {
-    if (results.verdicts[i].window.ratio > results.verdicts[worst].window.ratio) worst = i;
+    if (results.verdicts[i].ratio > results.verdicts[worst].ratio) worst = i;
   }
   return worst;
+}
+
+// What sets the verdict @p v, in words: "rule 3, a train of 101 pulses: C_P 0.315, its strongest
+// 0.329 over 7.69e-05 s", or "rule 1 (its worst window, within one pulse)".
+std::string decidedBy(const ExposureVerdict& v) {
+  if (v.rule == DecidingRule::Train) {
+    return std::string("rule 3, a train of ") + std::to_string(v.train.pulses) +
+           (v.train.grouped ? " pulses (or groups within t_min): " : " pulses: ") +
+           v.train.reduction_name + " " + formatNumber("%.3g", v.train.reduction) +
+           ", its strongest " + formatNumber("%.3g", v.train.pulse.ratio) + " over " +
+           formatNumber("%.3g", v.train.pulse.duration_s) + " s";
+  }
+  switch (v.rule) {
+    case DecidingRule::SinglePulse:
+      return "rule 1 (its worst window, within one pulse)";
+    case DecidingRule::Average:
+      return "rule 2 (its worst window, over several pulses)";
+    default:
+      return toString(v.rule);
+  }
 }
 
 }  // namespace
@@ -71,7 +91,8 @@ EngagementResults judgeEngagement(std::vector<ExposureHistory> histories, const 
   r.verdicts.reserve(r.histories.size());
   for (const ExposureHistory& h : r.histories) {
     r.verdicts.push_back(judgeExposure(h.time_s, h.irradiance_w_m2, h.peak_w_m2, scene.hazard,
-                                       scene.engagement->longest_window_s));
+                                       scene.engagement->longest_window_s,
+                                       scene.engagement->time.floor_w_m2));
   }
   return r;
 }
@@ -93,11 +114,22 @@ std::vector<CsvColumn> engagementColumns(const EngagementResults& results,
   add("peak_irradiance_w_m2", [](H h, V) { return h.peak_w_m2; });
   add("peak_time_s", [](H h, V) { return h.peak_time_s; });
   add("time_above_mpe_s", [](H, V v) { return v.time_above_mpe_s; });
-  add("hazard_ratio", [](H, V v) { return v.window.ratio; });
-  add("worst_window_s", [](H, V v) { return v.window.duration_s; });
-  add("worst_window_start_s", [](H, V v) { return v.window.start_s; });
-  add("worst_window_exposure_j_m2", [](H, V v) { return v.window.exposure_j_m2; });
-  add("worst_window_mpe_j_m2", [](H, V v) { return v.window.mpe_j_m2; });
+  add("hazard_ratio", [](H, V v) { return v.ratio; });
+  add(
+      "hazard_rule", [](H, V v) { return static_cast<double>(v.rule); }, true);
+  add("worst_window_ratio", [](H, V v) { return v.worst_window.ratio; });
+  add("worst_window_s", [](H, V v) { return v.worst_window.duration_s; });
+  add("worst_window_start_s", [](H, V v) { return v.worst_window.start_s; });
+  add("worst_window_exposure_j_m2", [](H, V v) { return v.worst_window.exposure_j_m2; });
+  add("worst_window_mpe_j_m2", [](H, V v) { return v.worst_window.mpe_j_m2; });
+  add(
+      "pulses", [](H, V v) { return static_cast<double>(v.train.pulses); }, true);
+  add("pulse_train_ratio", [](H, V v) { return v.train.ratio; });
+  add("pulse_reduction", [](H, V v) { return v.train.reduction; });
+  add("pulse_window_s", [](H, V v) { return v.train.pulse.duration_s; });
+  add("pulse_window_exposure_j_m2", [](H, V v) { return v.train.pulse.exposure_j_m2; });
+  add("pulse_duration_s", [](H, V v) { return v.train.pulse_duration_s; });
+  add("pulse_exposure_j_m2", [](H, V v) { return v.train.pulse_exposure_j_m2; });
   if (hazard.aid) add("aided_hazard_ratio", [](H, V v) { return v.aided_ratio; });
   add("stare_hazard_ratio", [](H, V v) { return v.stare_ratio; });
   add(
@@ -118,17 +150,22 @@ void writeTimeSeriesCsv(std::ostream& out, const EngagementResults& results) {
       }
     }
   }
-  std::string text = "observer,time_s,irradiance_w_m2\n";
+  std::string text = "observer,time_s,irradiance_w_m2,pulse\n";
   char buf[32];
   for (std::size_t o = 0; o < results.histories.size(); ++o) {
     const ExposureHistory& h = results.histories[o];
+    const std::vector<HistoryPulse>& spans = results.verdicts[o].train.spans;
+    std::size_t pulse = 0;  // the first span that does not end before the sample
     for (std::size_t i = 0; i < h.time_s.size(); ++i) {
+      const double t = h.time_s[i];
+      while (pulse < spans.size() && spans[pulse].end_s < t) ++pulse;
+      const bool inside = pulse < spans.size() && spans[pulse].start_s <= t;
       text += std::to_string(o + 1);
-      for (double v : {h.time_s[i], h.irradiance_w_m2[i]}) {
+      for (double v : {t, h.irradiance_w_m2[i]}) {
         text += ',';
         text.append(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
       }
-      text += '\n';
+      text += ',' + std::to_string(inside ? pulse + 1 : 0) + '\n';
     }
   }
   out << text;
@@ -163,12 +200,14 @@ void printEngagementSummary(std::ostream& err, const Scene& scene, std::span<con
   const ExposureVerdict& v = results.verdicts[worst];
   const Vec3& p = points[worst];
   err << "  worst observer: row " << worst + 1 << " at (" << p.x << ", " << p.y << ", " << p.z
-      << "): hazard ratio " << formatNumber("%.3g", v.window.ratio) << ", its worst window "
-      << formatNumber("%.3g", v.window.duration_s) << " s from "
-      << formatNumber("%.6g", v.window.start_s) << " s collecting "
-      << formatNumber("%.3g", v.window.exposure_j_m2) << " J/m² against an MPE of "
-      << formatNumber("%.3g", v.window.mpe_j_m2) << " J/m²";
+      << "): hazard ratio " << formatNumber("%.3g", v.ratio) << " by " << decidedBy(v);
   if (scene.hazard.aid) err << "; aided " << formatNumber("%.3g", v.aided_ratio);
+  err << "\n    its worst window " << formatNumber("%.3g", v.worst_window.duration_s) << " s from "
+      << formatNumber("%.6g", v.worst_window.start_s) << " s collects "
+      << formatNumber("%.3g", v.worst_window.exposure_j_m2) << " J/m² against an MPE of "
+      << formatNumber("%.3g", v.worst_window.mpe_j_m2) << " J/m² (ratio "
+      << formatNumber("%.3g", v.worst_window.ratio) << "); " << v.train.pulses
+      << (v.train.pulses == 1 ? " pulse" : " pulses") << " counted";
   err << "\n    exposure " << formatNumber("%.4g", h.exposure_j_m2) << " J/m², peak "
       << formatNumber("%.4g", h.peak_w_m2) << " W/m² at " << formatNumber("%.6g", h.peak_time_s)
       << " s, " << formatNumber("%.3g", v.time_above_mpe_s) << " s at or above the stare MPE\n";
@@ -216,6 +255,7 @@ std::vector<ExrChannel> EngagementMaps::channels() const {
   std::vector<ExrChannel> c = {
       {"exposure_j_m2", &exposure_j_m2},       {"peak_irradiance_w_m2", &peak_irradiance_w_m2},
       {"time_above_mpe_s", &time_above_mpe_s}, {"hazard_ratio", &hazard_ratio},
+      {"hazard_rule", &hazard_rule},           {"pulses", &pulses},
       {"worst_window_s", &worst_window_s},     {"stare_hazard_ratio", &stare_hazard_ratio}};
   if (!aided_hazard_ratio.empty()) c.push_back({"aided_hazard_ratio", &aided_hazard_ratio});
   c.push_back({"status", &status});
@@ -227,7 +267,12 @@ std::vector<LatticeChannel> EngagementMaps::latticeChannels() const {
       {"exposure_j_m2", "J/m^2", &exposure_j_m2},
       {"peak_irradiance_w_m2", "W/m^2", &peak_irradiance_w_m2},
       {"time_above_mpe_s", "s", &time_above_mpe_s},
-      {"hazard_ratio", "1 (worst window's exposure / its MPE)", &hazard_ratio},
+      {"hazard_ratio",
+       "1 (the larger of the worst window's exposure / its MPE and the pulse train's rule 3)",
+       &hazard_ratio},
+      {"hazard_rule", "1, 2 or 3: the repetitive-pulse rule that sets hazard_ratio (0 dark)",
+       &hazard_rule},
+      {"pulses", "1 (pulses rule 3 counted)", &pulses},
       {"worst_window_s", "s", &worst_window_s},
       {"stare_hazard_ratio", "1 (peak irradiance / MPE for exposure_s)", &stare_hazard_ratio}};
   if (!aided_hazard_ratio.empty()) {
@@ -244,8 +289,9 @@ EngagementMaps engagementMaps(const FieldSpec& spec, std::span<const std::uint8_
   EngagementMaps m;
   m.grid = {n[0], n[1], spec.min_m, spec.axes[0], spec.axes[1], spec.voxel_m};
   const std::size_t count = lit.size();
-  for (auto* channel : {&m.exposure_j_m2, &m.peak_irradiance_w_m2, &m.time_above_mpe_s,
-                        &m.hazard_ratio, &m.stare_hazard_ratio, &m.worst_window_s}) {
+  for (auto* channel :
+       {&m.exposure_j_m2, &m.peak_irradiance_w_m2, &m.time_above_mpe_s, &m.hazard_ratio,
+        &m.hazard_rule, &m.pulses, &m.stare_hazard_ratio, &m.worst_window_s}) {
     channel->assign(count, 0.0f);
   }
   if (hazard.aid) m.aided_hazard_ratio.assign(count, 0.0f);
@@ -259,13 +305,16 @@ EngagementMaps engagementMaps(const FieldSpec& spec, std::span<const std::uint8_
     m.exposure_j_m2[p] = static_cast<float>(h.exposure_j_m2);
     m.peak_irradiance_w_m2[p] = static_cast<float>(h.peak_w_m2);
     m.time_above_mpe_s[p] = static_cast<float>(v.time_above_mpe_s);
-    m.hazard_ratio[p] = static_cast<float>(v.window.ratio);
-    m.worst_window_s[p] = static_cast<float>(v.window.duration_s);
+    m.hazard_ratio[p] = static_cast<float>(v.ratio);
+    m.hazard_rule[p] = static_cast<float>(v.rule);
+    m.pulses[p] = static_cast<float>(v.train.pulses);
+    m.worst_window_s[p] = static_cast<float>(v.worst_window.duration_s);
     m.stare_hazard_ratio[p] = static_cast<float>(v.stare_ratio);
     if (hazard.aid) m.aided_hazard_ratio[p] = static_cast<float>(v.aided_ratio);
     m.status[p] = h.converged ? 1.0f : 5.0f;
     ++m.integrated;
-    m.hazardous += v.window.ratio >= 1.0 ? 1 : 0;
+    m.hazardous += v.ratio >= 1.0 ? 1 : 0;
+    m.train_decides += v.rule == DecidingRule::Train ? 1 : 0;
     m.stare_hazardous += v.stare_ratio >= 1.0 ? 1 : 0;
     m.aided_hazardous += hazard.aid && v.aided_ratio >= 1.0 ? 1 : 0;
     m.unconverged += h.converged ? 0 : 1;
@@ -331,7 +380,8 @@ nlohmann::json engagementRegionJson(const std::string& name, const std::string& 
   }
   j["points"] = {{"integrated", maps.integrated},
                  {"dark_by_bound", total - maps.integrated},
-                 {"unconverged", maps.unconverged}};
+                 {"unconverged", maps.unconverged},
+                 {"decided_by_pulse_train", maps.train_decides}};
   j["time_samples"] = samples;
   j["evaluations"] = evaluations;
   j["seconds"] = results.seconds;
@@ -344,11 +394,23 @@ nlohmann::json engagementRegionJson(const std::string& name, const std::string& 
     const ExposureVerdict& v = results.verdicts[w];
     const Vec3& x = region.points[w];
     j["worst"] = {{"at_m", {x.x, x.y, x.z}},
-                  {"hazard_ratio", v.window.ratio},
-                  {"window_s", v.window.duration_s},
-                  {"window_start_s", v.window.start_s},
-                  {"window_exposure_j_m2", v.window.exposure_j_m2},
-                  {"window_mpe_j_m2", v.window.mpe_j_m2},
+                  {"hazard_ratio", v.ratio},
+                  {"hazard_rule", toString(v.rule)},
+                  {"decided_by", decidedBy(v)},
+                  {"window_ratio", v.worst_window.ratio},
+                  {"window_s", v.worst_window.duration_s},
+                  {"window_start_s", v.worst_window.start_s},
+                  {"window_exposure_j_m2", v.worst_window.exposure_j_m2},
+                  {"window_mpe_j_m2", v.worst_window.mpe_j_m2},
+                  {"pulse_train",
+                   {{"pulses", v.train.pulses},
+                    {"hazard_ratio", v.train.ratio},
+                    {"reduction", v.train.reduction},
+                    {"grouped", v.train.grouped},
+                    {"pulse_window_ratio", v.train.pulse.ratio},
+                    {"pulse_window_s", v.train.pulse.duration_s},
+                    {"pulse_duration_s", v.train.pulse_duration_s},
+                    {"pulse_exposure_j_m2", v.train.pulse_exposure_j_m2}}},
                   {"exposure_j_m2", h.exposure_j_m2},
                   {"peak_irradiance_w_m2", h.peak_w_m2},
                   {"peak_time_s", h.peak_time_s},
@@ -375,8 +437,11 @@ nlohmann::json engagementJson(const EngagementSpec& e) {
             {"initial_intervals", e.time.initial_intervals},
             {"max_depth", e.time.max_depth}}},
           {"rule",
-           "for every duration t up to longest_window_s, the largest radiant exposure any window "
-           "of length t collects, against the MPE for t"}};
+           "the larger of: for every duration t up to longest_window_s, the largest radiant "
+           "exposure any window of length t collects against the MPE for t (rules 1 and 2); and "
+           "the pulses above the floor (or above a doubling of it) counted as a pulse train, "
+           "each pulse's worst window against the single-pulse MPE times C_P (ANSI) or C5 (IEC) "
+           "of the count (rule 3)"}};
 }
 
 void printEngagementRegion(std::ostream& err, const std::string& what, const FieldSpec& spec,
@@ -395,11 +460,15 @@ void printEngagementRegion(std::ostream& err, const std::string& what, const Fie
   const ExposureVerdict& v = results.verdicts[w];
   const Vec3& x = region.points[w];
   err << "\n  worst point (" << x.x << ", " << x.y << ", " << x.z << "): hazard ratio "
-      << formatNumber("%.3g", v.window.ratio) << " over "
-      << formatNumber("%.3g", v.window.duration_s) << " s (stare verdict "
+      << formatNumber("%.3g", v.ratio) << " by " << decidedBy(v) << "; worst window "
+      << formatNumber("%.3g", v.worst_window.ratio) << " over "
+      << formatNumber("%.3g", v.worst_window.duration_s) << " s (stare verdict "
       << formatNumber("%.3g", v.stare_ratio) << "); hazardous "
       << formatNumber("%.4g", extent.of(maps.hazardous)) << " " << extent.unit() << ", as a stare "
-      << formatNumber("%.4g", extent.of(maps.stare_hazardous)) << " " << extent.unit() << "\n";
+      << formatNumber("%.4g", extent.of(maps.stare_hazardous)) << " " << extent.unit();
+  if (maps.train_decides > 0)
+    err << "; the pulse train sets the verdict at " << maps.train_decides << " points";
+  err << "\n";
   if (maps.unconverged > 0) {
     err << "  warning: " << maps.unconverged
         << " points did not reach the tolerance in time (status 5)\n";

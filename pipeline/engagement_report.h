@@ -1,8 +1,9 @@
 #pragma once
 /// @file
 /// @brief What `glint points` reports of an engagement (docs/engagement.md): each observer's
-/// exposure, peak, time above the MPE and worst window as table columns, the irradiance
-/// histories as a time series, and the summary on the terminal.
+/// exposure, peak, time above the MPE, verdict and the rule that sets it (its worst window, or
+/// its train of pulses) as table columns, the irradiance histories as a time series, and the
+/// summary on the terminal.
 
 #include <cstdint>
 #include <nlohmann/json_fwd.hpp>
@@ -14,7 +15,7 @@
 #include "export/exr_map.h"
 #include "export/lattice_vdb.h"
 #include "export/points_csv.h"
-#include "hazard/exposure_window.h"
+#include "hazard/exposure_train.h"
 #include "observers/exposure.h"
 #include "pipeline/scene.h"
 
@@ -43,33 +44,42 @@ EngagementResults sampleEngagement(const FacetIntegrator& reference, const Scene
 EngagementResults judgeEngagement(std::vector<ExposureHistory> histories, const Scene& scene);
 
 /// @brief The table's columns after x, y, z: `exposure_j_m2`, `exposure_error_j_m2`,
-/// `peak_irradiance_w_m2`, `peak_time_s`, `time_above_mpe_s`, `hazard_ratio` (the worst
-/// window), `worst_window_s`, `worst_window_start_s`, `worst_window_exposure_j_m2`,
-/// `worst_window_mpe_j_m2`, `aided_hazard_ratio` (with an optical aid), `stare_hazard_ratio`,
-/// `time_samples`, `evaluations`, `converged`.
+/// `peak_irradiance_w_m2`, `peak_time_s`, `time_above_mpe_s`, `hazard_ratio` (the verdict),
+/// `hazard_rule` (1, 2 or 3: which sets it; 0 nothing above the floor), `worst_window_ratio`,
+/// `worst_window_s`, `worst_window_start_s`, `worst_window_exposure_j_m2`,
+/// `worst_window_mpe_j_m2` (rules 1 and 2), `pulses`, `pulse_train_ratio`, `pulse_reduction`,
+/// `pulse_window_s`, `pulse_window_exposure_j_m2`, `pulse_duration_s`, `pulse_exposure_j_m2`
+/// (rule 3: the pulses counted, its ratio and reduction, and the pulse that sets it),
+/// `aided_hazard_ratio` (with an optical aid), `stare_hazard_ratio`, `time_samples`,
+/// `evaluations`, `converged`.
 std::vector<CsvColumn> engagementColumns(const EngagementResults& results,
                                          const HazardSpec& hazard);
 
-/// @brief Every sample of every history: `observer,time_s,irradiance_w_m2`, observers numbered
-/// from 1 in the points file's order, times increasing.
+/// @brief Every sample of every history: `observer,time_s,irradiance_w_m2,pulse`, observers
+/// numbered from 1 in the points file's order, times increasing; `pulse` numbers from 1 the
+/// pulses (or groups) rule 3 counted that the sample lies in, 0 between them.
 /// @throw OutputError where a sample is not finite (before anything is written).
 void writeTimeSeriesCsv(std::ostream& out, const EngagementResults& results);
 
-/// @brief The terminal summary: the span and its sampling, the worst observer and its window,
-/// the per-pose stare verdict beside it, and a warning for observers that did not converge.
+/// @brief The terminal summary: the span and its sampling, the worst observer, its verdict and
+/// the rule that sets it (its worst window, or its train of pulses), the per-pose stare verdict
+/// beside it, and a warning for observers that did not converge.
 void printEngagementSummary(std::ostream& err, const Scene& scene, std::span<const Vec3> points,
                             const EngagementResults& results, int threads);
 
 /// @brief An engagement's maps over one region of `glint run` (a plane or the box), arrays
 /// indexed as the lattice's points, [(k × nodes[1] + j) × nodes[0] + i]: each point's exposure,
-/// peak, time above the MPE, worst window and its hazard ratio, the stare verdict, and its status
-/// (1 integrated, 3 dark over the whole span by the bound, 5 integrated but unconverged).
+/// peak, time above the MPE, verdict (hazard_ratio, the larger of the worst window's and the
+/// train's) and the rule that sets it, the pulses rule 3 counted, the worst window's length,
+/// the stare verdict, and its status (1 integrated, 3 dark over the whole span by the bound, 5
+/// integrated but unconverged).
 struct EngagementMaps {
   PlaneGrid grid;  ///< a plane's (its first two axes for the box)
   std::vector<float> exposure_j_m2, peak_irradiance_w_m2, time_above_mpe_s, hazard_ratio,
-      aided_hazard_ratio, stare_hazard_ratio, worst_window_s, status;
+      hazard_rule, pulses, aided_hazard_ratio, stare_hazard_ratio, worst_window_s, status;
   std::int64_t integrated = 0;       ///< lattice points sampled in time
   std::int64_t hazardous = 0;        ///< hazard_ratio ≥ 1
+  std::int64_t train_decides = 0;    ///< points whose verdict rule 3 sets
   std::int64_t stare_hazardous = 0;  ///< stare_hazard_ratio ≥ 1
   std::int64_t aided_hazardous = 0;  ///< aided_hazard_ratio ≥ 1 (with an aid)
   std::int64_t unconverged = 0;
@@ -105,9 +115,9 @@ EngagementRegion engagementRegion(const FacetIntegrator& target, const Scene& sc
                                   PointExchange* exchange = nullptr);
 
 /// @brief The summary's entry of one region named @p name, written to @p file: its lattice,
-/// counts, worst point and its window, the hazardous area (a plane: `hazardous_area_m2`,
-/// `stare_hazardous_area_m2`) or volume (the box: `hazard_volume_m3`, ...) by the worst window
-/// and by the stare verdict.
+/// counts, worst point with its verdict and the rule that sets it, the hazardous area (a plane:
+/// `hazardous_area_m2`, `stare_hazardous_area_m2`) or volume (the box: `hazard_volume_m3`, ...) by
+/// the worst window and by the stare verdict.
 nlohmann::json engagementRegionJson(const std::string& name, const std::string& file,
                                     const FieldSpec& spec, const EngagementRegion& region,
                                     const HazardSpec& hazard);

@@ -92,7 +92,8 @@ TEST(EngagementPoints, TheTableAndTheTimeSeriesTellTheSameExposure) {
     ASSERT_TRUE(column.count(name)) << "no column " << name;
   }
   const auto series = csv(test::readFile(f.dir / "series.csv"));
-  ASSERT_EQ(series[0], (std::vector<std::string>{"observer", "time_s", "irradiance_w_m2"}));
+  ASSERT_EQ(series[0],
+            (std::vector<std::string>{"observer", "time_s", "irradiance_w_m2", "pulse"}));
   for (int observer = 1; observer <= 3; ++observer) {
     std::vector<double> t, e;
     for (std::size_t i = 1; i < series.size(); ++i) {
@@ -303,6 +304,174 @@ TEST(EngagementRun, ABoxsGridsAreWhatGlintPointsGivesAtItsPoints) {
     return spec.position(static_cast<int>(p % row), static_cast<int>(p / row % n[1]),
                          static_cast<int>(p / layer));
   });
+}
+
+// tests/data/engagement_mpi.json's mirror turning at @p turn_deg_s over [@p start_s, @p end_s]
+// in a @p power_w beam, with the observer regions @p regions (JSON keys `observers` or
+// `planes`; none: only the scene).
+std::string turningMirror(double turn_deg_s, double start_s, double end_s, double power_w,
+                          const nlohmann::json& regions = nlohmann::json::object()) {
+  nlohmann::json scene =
+      nlohmann::json::parse(test::readFile(fs::path(GLINT_TEST_DATA_DIR) / "engagement_mpi.json"));
+  scene["engagement"]["start_s"] = start_s;
+  scene["engagement"]["end_s"] = end_s;
+  scene["engagement"]["target"]["turn_deg_s"] = {turn_deg_s, 0, 0};
+  scene["laser"]["power_w"] = power_w;
+  scene.erase("observers");
+  scene.erase("planes");
+  scene.update(regions);
+  return scene.dump(2);
+}
+
+// The table's columns by name.
+std::map<std::string, std::size_t> columnsOf(const std::vector<std::vector<std::string>>& table) {
+  std::map<std::string, std::size_t> column;
+  for (std::size_t i = 0; i < table[0].size(); ++i) column[table[0][i]] = i;
+  return column;
+}
+
+// The turning mirror of engagement_mpi.json turning at 3600°/s for 10 s: its reflection turns
+// at twice that, so its glint crosses an observer at (−50, 0, 0) ten times a second, 101 times
+// from −5 s to 5 s (half a glint at each end). Each crossing's worst window (77 µs, 0.024 J/m²)
+// is a third of its MPE, 90 t^0.75 J/m² at 1064 nm: the windows alone say 0.33. To the eye it
+// is a train of 101 pulses, and ANSI Z136.1-2014's rule 3 holds each to the single-pulse MPE
+// times C_P = 101^-0.25: 0.33 × 101^0.25 = 1.04, hazardous. The expected ratio is worked here
+// from the crossings the time series shows, the window's energy and length, and the row's
+// formula.
+TEST(EngagementPoints, ATurningTargetsGlintsAreJudgedAsAPulseTrain) {
+  const Folder f("glint_engagement_train");
+  const fs::path scene = f.write("scene.json", turningMirror(3600.0, -5.0, 5.0, 1000.0));
+  const fs::path points = f.write("points.csv", "x,y,z\n-50,0,0\n");
+  const test::Outcome o =
+      glint({"points", scene.string(), "--points", points.string(), "--out",
+             (f.dir / "out.csv").string(), "--time-series", (f.dir / "series.csv").string()});
+  ASSERT_EQ(o.status, 0) << o.err;
+  const auto table = csv(test::readFile(f.dir / "out.csv"));
+  ASSERT_EQ(table.size(), 2u);
+  std::map<std::string, std::size_t> column = columnsOf(table);
+  for (const char* name : {"hazard_rule", "pulses", "worst_window_ratio", "pulse_train_ratio",
+                           "pulse_reduction", "pulse_exposure_j_m2"}) {
+    ASSERT_TRUE(column.count(name)) << "no column " << name;
+  }
+  const auto value = [&](const char* name) { return std::stod(table[1][column[name]]); };
+  // The crossings: where the irradiance rises above the floor, a thousandth of the 50 W/m²
+  // MPE, and the energy of the one about t = 0 by trapezoids through its samples.
+  const auto series = csv(test::readFile(f.dir / "series.csv"));
+  ASSERT_EQ(series[0],
+            (std::vector<std::string>{"observer", "time_s", "irradiance_w_m2", "pulse"}));
+  const double floor_w_m2 = 0.05;
+  int crossings = 0, last_pulse = 0;
+  double previous_e = 0.0, previous_t = 0.0, crossing_at_0_j_m2 = 0.0;
+  for (std::size_t i = 1; i < series.size(); ++i) {
+    const double t = std::stod(series[i][1]), e = std::stod(series[i][2]);
+    crossings += (i == 1 || previous_e <= floor_w_m2) && e > floor_w_m2 ? 1 : 0;
+    if (i > 1 && std::abs(t) < 0.05 && std::abs(previous_t) < 0.05)
+      crossing_at_0_j_m2 += 0.5 * (e + previous_e) * (t - previous_t);
+    const int pulse = std::stoi(series[i][3]);
+    if (e > 2.0 * floor_w_m2) {
+      EXPECT_GT(pulse, 0) << "t = " << t << ": in a crossing";
+    }
+    if (pulse > 0) {
+      EXPECT_GE(pulse, last_pulse) << "t = " << t;
+      last_pulse = pulse;
+    }
+    previous_e = e;
+    previous_t = t;
+  }
+  EXPECT_EQ(crossings, 101);
+  EXPECT_EQ(last_pulse, 101) << "the series numbers the pulses counted";
+  EXPECT_EQ(value("pulses"), 101.0);
+  EXPECT_EQ(value("hazard_rule"), 3.0);
+  const double window_j_m2 = value("worst_window_exposure_j_m2"),
+               window_s = value("worst_window_s");
+  const double window_mpe_j_m2 = 90.0 * std::pow(window_s, 0.75);  // 1064 nm, 13 µs to 10 s
+  EXPECT_NEAR(value("worst_window_mpe_j_m2"), window_mpe_j_m2, 1e-12 * window_mpe_j_m2);
+  EXPECT_NEAR(window_s, 77e-6, 2e-6);
+  EXPECT_LT(window_j_m2 / window_mpe_j_m2, 0.35) << "the windows alone";
+  const double want = window_j_m2 / window_mpe_j_m2 * std::pow(crossings, 0.25);
+  EXPECT_GT(want, 1.03);
+  EXPECT_GE(value("hazard_ratio"), want * (1.0 - 1.1e-3)) << "the window search's 0.1 %";
+  EXPECT_LE(value("hazard_ratio"), want * (1.0 + 1.1e-3));
+  EXPECT_EQ(value("hazard_ratio"), value("pulse_train_ratio"));
+  EXPECT_NEAR(value("pulse_reduction"), std::pow(101.0, -0.25), 1e-12);
+  // Every crossing delivers the same light: the one that sets the ratio as much as the one at 0.
+  EXPECT_NEAR(value("pulse_exposure_j_m2"), crossing_at_0_j_m2, 1e-3 * crossing_at_0_j_m2);
+  EXPECT_NE(o.err.find("hazard ratio 1.04 by rule 3, a train of 101 pulses: C_P 0.315"),
+            std::string::npos)
+      << o.err;
+}
+
+// A 2 × 2 plane where the turning mirror's glint crosses it 5 times (the mirror at 3600°/s in
+// a 2.5 kW beam from −0.25 to 0.25 s): each crossing's worst window is 0.82 of its MPE, the
+// train of 5 makes it 0.82 × 5^0.25 = 1.23. glint run's map holds at each point the verdict
+// glint points gives there, rule 3 with its 5 pulses, and the summary and the terminal say the
+// train sets it. A study of the same engagement counts those points hazardous: its coverage
+// follows the train too.
+TEST(EngagementRun, ATrainOfGlintsSetsThePlanesMapsAndTheStudysCoverage) {
+  const Folder f("glint_engagement_train_map");
+  const nlohmann::json plane = nlohmann::json::parse(R"({"planes": [{"name": "eye",
+    "origin": [-50, -0.1, -0.1], "u_axis": [0, 1, 0], "v_axis": [0, 0, 1], "size_m": [0.1, 0.1],
+    "pixel_m": 0.1, "block_m": 0.1}]})");
+  const fs::path scene = f.write("scene.json", turningMirror(3600.0, -0.25, 0.25, 2500.0, plane));
+  const test::Outcome run = glint({"run", scene.string(), "-o", (f.dir / "out").string()});
+  ASSERT_EQ(run.status, 0) << run.err;
+  int width = 0, height = 0;
+  const std::string exr = (f.dir / "out" / "eye.exr").string();
+  const std::vector<float> ratio = readExrChannel(exr, "hazard_ratio", width, height);
+  const std::vector<float> rule = readExrChannel(exr, "hazard_rule", width, height);
+  const std::vector<float> pulses = readExrChannel(exr, "pulses", width, height);
+  ASSERT_EQ(ratio.size(), 4u);
+  std::string points = "x,y,z\n";
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i)
+      points +=
+          "-50," + std::to_string(-0.1 + 0.1 * i) + "," + std::to_string(-0.1 + 0.1 * j) + "\n";
+  const test::Outcome o =
+      glint({"points", scene.string(), "--points", f.write("points.csv", points).string(), "--out",
+             (f.dir / "table.csv").string()});
+  ASSERT_EQ(o.status, 0) << o.err;
+  const auto table = csv(test::readFile(f.dir / "table.csv"));
+  std::map<std::string, std::size_t> column = columnsOf(table);
+  for (std::size_t p = 0; p < 4; ++p) {
+    const auto value = [&](const char* name) { return std::stod(table[p + 1][column[name]]); };
+    EXPECT_NEAR(ratio[p], value("hazard_ratio"), 1e-6) << "point " << p;
+    EXPECT_GE(ratio[p], 1.0f) << "point " << p;
+    EXPECT_LT(value("worst_window_ratio"), 1.0) << "point " << p << ": hazardous by the train";
+    EXPECT_EQ(rule[p], 3.0f) << "point " << p;
+    EXPECT_EQ(pulses[p], 5.0f) << "point " << p;
+    EXPECT_EQ(value("pulses"), 5.0) << "point " << p;
+  }
+  const auto summary = nlohmann::json::parse(std::ifstream(f.dir / "out" / "summary.json"));
+  const nlohmann::json& eye = summary.at("planes").at(0);
+  EXPECT_EQ(eye.at("points").at("decided_by_pulse_train"), 4);
+  EXPECT_NEAR(eye.at("hazardous_area_m2").get<double>(), 0.04, 1e-12);
+  EXPECT_EQ(eye.at("worst").at("hazard_rule"), "rule 3");
+  EXPECT_EQ(eye.at("worst").at("pulse_train").at("pulses"), 5);
+  EXPECT_NE(eye.at("worst").at("decided_by").get<std::string>().find("a train of 5 pulses"),
+            std::string::npos);
+  EXPECT_NE(run.err.find("by rule 3, a train of 5 pulses"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("the pulse train sets the verdict at 4 points"), std::string::npos)
+      << run.err;
+
+  // A study of one scenario (pointing jitter too small to move the glint), hazardous at every
+  // point by the train alone.
+  const fs::path study = f.write("study.json", R"({"scene": "scene.json",
+    "pointing_jitter": {"sigma_rad": 1e-6, "samples": 1, "seed": 1}})");
+  const test::Outcome batch = glint({"batch", study.string(), "-o", (f.dir / "study").string()});
+  ASSERT_EQ(batch.status, 0) << batch.err;
+  const std::string map = (f.dir / "study" / "eye.exr").string();
+  const std::vector<float> cover = readExrChannel(map, "coverage_probability", width, height);
+  const std::vector<float> max_ratio = readExrChannel(map, "max_hazard_ratio", width, height);
+  for (std::size_t p = 0; p < 4; ++p) {
+    EXPECT_EQ(cover[p], 1.0f) << "point " << p;
+    EXPECT_NEAR(max_ratio[p], ratio[p], 1e-3 * static_cast<double>(ratio[p])) << "point " << p;
+  }
+  const auto result = nlohmann::json::parse(
+      std::ifstream(f.dir / "study" / "scenarios" / "s000000" / "result.json"));
+  const nlohmann::json& region = result.at("regions").at(0);
+  EXPECT_EQ(region.at("hazardous_points"), 4);
+  EXPECT_EQ(region.at("worst").at("hazard_rule"), "rule 3");
+  EXPECT_LT(region.at("worst").at("window_ratio").get<double>(), 1.0);
 }
 
 TEST(EngagementPoints, CommandsThatCannotIntegrateAnEngagementRefuseIt) {

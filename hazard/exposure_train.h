@@ -1,0 +1,117 @@
+#pragma once
+/// @file
+/// @brief An exposure that varies in time judged as a train of pulses, and the verdict that
+/// joins the repetitive-pulse rules over it. A target that turns or vibrates sends its glint
+/// across an eye again and again, and to the eye that is a pulse train (ANSI Z136.1-2014 8.2.3,
+/// IEC 60825-1:2014 A.3; docs/hazard.md, "A train of glints"). The separate exposures of an
+/// irradiance history are counted and rule 3 of the repetitive-pulse rules applied to them;
+/// rules 1 and 2 are the worst window's (hazard/exposure_window.h).
+///
+/// The standards write rule 3 for identical pulses; glints are not. Each pulse is held to its
+/// own reduced limit (its worst window against the single-pulse MPE times the reduction of all
+/// the pulses counted): the train is judged as N copies of its most hazardous pulse, which no
+/// reading of rule 3 that grows with each pulse's energy finds less hazardous than the real
+/// train.
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "hazard/exposure_window.h"
+
+namespace glint {
+
+/// @brief One separate exposure of a history: where the irradiance rises above a threshold
+/// and falls back to it, or a group of such pulses closer than t_min (T_i) counted as one.
+struct HistoryPulse {
+  double start_s = 0.0;        ///< where it rises above the threshold (a group: its first pulse's)
+  double end_s = 0.0;          ///< where it falls back (a group: its last pulse's)
+  double exposure_j_m2 = 0.0;  ///< ∫E dt from start to end, the light between grouped pulses too
+  /// Its duration as the standards define it: the time at or above half its peak; a group's,
+  /// t_min or its span if longer.
+  double duration_s = 0.0;
+  int members = 1;  ///< pulses counted as this one (more than 1: grouped)
+};
+
+/// @brief The pulses of the irradiance piecewise linear through (@p time_s,
+/// @p irradiance_w_m2): the intervals where it is above @p threshold_w_m2, those starting
+/// less than @p grouping_s after a group's first grouped with it (0: none grouped), in time
+/// order.
+std::vector<HistoryPulse> historyPulses(std::span<const double> time_s,
+                                        std::span<const double> irradiance_w_m2,
+                                        double threshold_w_m2, double grouping_s);
+
+/// @brief The most pulses whose starts lie in any interval [s, s + @p span_s) (the starts
+/// increasing): the n or N rule 3 counts.
+std::int64_t pulsesWithin(const std::vector<HistoryPulse>& pulses, double span_s);
+
+/// @brief Rule 3 of an irradiance history's train of pulses.
+struct TrainHazard {
+  /// The largest over the pulses of each one's worst window against the single-pulse MPE times
+  /// its reduction (ANSI's C_P, IEC's C5), at the threshold where that is largest; 0 where
+  /// rule 3 does not apply (the skin, beyond 1400 nm) or nothing is above the floor.
+  double ratio = 0.0;
+  /// The pulses (or groups) counted: n over the longest window (ANSI), N within T2 (IEC),
+  /// at that threshold.
+  std::int64_t pulses = 0;
+  double reduction = 1.0;              ///< C_P or C5 of the pulse that sets the ratio
+  const char* reduction_name = "C_P";  ///< "C_P" (ANSI) or "C5" (IEC)
+  double threshold_w_m2 = 0.0;         ///< the irradiance the pulses were counted above
+  bool grouped = false;                ///< some pulses closer than t_min were counted as one
+  /// The pulse that sets the ratio (its own worst window and its duration, at or above half
+  /// its peak).
+  WindowHazard pulse;
+  double pulse_duration_s = 0.0;
+  double pulse_exposure_j_m2 = 0.0;  ///< all it delivers, from where it rises to where it falls
+  /// Every pulse (or group) at that threshold, in time order: what the time series marks.
+  std::vector<HistoryPulse> spans;
+};
+
+/// @brief Rule 3 of the history (@p time_s, @p irradiance_w_m2) under @p hazard's wavelength,
+/// standard and tissue, for an exposure of @p longest_s at most. The pulses are counted above
+/// the floor @p floor_w_m2 and above every doubling of it below the peak, and the threshold
+/// that gives the largest ratio is kept: a glint riding on light that never falls to the floor
+/// is still a pulse of its own. Thresholds that cannot exceed @p window_ratio (the worst
+/// window's, which already holds) nor the floor's are not evaluated: below @p window_ratio the
+/// ratio returned is then a lower bound of rule 3's.
+/// @pre times increasing, irradiance ≥ 0, longest_s within the MPE table; floor_w_m2 > 0 (0
+/// stands for a millionth of the peak).
+TrainHazard judgeTrain(std::span<const double> time_s, std::span<const double> irradiance_w_m2,
+                       const HazardSpec& hazard, double longest_s, double floor_w_m2,
+                       double window_ratio);
+
+/// @brief Which of the repetitive-pulse rules sets a verdict.
+enum class DecidingRule : std::uint8_t {
+  None = 0,         ///< nothing above the floor
+  SinglePulse = 1,  ///< rule 1: the worst window lies within one pulse (or one exposure)
+  Average = 2,      ///< rule 2: the worst window spans several pulses
+  Train = 3,        ///< rule 3: a pulse against the single-pulse MPE reduced for the train
+};
+
+/// @brief What an engagement's irradiance history at one observer means for the eye.
+struct ExposureVerdict {
+  /// The verdict, unaided: the larger of the worst window's ratio (rules 1 and 2) and the
+  /// train's (rule 3).
+  double ratio = 0.0;
+  DecidingRule rule = DecidingRule::None;  ///< which rule sets it
+  WindowHazard worst_window;               ///< rules 1 and 2: the worst window, unaided
+  TrainHazard train;                       ///< rule 3
+  /// The verdict through the optical aid: its gain scales every exposure alike, so the ratio is
+  /// the gain times the unaided one (the unaided ratio without an aid).
+  double aided_ratio = 0.0;
+  double time_above_mpe_s = 0.0;  ///< at or above the stare MPE (HazardSpec::mpe_w_m2)
+  /// The per-pose verdict: the peak irradiance as if stared at for the whole exposure
+  /// (peak / HazardSpec::mpe_w_m2), what judging each pose alone would report.
+  double stare_ratio = 0.0;
+};
+
+/// @brief The verdict of the history (@p time_s, @p irradiance_w_m2) whose peak is
+/// @p peak_w_m2: windows up to @p longest_s, pulses counted above @p floor_w_m2 (judgeTrain()).
+ExposureVerdict judgeExposure(std::span<const double> time_s,
+                              std::span<const double> irradiance_w_m2, double peak_w_m2,
+                              const HazardSpec& hazard, double longest_s, double floor_w_m2);
+
+/// @brief "rule 1", "rule 2", "rule 3" or "none".
+const char* toString(DecidingRule rule);
+
+}  // namespace glint
