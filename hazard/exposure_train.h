@@ -7,11 +7,13 @@
 /// irradiance history are counted and rule 3 of the repetitive-pulse rules applied to them;
 /// rules 1 and 2 are the worst window's (hazard/exposure_window.h).
 ///
-/// The standards write rule 3 for identical pulses; glints are not. Each pulse is held to its
-/// own reduced limit (its worst window against the single-pulse MPE times the reduction of all
-/// the pulses counted): the train is judged as N copies of its most hazardous pulse, which no
-/// reading of rule 3 that grows with each pulse's energy finds less hazardous than the real
-/// train.
+/// Each pulse is read two ways against the single-pulse MPE, the larger kept: its worst window,
+/// and the standards' reading of a pulse, all its energy against the MPE for its duration at
+/// half its peak. The standards write rule 3 for identical pulses; glints are not. glint judges
+/// a train as N_eff pulses as strong as its strongest, N_eff = Σ (r_i / r_max)⁴ over its pulses'
+/// ratios r_i: the weighing under which rule 3's N^-1/4 law is exact (identical pulses give
+/// N_eff = N, the standards' own count), so that a faint glimmer beside a glint adds next to
+/// nothing while ten equal glints count as ten.
 
 #include <cstdint>
 #include <span>
@@ -30,6 +32,8 @@ struct HistoryPulse {
   /// Its duration as the standards define it: the time at or above half its peak; a group's,
   /// t_min or its span if longer.
   double duration_s = 0.0;
+  /// What it delivers while at or above half its peak (a group: all of it): how compact it is.
+  double half_peak_exposure_j_m2 = 0.0;
   int members = 1;  ///< pulses counted as this one (more than 1: grouped)
 };
 
@@ -45,6 +49,11 @@ std::vector<HistoryPulse> historyPulses(std::span<const double> time_s,
 /// increasing): the n or N rule 3 counts.
 std::int64_t pulsesWithin(const std::vector<HistoryPulse>& pulses, double span_s);
 
+/// @brief The largest sum of @p weights (one per pulse) over the pulses whose starts lie in any
+/// interval [s, s + @p span_s): pulsesWithin() with each pulse counted by its weight.
+double weightedPulsesWithin(const std::vector<HistoryPulse>& pulses,
+                            const std::vector<double>& weights, double span_s);
+
 /// @brief Rule 3 of an irradiance history's train of pulses.
 struct TrainHazard {
   /// The largest over the pulses of each one's worst window against the single-pulse MPE times
@@ -54,6 +63,9 @@ struct TrainHazard {
   /// The pulses (or groups) counted: n over the longest window (ANSI), N within T2 (IEC),
   /// at that threshold.
   std::int64_t pulses = 0;
+  /// What the reduction counts: the pulses as so many as strong as the strongest, each weighed
+  /// by (its ratio / the strongest's)⁴ (pulses for identical pulses).
+  double effective_pulses = 0.0;
   double reduction = 1.0;              ///< C_P or C5 of the pulse that sets the ratio
   const char* reduction_name = "C_P";  ///< "C_P" (ANSI) or "C5" (IEC)
   double threshold_w_m2 = 0.0;         ///< the irradiance the pulses were counted above
@@ -61,6 +73,11 @@ struct TrainHazard {
   /// The pulse that sets the ratio (its own worst window and its duration, at or above half
   /// its peak).
   WindowHazard pulse;
+  /// That pulse against the single-pulse MPE, before the reduction: the larger of its worst
+  /// window's ratio and the standards' reading of a pulse, all its energy against the MPE for
+  /// its half-peak duration (see by_half_peak).
+  double pulse_ratio = 0.0;
+  bool by_half_peak = false;  ///< the half-peak reading set pulse_ratio
   double pulse_duration_s = 0.0;
   double pulse_exposure_j_m2 = 0.0;  ///< all it delivers, from where it rises to where it falls
   /// Every pulse (or group) at that threshold, in time order: what the time series marks.

@@ -32,18 +32,32 @@ std::size_t worstRow(const EngagementResults& results) {
   return worst;
 }
 
-// What sets the verdict @p v, in words: "rule 3, a train of 101 pulses: C_P 0.315, its strongest
-// 0.329 over 7.69e-05 s", or "rule 1 (its worst window, within one pulse)".
+// How the strongest pulse of @p t was read: "0.417 (its 0.0304 J/m² over its half-peak
+// 5.1e-05 s)" or "0.329 (its worst window, 7.69e-05 s)".
+std::string strongestPulse(const TrainHazard& t) {
+  return formatNumber("%.3g", t.pulse_ratio) +
+         (t.by_half_peak
+              ? " (its " + formatNumber("%.3g", t.pulse_exposure_j_m2) +
+                    " J/m² over its half-peak " + formatNumber("%.3g", t.pulse_duration_s) + " s)"
+              : " (its worst window, " + formatNumber("%.3g", t.pulse.duration_s) + " s)");
+}
+
+// What sets the verdict @p v, in words: "rule 3, a train of 101 pulses, 99.67 as strong as its
+// strongest: C_P 0.316, its strongest 0.418 (…)", or "rule 1 (its worst window, within one
+// pulse)".
 std::string decidedBy(const ExposureVerdict& v) {
   if (v.rule == DecidingRule::Train) {
     return std::string("rule 3, a train of ") + std::to_string(v.train.pulses) +
-           (v.train.grouped ? " pulses (or groups within t_min): " : " pulses: ") +
-           v.train.reduction_name + " " + formatNumber("%.3g", v.train.reduction) +
-           ", its strongest " + formatNumber("%.3g", v.train.pulse.ratio) + " over " +
-           formatNumber("%.3g", v.train.pulse.duration_s) + " s";
+           (v.train.grouped ? " pulses (or groups within t_min), " : " pulses, ") +
+           formatNumber("%.4g", v.train.effective_pulses) +
+           " as strong as its strongest: " + v.train.reduction_name + " " +
+           formatNumber("%.3g", v.train.reduction) + ", its strongest " + strongestPulse(v.train);
   }
   switch (v.rule) {
     case DecidingRule::SinglePulse:
+      if (v.ratio > v.worst_window.ratio) {
+        return "rule 1 (one pulse: " + strongestPulse(v.train) + ")";
+      }
       return "rule 1 (its worst window, within one pulse)";
     case DecidingRule::Average:
       return "rule 2 (its worst window, over several pulses)";
@@ -125,7 +139,11 @@ std::vector<CsvColumn> engagementColumns(const EngagementResults& results,
   add(
       "pulses", [](H, V v) { return static_cast<double>(v.train.pulses); }, true);
   add("pulse_train_ratio", [](H, V v) { return v.train.ratio; });
+  add("effective_pulses", [](H, V v) { return v.train.effective_pulses; });
   add("pulse_reduction", [](H, V v) { return v.train.reduction; });
+  add("pulse_ratio", [](H, V v) { return v.train.pulse_ratio; });
+  add(
+      "pulse_by_half_peak", [](H, V v) { return v.train.by_half_peak ? 1.0 : 0.0; }, true);
   add("pulse_window_s", [](H, V v) { return v.train.pulse.duration_s; });
   add("pulse_window_exposure_j_m2", [](H, V v) { return v.train.pulse.exposure_j_m2; });
   add("pulse_duration_s", [](H, V v) { return v.train.pulse_duration_s; });
@@ -404,9 +422,12 @@ nlohmann::json engagementRegionJson(const std::string& name, const std::string& 
                   {"window_mpe_j_m2", v.worst_window.mpe_j_m2},
                   {"pulse_train",
                    {{"pulses", v.train.pulses},
+                    {"effective_pulses", v.train.effective_pulses},
                     {"hazard_ratio", v.train.ratio},
                     {"reduction", v.train.reduction},
                     {"grouped", v.train.grouped},
+                    {"pulse_ratio", v.train.pulse_ratio},
+                    {"pulse_reading", v.train.by_half_peak ? "half peak" : "worst window"},
                     {"pulse_window_ratio", v.train.pulse.ratio},
                     {"pulse_window_s", v.train.pulse.duration_s},
                     {"pulse_duration_s", v.train.pulse_duration_s},

@@ -130,7 +130,8 @@ void writeEngagementZones(std::ostream& out, const EngagementPlaneResults& r, Ve
     for (std::size_t i = 0; i < v->size(); ++i) z.inside[i] = (*v)[i] >= 1.0F ? 1 : 0;
     zones.push_back(std::move(z));
   };
-  add("hazard_ratio", "hazardous", "the worst window's exposure reaches its MPE");
+  add("hazard_ratio", "hazardous",
+      "the verdict reaches 1: the worst window, a pulse at its half peak or the pulse train");
   add("aided_hazard_ratio", "aided_hazardous", "through the optical aid");
   writeZones(out, format, r.grid, zones, *r.site, engagementGeoInfo(r));
 }

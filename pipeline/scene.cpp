@@ -806,8 +806,9 @@ EngagementSpec readEngagement(ObjectReader r, const Scene& scene) {
   e.longest_window_s = std::min(m.end_s - m.start_s, scene.hazard.exposure_s);
   if (scene.hazard.pulse) {
     r.failHere(
-        "an engagement needs a continuous laser: a pulsed laser's windows follow the "
-        "pulse-train rules, which engagements do not apply yet; remove laser.pulse");
+        "an engagement needs a continuous laser: a pulsed laser swept across an eye is a train "
+        "of its own pulses within the train of crossings, which engagements do not judge yet; "
+        "remove laser.pulse");
   }
   r.finish();
   return e;

@@ -105,10 +105,12 @@ TEST(PulseTrain, NEqualPulsesAreJudgedAsThePulsedLaserOfThatTrain) {
     if (laser.reduced_j_m2 > 0.0) {
       EXPECT_NEAR(static_cast<double>(v.train.pulses), laser.reduction_pulses, 1e-9)
           << c.what << ": the pulses rule 3 counts";
-      EXPECT_NEAR(v.train.reduction, laser.c_p, 1e-12) << c.what;
+      // Equal pulses' ratios agree to rounding, so each weighs 1 within 1e-9.
+      EXPECT_NEAR(v.train.reduction, laser.c_p, 1e-9) << c.what;
       EXPECT_EQ(v.train.grouped, laser.grouped) << c.what;
     } else {
-      EXPECT_EQ(v.train.ratio, 0.0) << c.what << ": rule 3 does not apply";
+      EXPECT_EQ(v.train.reduction, 1.0) << c.what << ": rule 3 does not apply";
+      EXPECT_LE(v.train.ratio, v.ratio) << c.what << ": a pulse alone, read at its half peak";
       EXPECT_EQ(v.train.pulses, n) << c.what << ": the pulses are counted all the same";
     }
   }
@@ -134,7 +136,8 @@ TEST(PulseTrain, IecCountsGroupsWithinTiAndOnlyTheOnesWithinT2) {
   EXPECT_TRUE(iec.train.grouped);
   EXPECT_EQ(iec.train.pulses, 1000) << "the groups within T2, not the 2000 of the exposure";
   EXPECT_STREQ(iec.train.reduction_name, "C5");
-  EXPECT_NEAR(iec.train.reduction, 5.0 * std::pow(1000.0, -0.25), 1e-12);
+  // The groups' ratios agree to rounding, so each weighs 1 within 1e-9.
+  EXPECT_NEAR(iec.train.reduction, 5.0 * std::pow(1000.0, -0.25), 1e-9);
   const double want_iec = 2.0 * h_j_m2 / (group_mpe_j_m2 * 5.0 * std::pow(1000.0, -0.25));
   EXPECT_GE(iec.ratio, want_iec * (1.0 - 1e-9));
   EXPECT_LE(iec.ratio, want_iec * (1.0 + 1.1e-3));
@@ -148,13 +151,14 @@ TEST(PulseTrain, IecCountsGroupsWithinTiAndOnlyTheOnesWithinT2) {
   EXPECT_LE(ansi.ratio, want_ansi * (1.0 + 1.1e-3));
 }
 
-// Unequal pulses are judged as if every one were as hazardous as the most hazardous: at
-// 1064 nm, 20 pulses at 20 Hz alternating 0.02 J/m² over 100 µs (0.02 / (90 × (1e-4)^0.75) =
-// 0.222 alone) and 0.05 J/m² over 1 ms (0.05 / (90 × (1e-3)^0.75) = 0.0988 alone, though it
-// carries more energy). The short pulse sets the train: 0.222 × 20^0.25 = 0.470, where the 10
-// short pulses alone give 0.222 × 10^0.25 = 0.395 and the long ones 0.0988 × 20^0.25 = 0.209:
-// never below the identical train the history contains, at most 20^0.25 above its strongest.
-TEST(PulseTrain, UnequalPulsesAreEachJudgedAsIfAllWereAsStrongAsTheStrongest) {
+// Unequal pulses count by their share of the strongest to the fourth power, the weighing under
+// which rule 3's N^-1/4 is exact: at 1064 nm, 20 pulses at 20 Hz alternating 0.02 J/m² over
+// 100 µs (0.02 / (90 × (1e-4)^0.75) = 0.222 alone) and 0.05 J/m² over 1 ms (0.05 / (90 ×
+// (1e-3)^0.75) = 0.0988 alone, though it carries more energy). The train counts as 10 +
+// 10 × (0.0988 / 0.222)^4 = 10.39 pulses as strong as the short one: 0.222 × 10.39^0.25 =
+// 0.399, never below the 10 identical short pulses alone (0.395), and below the 0.470 of 20
+// copies of the strongest, which would count the weak pulses as strong ones.
+TEST(PulseTrain, UnequalPulsesCountByTheirShareOfTheStrongestToTheFourthPower) {
   std::vector<Pulse> pulses;
   for (int i = 0; i < 20; ++i) {
     const bool short_pulse = i % 2 == 0;
@@ -163,17 +167,32 @@ TEST(PulseTrain, UnequalPulsesAreEachJudgedAsIfAllWereAsStrongAsTheStrongest) {
   }
   const History h = rectangles(pulses, 1.0);
   const ExposureVerdict v = judge(h, hazardAt(1064.0), 1.0, 200.0);
-  const double strongest = 0.02 / (90.0 * std::pow(1e-4, 0.75));
-  const double want = strongest * std::pow(20.0, 0.25);
+  const double strong = 0.02 / (90.0 * std::pow(1e-4, 0.75));
+  const double weak = 0.05 / (90.0 * std::pow(1e-3, 0.75));
+  const double effective = 10.0 + 10.0 * std::pow(weak / strong, 4.0);
+  const double want = strong * std::pow(effective, 0.25);
   EXPECT_EQ(v.rule, DecidingRule::Train);
   EXPECT_EQ(v.train.pulses, 20);
+  EXPECT_NEAR(v.train.effective_pulses, effective, 2e-3 * effective);
   EXPECT_GE(v.ratio, want * (1.0 - 1e-9));
   EXPECT_LE(v.ratio, want * (1.0 + 1.1e-3));
   EXPECT_NEAR(v.train.pulse.duration_s, 1e-4, 1e-6) << "the short pulse sets it";
   EXPECT_NEAR(v.train.pulse_exposure_j_m2, 0.02, 1e-5 * 0.02);
-  EXPECT_GT(v.ratio, strongest * std::pow(10.0, 0.25)) << "the 10 short pulses alone";
-  EXPECT_LE(v.ratio, v.worst_window.ratio * std::pow(20.0, 0.25) * (1.0 + 1.1e-3))
-      << "at most N^0.25 above the strongest pulse alone";
+  EXPECT_GE(v.ratio, strong * std::pow(10.0, 0.25) * (1.0 - 1e-9)) << "the 10 short pulses alone";
+  EXPECT_LT(v.ratio, strong * std::pow(20.0, 0.25)) << "20 copies of the strongest";
+}
+
+// A glint with faint glimmers beside it (the missile's body light beside its fin's glint) is
+// judged as the glint alone, within their fourth-power weight: 100 µs of 1000 W/m² at 1064 nm
+// (0.1 / (90 × (1e-4)^0.75) = 1.11) and two 100 µs glimmers of 3 W/m² a tenth of a second away,
+// above the floor (1 W/m²): three pulses, which weigh as 1 + 2 × (3/1000)^4.
+TEST(PulseTrain, FaintGlimmersBesideAGlintAddNextToNothing) {
+  const History h = rectangles({{0.1, 1e-4, 3.0}, {0.2, 1e-4, 1000.0}, {0.3, 1e-4, 3.0}}, 0.5);
+  const ExposureVerdict v = judge(h, hazardAt(1064.0), 0.5, 1000.0);
+  const double glint = 0.1 / (90.0 * std::pow(1e-4, 0.75));
+  EXPECT_EQ(v.train.pulses, 3);
+  EXPECT_NEAR(v.train.effective_pulses, 1.0, 1e-9);
+  EXPECT_NEAR(v.ratio, glint, 1.1e-3 * glint);
 }
 
 // Glints on light that never falls back to the floor (a diffuse background of 1 W/m² under
