@@ -230,8 +230,10 @@ void writeStudyGeoMaps(OutputSet& outputs, const std::filesystem::path& dir, con
   for (const auto& [name, format] :
        {std::pair{output_names::planeZonesGeoJson(r.name), VectorFormat::GeoJson},
         std::pair{output_names::planeZonesKml(r.name), VectorFormat::Kml}}) {
+    // A named copy: Clang 14 does not let a lambda capture a structured binding.
+    const VectorFormat as = format;
     outputs.open(dir / name).write([&](std::ostream& out) {
-      writeZones(out, format, g, zones, site, info);
+      writeZones(out, as, g, zones, site, info);
     });
   }
 }
