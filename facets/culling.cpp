@@ -27,6 +27,19 @@ Vec3 rayOrigin(const Occluder& occluder, const Target& target, const PatchGeomet
   return g.centre_m + target.objects[object].origin_m + occluder.lift_m(coarse) * g.normal;
 }
 
+// A band holding both bands: their union where they share an axis (a quadric's pieces take
+// theirs from its principal axes, so a cylinder's all have the same), else none.
+NormalBand enclosingBand(const NormalBand& a, const NormalBand& b) {
+  if (a.axis == Vec3(0.0) || b.axis == Vec3(0.0)) return {};
+  if (a.axis == b.axis) {
+    return {a.axis, std::min(a.sin_lo, b.sin_lo), std::max(a.sin_hi, b.sin_hi)};
+  }
+  if (a.axis == -b.axis) {
+    return {a.axis, std::min(a.sin_lo, -b.sin_hi), std::max(a.sin_hi, -b.sin_lo)};
+  }
+  return {};
+}
+
 // The smallest ball and cone (about the mean axis) holding both geometries' own.
 PatchGeometry enclosing(const PatchGeometry& a, const PatchGeometry& b) {
   PatchGeometry g;
@@ -37,6 +50,7 @@ PatchGeometry enclosing(const PatchGeometry& a, const PatchGeometry& b) {
   g.cone_rad = std::min(kPi, std::max(angleBetween(g.normal, a.normal) + a.cone_rad,
                                       angleBetween(g.normal, b.normal) + b.cone_rad));
   g.area_bound_m2 = a.area_bound_m2 + b.area_bound_m2;
+  g.band = enclosingBand(a.band, b.band);
   return g;
 }
 

@@ -36,6 +36,16 @@ struct SubFacet {
   std::uint8_t rim_edges = 0;    ///< bit k: edge (k, k+1) lies on the object's rim
 };
 
+/// @brief A bound of a patch's normals along one axis: every normal n it can show has n·axis in
+/// [sin_lo, sin_hi], a band of latitudes about the great circle normal to the axis. The cone
+/// bounds the normals in every direction at once; the band in one, where a cylinder's piece,
+/// whose normals spread along its circumference only, has no width at all.
+struct NormalBand {
+  Vec3 axis{0.0};  ///< unit; zero where the patch has no band (its cone alone bounds it)
+  double sin_lo = -1.0;
+  double sin_hi = 1.0;
+};
+
 /// @brief The geometry of a (sub)facet.
 struct PatchGeometry {
   Vec3 centre_m{0.0};          ///< x_C: the mean of the corners (the paper's choice)
@@ -52,6 +62,7 @@ struct PatchGeometry {
   double radius_m = 0.0;       ///< a ball of this radius about centre_m holds the curved patch
   double cone_rad = 0.0;       ///< every normal the patch can show lies within this of `normal`
   double area_bound_m2 = 0.0;  ///< an upper bound of the curved patch's true area
+  NormalBand band{};           ///< where known, a second bound of the normals, along one axis
 };
 
 /// @brief The coarse facet @p facet of @p target as the root of its hierarchy.

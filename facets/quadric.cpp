@@ -10,9 +10,21 @@ Quadric::Quadric(const glm::dmat3& a, const Vec3& b, double c) : a_(a), b_(b), c
   Eigen::Matrix3d m;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) m(i, j) = 0.5 * (a[j][i] + a[i][j]);
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-  eig.computeDirect(m, Eigen::EigenvaluesOnly);
-  gradient_lipschitz_ = 2.0 * eig.eigenvalues().cwiseAbs().maxCoeff();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> direct;
+  direct.computeDirect(m, Eigen::EigenvaluesOnly);
+  gradient_lipschitz_ = 2.0 * direct.eigenvalues().cwiseAbs().maxCoeff();
+  // The axes from the iterative solver: its eigenvectors stay accurate where eigenvalues
+  // repeat (a cylinder's 1, 1, 0), where the closed form's lose digits.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m);
+  if (eig.info() != Eigen::Success) return;  // the coordinate axes: still axes, just less apt
+  std::array<int, 3> order{0, 1, 2};
+  std::sort(order.begin(), order.end(), [&](int i, int j) {
+    return std::abs(eig.eigenvalues()(i)) < std::abs(eig.eigenvalues()(j));
+  });
+  for (int k = 0; k < 3; ++k) {
+    const auto v = eig.eigenvectors().col(order[k]);
+    if (const auto unit = tryNormalize(Vec3(v(0), v(1), v(2)))) principal_axes_[k] = *unit;
+  }
 }
 
 Quadric Quadric::cylinder(const Vec3& center_m, const Vec3& unit_axis, double radius_m) {

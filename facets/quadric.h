@@ -3,6 +3,7 @@
 /// @brief Quadric surfaces PᵀQP = 0 (the paper's Eq. 3–6): evaluation, gradient normals and
 /// projection of points onto the surface for exact 1→4 subdivision.
 
+#include <array>
 #include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
 #include <optional>
@@ -47,6 +48,11 @@ class Quadric {
   /// @brief L with |∇Q(x) − ∇Q(y)| ≤ L |x − y| for all x, y: twice the spectral norm of A.
   [[nodiscard]] double gradientLipschitz() const { return gradient_lipschitz_; }
 
+  /// @brief Unit eigenvectors of A, the quadric's principal axes, in order of increasing |λ|:
+  /// along an axis of small |λ| the gradient, and so the normal, hardly changes (a cylinder's
+  /// axis, λ = 0, along which its normals have no component at all).
+  [[nodiscard]] const std::array<Vec3, 3>& principalAxes() const { return principal_axes_; }
+
   /// @brief The same surface with the opposite orientation.
   [[nodiscard]] Quadric flipped() const { return Quadric(-a_, -b_, -c_); }
 
@@ -59,6 +65,7 @@ class Quadric {
   Vec3 b_{0.0};
   double c_ = 0.0;
   double gradient_lipschitz_ = 0.0;
+  std::array<Vec3, 3> principal_axes_{Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
 };
 
 /// @brief A circular boundary curve of a surface (the rim of a disk). Subdivision points on a

@@ -27,7 +27,82 @@ bool hiddenFromObserver(double angle_to_v_rad, double cone_rad, double d_m, doub
   return excess >= 0.5 * kPi && d_m * std::cos(excess) + reach_m <= 0.0;
 }
 
+// The half vector ωi + ωo at the patch's centre and how far its direction can turn over the
+// patch and the observers' ball: ωo turns by at most eps_o = asin(reach/d), ωi by the beam's
+// spread eps_i, and their sum moves by at most the two chords.
+struct HalfVector {
+  Vec3 h;
+  double turn_rad;
+};
+HalfVector halfVector(const Vec3& wi, const Vec3& v, double d, double eps_i, double eps_o) {
+  const Vec3 h = wi + v / d;
+  const double chord = 2.0 * std::sin(0.5 * eps_o) + 2.0 * std::sin(0.5 * eps_i);
+  return {h, turnAngle(chord, glm::length(h))};
+}
+
+// A lower bound of the angle between `direction` and every normal of the patch that is in
+// both its band and its cone, 0 without a band. Latitude λ is taken about the band's axis and
+// longitude about it too: the band holds latitudes [λ_lo, λ_hi], and the cone (radius c about
+// g.normal, at latitude λ0) longitudes within L of g.normal's, sin L = sin c / cos λ0, when it
+// leaves out the poles. The nearest point of that latitude–longitude box to the direction
+// (latitude φ, longitude δ from g.normal's) lies on its nearer meridian, δ_min = max(0, δ − L)
+// away, at the latitude of the box nearest to the great circle's closest approach; the
+// haversine gives the distance without the cancellation of an arccosine near 0. For a
+// cylinder's piece, whose band has no width, this is exactly the distance to its arc of
+// normals.
+double bandDistanceRad(const PatchGeometry& g, const Vec3& direction) {
+  const NormalBand& band = g.band;
+  if (band.axis == Vec3(0.0)) return 0.0;
+  const double len = glm::length(direction);
+  if (!(len > 0.0)) return 0.0;
+  const Vec3& e = band.axis;
+  const double sin_phi = std::clamp(glm::dot(direction, e) / len, -1.0, 1.0);
+  const double phi = std::asin(sin_phi);
+  const double lat_lo = std::asin(band.sin_lo), lat_hi = std::asin(band.sin_hi);
+  double delta_min = 0.0;
+  const double lat0 = std::asin(std::clamp(glm::dot(g.normal, e), -1.0, 1.0));
+  if (g.cone_rad + std::abs(lat0) < 0.5 * kPi) {
+    const double half_width = std::asin(std::min(1.0, std::sin(g.cone_rad) / std::cos(lat0)));
+    const double delta =
+        angleBetween(direction - glm::dot(direction, e) * e, g.normal - glm::dot(g.normal, e) * e);
+    delta_min = std::max(0.0, delta - half_width);
+  }
+  // hav θ = hav(φ − λ) + cos φ cos λ hav δ, least over λ in the box at its ends or at the
+  // latitude λ* where the meridian passes closest; any extra candidate only lowers it.
+  const double cos_phi = std::cos(phi);
+  const double lat_star =
+      std::clamp(std::atan2(sin_phi, cos_phi * std::cos(delta_min)), lat_lo, lat_hi);
+  const double hav_delta = std::pow(std::sin(0.5 * delta_min), 2);
+  double hav = 1.0;
+  for (const double lat : {lat_lo, lat_hi, lat_star}) {
+    const double at =
+        std::pow(std::sin(0.5 * (phi - lat)), 2) + cos_phi * std::cos(lat) * hav_delta;
+    if (!(at >= 0.0)) return 0.0;  // a NaN proves nothing
+    hav = std::min(hav, at);
+  }
+  return 2.0 * std::asin(std::sqrt(hav));
+}
+
+// The smallest angle between a normal of the patch and a direction within turn_rad of
+// `direction` (at angle_to_normal from g.normal): the larger of what the cone and the band allow.
+double minNormalAngle(const PatchGeometry& g, const Vec3& direction, double angle_to_normal,
+                      double turn_rad) {
+  return std::max(
+      {0.0, angle_to_normal - (g.cone_rad + turn_rad), bandDistanceRad(g, direction) - turn_rad});
+}
+
 }  // namespace
+
+double minHalfVectorAngle(const PatchGeometry& g, const Vec3& observer_m, const Beam& beam,
+                          double observer_radius_m) {
+  const Vec3 v = observer_m - g.centre_m;
+  const double d = glm::length(v);
+  const double reach = g.radius_m + observer_radius_m;
+  if (!(d > reach)) return 0.0;
+  const HalfVector hv = halfVector(beam.at(g.centre_m).toward_laser, v, d,
+                                   beam.directionSpreadInBall(g.radius_m), std::asin(reach / d));
+  return minNormalAngle(g, hv.h, angleBetween(g.normal, hv.h), hv.turn_rad);
+}
 
 ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer_m,
                                     const Beam& beam, const Material& material,
@@ -55,12 +130,8 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
     return {0.0, 0.0, 0.0};
   }
 
-  // Half-vector spread: ωo turns by at most asin(r/d) over the ball, ωi by the beam's spread;
-  // their sum moves by at most the two chords.
   const double eps_o = std::asin(reach / d);
-  const Vec3 h = wi + v / d;
-  const double chord = 2.0 * std::sin(0.5 * eps_o) + 2.0 * std::sin(0.5 * eps_i);
-  const double h_turn = turnAngle(chord, glm::length(h));
+  const auto [h, h_turn] = halfVector(wi, v, d, eps_i, eps_o);
   const double spread = g.cone_rad + h_turn;
 
   const double theta_n = angleBetween(g.normal, h);
@@ -68,7 +139,7 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
     return theta < 0.5 * kPi ? std::tan(theta) * std::tan(theta)
                              : std::numeric_limits<double>::infinity();
   };
-  const double tan2_min = tan2(std::max(0.0, theta_n - spread));
+  const double tan2_min = tan2(minNormalAngle(g, h, theta_n, h_turn));
   const double d_min = d - reach;
   const double scale = e_max * g.area_bound_m2 / (d_min * d_min);
   double specular = 0.0;

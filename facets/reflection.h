@@ -104,10 +104,10 @@ struct ContributionBound {
 
 /// @brief Bounds the irradiance at @p observer_m from every point of the curved patch @p g:
 /// the beam's maximum over the patch's ball, its largest possible lobe value (the smallest θN
-/// any normal of the cone can make with any half vector the ball allows), its area bound and
-/// its nearest distance, for the specular and diffuse terms separately; 0 where no normal of
-/// the patch can both face the laser and be seen (lightVerdict(), mayFaceObserver()). Requires
-/// the bound fields of @p g.
+/// any normal of the cone and band can make with any half vector the ball allows:
+/// minHalfVectorAngle()), its area bound and its nearest distance, for the specular and diffuse
+/// terms separately; 0 where no normal of the patch can both face the laser and be seen
+/// (lightVerdict(), mayFaceObserver()). Requires the bound fields of @p g.
 ///
 /// With @p observer_radius_m > 0 the bound holds for every observer in the ball of that radius
 /// around @p observer_m (a block of the observer field): the half vector may then also turn by
@@ -115,6 +115,14 @@ struct ContributionBound {
 ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer_m,
                                     const Beam& beam, const Material& material,
                                     const ResolutionLimits& limits, double observer_radius_m = 0.0);
+
+/// @brief A lower bound (rad) of θN, the angle between any normal of patch @p g and the half
+/// vector ωi + ωo at any of its points toward any observer within @p observer_radius_m of
+/// @p observer_m: the larger of what its normal cone and its normal band allow (0 where
+/// neither proves anything, or the observer is inside the ball). contributionBound() takes the
+/// lobe's largest value beyond this angle. Requires the bound fields of @p g.
+double minHalfVectorAngle(const PatchGeometry& g, const Vec3& observer_m, const Beam& beam,
+                          double observer_radius_m = 0.0);
 
 /// @brief False only when no normal of the patch can face any observer within
 /// @p observer_radius_m of @p observer_m from any point of it: such a facet costs them nothing.

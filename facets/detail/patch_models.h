@@ -104,6 +104,35 @@ inline double areaBound(const Chord& c, double tilt_rad, double radius_m) {
   return 4.0 * kPi * radius_m * radius_m;
 }
 
+// The narrowest band (patch.h) that one of the quadric's principal axes e gives the normals
+// ∇Q/|∇Q| of every point in the ball (centre_m, radius_m). ∇Q·e = 2((Aᵀe)·x + b·e) is affine in
+// x, so over the ball it stays within 2|Aᵀe| r of its value at the centre, and |∇Q| within L r
+// of its own; the quotient's interval follows. No band where |∇Q| may vanish in the ball.
+inline NormalBand quadricNormalBand(const Quadric& q, const Vec3& centre_m, double radius_m) {
+  const Vec3 grad = q.gradient(centre_m);
+  const double grad_len = glm::length(grad);
+  const double slack = q.gradientLipschitz() * radius_m;
+  const double len_lo = grad_len - slack, len_hi = grad_len + slack;
+  if (!(len_lo > 0.0) || !std::isfinite(len_hi)) return {};
+  NormalBand best;
+  double best_width = kPi;
+  for (const Vec3& e : q.principalAxes()) {
+    // A margin of 1e-12 |∇Q| covers the rounding of the dot products (a cylinder's band along
+    // its axis is otherwise exactly 0 wide).
+    const double along = glm::dot(grad, e);
+    const double swing = 2.0 * glm::length(glm::transpose(q.a()) * e) * radius_m + 1e-12 * len_hi;
+    const double p_lo = along - swing, p_hi = along + swing;
+    const double sin_lo = std::max(-1.0, p_lo / (p_lo >= 0.0 ? len_hi : len_lo));
+    const double sin_hi = std::min(1.0, p_hi / (p_hi >= 0.0 ? len_lo : len_hi));
+    const double width = std::asin(sin_hi) - std::asin(sin_lo);
+    if (width < best_width) {
+      best_width = width;
+      best = {e, sin_lo, sin_hi};
+    }
+  }
+  return best;
+}
+
 struct FlatPatches {
   [[nodiscard]] std::array<SubFacet, 4> split(const SubFacet& f) const {
     return splitWith(f, [](const SubFacet& s, int e, const Vec3&) {
@@ -196,6 +225,11 @@ struct QuadricPatches {
         if (sag <= r0) {
           radius = r0 + sag;
           if (lip * radius < grad_len) cone = std::asin(lip * radius / grad_len);
+          // The same ball holds the patch: every normal it shows is also in this band, which
+          // is about a fixed axis and needs no widening for the sample's normal.
+          if (normals == NormalModel::Surface) {
+            g.band = quadricNormalBand(*quadric, c.centre_m, radius);
+          }
         }
       }
       const double chord_tilt = c.area_m2 > 0.0 ? angleBetween(c.normal, surface_normal) : 0.0;
