@@ -13,6 +13,7 @@
 #include <cerrno>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "geo/backend/gdal_errors.h"
 
@@ -61,6 +62,16 @@ constexpr std::array<const char*, 26> kNetworkDrivers = {
     "PostGISRaster", "PostgreSQL", "MySQL",         "OCI",     "GeoRaster", "MSSQLSpatial",
     "ODBC",          "MongoDBv3"};
 
+// Puts the refusing file system in the place of @p prefix's. GDAL's InstallHandler() forgets
+// the handler it replaces without freeing it (its file manager frees only those it still
+// holds, at its clean-up): the replaced ones are kept here, reachable for the process's life,
+// as GDAL's own would have been.
+void refuse(const std::string& prefix) {
+  static auto* const replaced = new std::vector<VSIFilesystemHandler*>;  // never destroyed
+  replaced->push_back(VSIFileManager::GetHandler(prefix.c_str()));
+  VSIFileManager::InstallHandler(prefix, new RefusingFilesystem);
+}
+
 }  // namespace
 
 void keepGdalOffline() {
@@ -68,7 +79,7 @@ void keepGdalOffline() {
   for (int i = 0; prefixes != nullptr && prefixes[i] != nullptr; ++i) {
     const std::string_view prefix = prefixes[i];
     if (std::find(kLocal.begin(), kLocal.end(), prefix) == kLocal.end())
-      VSIFileManager::InstallHandler(std::string(prefix), new RefusingFilesystem);
+      refuse(std::string(prefix));
   }
   CSLDestroy(prefixes);
   // Those of GDAL 3.6 by name besides: "/vsicurl?" (the URL as a query, "/vsicurl?url=…") is
@@ -77,7 +88,7 @@ void keepGdalOffline() {
        {"/vsicurl?", "/vsicurl/", "/vsicurl_streaming/", "/vsis3/", "/vsis3_streaming/", "/vsigs/",
         "/vsigs_streaming/", "/vsiaz/", "/vsiaz_streaming/", "/vsiadls/", "/vsioss/",
         "/vsioss_streaming/", "/vsiswift/", "/vsiswift_streaming/", "/vsihdfs/", "/vsiwebhdfs/"})
-    VSIFileManager::InstallHandler(prefix, new RefusingFilesystem);
+    refuse(prefix);
   CPLHTTPSetFetchCallback(refuseHttp, nullptr);
   OSRSetPROJEnableNetwork(FALSE);
   GDALDriverManager* drivers = GetGDALDriverManager();
