@@ -49,7 +49,8 @@ constexpr double kOccluderBytesPerFacet = 1500.0;
 // A lit facet's candidate, and in the lobe scheme its share of the bounds over runs of 8 lit
 // facets (LitClusters: a PatchGeometry a node at the lowest level, as many again above).
 // Measured: 457 bytes a lit facet (disks of 2 048 segments, all lit against 2 % lit); counted
-// here, the candidate and the lowest level, 428.
+// here, the candidate and the lowest level, 428. Both before PatchGeometry gained its normal
+// band (40 bytes, in the candidate and the cluster alike), which sizeof follows.
 constexpr double kLitBytesPerFacet = sizeof(Candidate);
 constexpr double kLitClusterBytesPerFacet = sizeof(PatchGeometry) / 8.0;
 // A decoded mesh as the scene keeps it (TriangleMesh): a position and a normal a vertex, three
