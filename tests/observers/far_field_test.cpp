@@ -186,7 +186,8 @@ struct FailSafeCase {
 constexpr double kTruthTolerance = 1e-4;
 constexpr double kCellTruthTolerance = 1e-3;
 
-// The scene's far field as glint run computes it, and the truth beside it.
+// The scene's far field as glint run computes it (but for the far radius's check), and the
+// truth beside it.
 struct FarRun {
   Scene scene;
   SceneTarget target;
@@ -218,7 +219,12 @@ const FarRun& farRun(const std::string& scene_file) {
   if (!r) {
     Scene s = loadScene(std::string(GLINT_TEST_DATA_DIR) + "/" + scene_file);
     SceneTarget target = sceneTarget(s, planeFieldSpec(s, s.planes.front()));
-    FarField field = computeFarField(target.integrator, farFieldSpec(s, target.integrator));
+    // Without the far radius's check by direct integration (its own tests are NearAndFar's),
+    // which costs the fan four times its map: the map, its peak and the NOHD are what these
+    // tests judge, and the first-order radius they then use is the farther.
+    FarFieldSpec spec = farFieldSpec(s, target.integrator);
+    spec.innermost_far_radius_m = 0.0;
+    FarField field = computeFarField(target.integrator, spec);
     r = std::make_unique<FarRun>(farRunOf(std::move(s), std::move(target), std::move(field)));
   }
   return *r;

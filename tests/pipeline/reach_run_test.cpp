@@ -189,10 +189,22 @@ TEST(ReachRun, ASceneWithNeitherBoxNorPlanesFollowsThePencilFromTheMirrorOn) {
 
 // The default example (examples/cylinder.json) asks for the reach beside its box: the two
 // agree on the farthest hazardous point from the target's centre within one 0.1 m voxel, and
-// the reach is never the nearer by more than that.
+// the reach is never the nearer by more than that. The example's box and layers as they are;
+// its rays (16 per face edge, not 64) and far-field directions (256, not 1024) coarser, which
+// only widen the reach between rays: the claim is about how near the target the reach begins,
+// and the old lattice fails it here as with the example's own (1 806 and 2 416 of 13 784
+// hazardous voxels beyond the reach), at a quarter of the cost.
 TEST(ReachRun, TheDefaultExamplesReachIsItsBoxsHazardZoneWithinOneVoxel) {
-  const RunResult r =
-      runScene(fs::path(GLINT_EXAMPLES_DIR) / "cylinder.json", "glint_reach_default");
+  nlohmann::json scene =
+      nlohmann::json::parse(std::ifstream(fs::path(GLINT_EXAMPLES_DIR) / "cylinder.json"));
+  scene["reach"] = {{"face_cells", 16}};
+  scene["far_field"] = {{"face_pixels", 256}};
+  const fs::path dir = fs::temp_directory_path() / "glint_reach_default_scene";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "cylinder.json") << scene.dump();
+  const RunResult r = runScene(dir / "cylinder.json", "glint_reach_default");
+  fs::remove_all(dir);
   ASSERT_EQ(r.outcome.status, 0) << r.outcome.err;
   const nlohmann::json& reach = r.summary.at("hazard_reach");
   ASSERT_TRUE(reach.at("closed").get<bool>()) << reach.dump();
