@@ -161,17 +161,6 @@ std::vector<HistoryPulse> historyPulses(std::span<const double> time_s,
   return pulses;
 }
 
-std::int64_t pulsesWithin(const std::vector<HistoryPulse>& pulses, double span_s) {
-  std::int64_t most = 0;
-  std::size_t j = 0;
-  for (std::size_t i = 0; i < pulses.size(); ++i) {
-    j = std::max(j, i);
-    while (j < pulses.size() && pulses[j].start_s - pulses[i].start_s < span_s * kRounding) ++j;
-    most = std::max(most, static_cast<std::int64_t>(j - i));
-  }
-  return most;
-}
-
 double weightedPulsesWithin(const std::vector<HistoryPulse>& pulses,
                             const std::vector<double>& weights, double span_s) {
   double most = 0.0, sum = 0.0;
@@ -184,6 +173,12 @@ double weightedPulsesWithin(const std::vector<HistoryPulse>& pulses,
     sum -= weights[i];
   }
   return most;
+}
+
+std::int64_t pulsesWithin(const std::vector<HistoryPulse>& pulses, double span_s) {
+  // Sums of ones are exact: the count is the weighted one with every weight 1.
+  return static_cast<std::int64_t>(
+      weightedPulsesWithin(pulses, std::vector<double>(pulses.size(), 1.0), span_s));
 }
 
 TrainHazard judgeTrain(std::span<const double> time_s, std::span<const double> irradiance_w_m2,
@@ -255,15 +250,12 @@ TrainHazard judgeTrain(std::span<const double> time_s, std::span<const double> i
   for (std::size_t li = 0; li < levels.size(); ++li) {
     const Level& l = levels[li];
     if (l.pulses.empty()) continue;
-    double smallest_reduction = 1.0;
-    for (const HistoryPulse& p : l.pulses)
-      smallest_reduction =
-          std::min(smallest_reduction, reduction(p, static_cast<double>(l.counted)));
     // The half-peak reading is cheap: its part of the bound is exact.
-    double half_peak = 0.0;
+    double smallest_reduction = 1.0, half_peak = 0.0;
     for (const HistoryPulse& p : l.pulses) {
-      half_peak = std::max(half_peak, halfPeakRatio(p, hazard, longest_s) /
-                                          reduction(p, static_cast<double>(l.counted)));
+      const double c = reduction(p, static_cast<double>(l.counted));
+      smallest_reduction = std::min(smallest_reduction, c);
+      half_peak = std::max(half_peak, halfPeakRatio(p, hazard, longest_s) / c);
     }
     const double pulse_bound = l.grouped ? window_ratio : std::min(window_ratio, nested_bound);
     if (li > 0 && std::max(pulse_bound / smallest_reduction, half_peak) <=

@@ -44,6 +44,18 @@ RunResult runScene(const fs::path& scene, const std::string& name) {
   return r;
 }
 
+// @p scene, edited from a file, run from a folder of its own (removed once the run is over) into
+// the temporary folder @p name.
+RunResult runEdited(const nlohmann::json& scene, const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / (name + "_scene");
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "scene.json") << scene.dump();
+  RunResult r = runScene(dir / "scene.json", name);
+  fs::remove_all(dir);
+  return r;
+}
+
 // The reach per direction as reach.vtp keeps it, read between its rays as the reach reads them
 // (NearReach::toward()): a ray's distance is a layer plane's distance times the ray's stretch
 // (distance per unit along the face's normal); toward a direction, the farthest plane of the
@@ -199,12 +211,7 @@ TEST(ReachRun, TheDefaultExamplesReachIsItsBoxsHazardZoneWithinOneVoxel) {
       nlohmann::json::parse(std::ifstream(fs::path(GLINT_EXAMPLES_DIR) / "cylinder.json"));
   scene["reach"] = {{"face_cells", 16}};
   scene["far_field"] = {{"face_pixels", 256}};
-  const fs::path dir = fs::temp_directory_path() / "glint_reach_default_scene";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  std::ofstream(dir / "cylinder.json") << scene.dump();
-  const RunResult r = runScene(dir / "cylinder.json", "glint_reach_default");
-  fs::remove_all(dir);
+  const RunResult r = runEdited(scene, "glint_reach_default");
   ASSERT_EQ(r.outcome.status, 0) << r.outcome.err;
   const nlohmann::json& reach = r.summary.at("hazard_reach");
   ASSERT_TRUE(reach.at("closed").get<bool>()) << reach.dump();
@@ -341,11 +348,7 @@ TEST(ReachRun, AnOpticalAidsReachIsGivenBesideTheNakedEyes) {
   nlohmann::json scene =
       nlohmann::json::parse(std::ifstream(fs::path(GLINT_TEST_DATA_DIR) / "reach_pencil.json"));
   scene["optical_aid"] = {{"gain", 4.0}};
-  const fs::path dir = fs::temp_directory_path() / "glint_reach_aided";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  std::ofstream(dir / "scene.json") << scene.dump();
-  const RunResult r = runScene(dir / "scene.json", "glint_reach_aided_out");
+  const RunResult r = runEdited(scene, "glint_reach_aided_out");
   ASSERT_EQ(r.outcome.status, 0) << r.outcome.err;
   const nlohmann::json& reach = r.summary.at("hazard_reach");
   const double naked = reach.at("distance_m").get<double>();
@@ -357,7 +360,6 @@ TEST(ReachRun, AnOpticalAidsReachIsGivenBesideTheNakedEyes) {
   const std::vector<float> map =
       readExrChannel((r.out / "reach.exr").string(), "aided_reach_m", w, h);
   EXPECT_NEAR(*std::max_element(map.begin(), map.end()), aided, 1e-3 * aided);
-  fs::remove_all(dir);
   fs::remove_all(r.out);
 }
 
