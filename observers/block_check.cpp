@@ -142,7 +142,7 @@ std::optional<double> narrowGlintBound(const BallBound& bound, double largest_sa
 }
 
 Decision decideBySamples(const BlockSamples& samples, const BlockSize& size, const BallBound& bound,
-                         double tolerance, double floor_w_m2) {
+                         double tolerance, double floor_w_m2, double resolve_w_m2) {
   const std::uint8_t all = splittableAxes(size);
   const Decision everywhere{Verdict::Refine, 0, all};
   // The target is in the block: resolve it finely.
@@ -154,7 +154,7 @@ Decision decideBySamples(const BlockSamples& samples, const BlockSize& size, con
     if (!std::isfinite(v)) return everywhere;
     largest = std::max(largest, std::abs(v));
   }
-  const double allowed = kCheckShare * (tolerance * largest + floor_w_m2);
+  const double allowed = kCheckShare * (tolerance * std::max(largest, resolve_w_m2) + floor_w_m2);
   // A coarse facet whose light could pass between the samples leaves no trace in them: only
   // the bound can say whether such a glint is too weak to matter.
   if (!(bound.narrow_w_m2 <= allowed)) return everywhere;

@@ -123,9 +123,11 @@ struct BlockSamples {
 /// can exceed that. Refine otherwise: along every axis that may be halved wherever a sample is
 /// inside the target or not finite, a glint may pass between the samples, or no single axis
 /// explains the miss; else only along the axes whose lines of three samples are not linear
-/// (for the power with the fewest such axes).
+/// (for the power with the fewest such axes). With @p resolve_w_m2 > 0 (a classifying field's
+/// threshold), the tolerance is taken of the largest sample or of it, whichever is more: below
+/// the threshold the samples need only the accuracy a point at it has.
 Decision decideBySamples(const BlockSamples& samples, const BlockSize& size, const BallBound& bound,
-                         double tolerance, double floor_w_m2);
+                         double tolerance, double floor_w_m2, double resolve_w_m2 = 0.0);
 
 /// @brief Trilinear interpolation between the corners @p c (index 4x + 2y + z) at (u, v, w).
 double trilinear(const std::array<double, 8>& c, double u, double v, double w);

@@ -102,7 +102,9 @@ struct FieldSpec {
   /// points interpolated, where every one of its samples is at least this (all its points
   /// count hazardous, whatever passes between the samples, so neither its bound nor its
   /// interpolation error matters). Values below the first or between the samples of the second
-  /// are then not resolved. 0: the field resolves its values.
+  /// are then not resolved, and values below hazard_threshold_w_m2 only to tolerance × it (each
+  /// point's integration and each block's interpolation): the accuracy a point at the threshold
+  /// has, which is all the sorting reads. 0: the field resolves its values.
   double classify_above_w_m2 = 0.0;
   /// A plane laid over a surface (plane only): each point offset along axes[2]; null: flat.
   std::shared_ptr<const SurfaceOffsets> surface;

@@ -70,7 +70,7 @@ class FieldBuilder {
  public:
   FieldBuilder(const FacetIntegrator& integrator, const FieldSpec& spec, const ExcludedFn& excluded,
                WorkCounter* counter, PointExchange* exchange)
-      : integrator_(integrator),
+      : integrator_(classifyingAccuracy(integrator, spec)),
         spec_(spec),
         excluded_(excluded),
         counter_(counter),
@@ -650,7 +650,8 @@ class FieldBuilder {
       samples.irradiance_w_m2[s] = v.irradiance_w_m2;
       if (samples.far_from_target) samples.distance_m[s] = litDistance(p[0], p[1], p[2]);
     });
-    return field::decideBySamples(samples, b.size, bound, spec_.tolerance, spec_.floor_w_m2);
+    return field::decideBySamples(samples, b.size, bound, spec_.tolerance, spec_.floor_w_m2,
+                                  classifying() ? spec_.hazard_threshold_w_m2 : 0.0);
   }
 
   // Writes final block @p f's status, level and (accepted) interpolated irradiance into @p t,
@@ -806,7 +807,18 @@ class FieldBuilder {
   }
 
  private:
-  const FacetIntegrator& integrator_;
+  // A classifying field's points need, below the threshold, only the accuracy of a point at
+  // it (FieldSpec::classify_above_w_m2): a point far below it, where the diffuse glow of a
+  // whole lit side is summed to a thousandth, is then settled by a few pieces.
+  static FacetIntegrator classifyingAccuracy(const FacetIntegrator& integrator,
+                                             const FieldSpec& spec) {
+    if (!(spec.classify_above_w_m2 > 0.0)) return integrator;
+    return integrator.withAccuracy(
+        integrator.options().tolerance,
+        std::max(integrator.options().floor_w_m2, spec.tolerance * spec.hazard_threshold_w_m2));
+  }
+
+  const FacetIntegrator integrator_;
   const FieldSpec& spec_;
   const ExcludedFn& excluded_;
   WorkCounter* counter_;

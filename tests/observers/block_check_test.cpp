@@ -83,6 +83,28 @@ TEST(BlockCheck, AcceptsATrilinearFieldAndRefinesACurvedOne) {
       << "but it is to 30 %";
 }
 
+TEST(BlockCheck, AClassifyingFieldResolvesBelowItsThresholdOnlyToTheThresholdsAccuracy) {
+  // 0.1 x², interpolated from the corners, misses its middle sample by 0.025 (the octant
+  // centres by 0.00625). That is more than 1 % of its largest sample plus the floor (0.0011)
+  // and of a threshold of 1 (0.0101), less than 1 % of a threshold of 3 (0.0301): a field that
+  // only sorts its points against 3 accepts the block, its points then known to within what a
+  // point at the threshold is; one that resolves values, or sorts against 1, refines it.
+  const auto low = [](double x, double, double) { return 0.1 * x * x; };
+  EXPECT_EQ(decide(sample(low), boundOf(2.0), 0.01, 1e-4).verdict, Verdict::Refine)
+      << "resolved to 1 % of itself";
+  EXPECT_EQ(decideBySamples(sample(low), kSize, boundOf(2.0), 0.01, 1e-4, 1.0).verdict,
+            Verdict::Refine)
+      << "a miss of 0.025 is more than 1 % of the threshold (0.0101)";
+  EXPECT_EQ(decideBySamples(sample(low), kSize, boundOf(2.0), 0.01, 1e-4, 3.0).verdict,
+            Verdict::Accept)
+      << "and less than 1 % of a threshold of 3 (0.0301)";
+  // At or above the threshold the samples' own tolerance rules, as in a resolving field.
+  const auto high = [](double x, double, double) { return 10.0 * x * x; };
+  EXPECT_EQ(decideBySamples(sample(high), kSize, boundOf(20.0), 0.01, 1e-4, 3.0).verdict,
+            Verdict::Refine)
+      << "x² from 0 to 10 is not trilinear to 1 % of 10";
+}
+
 TEST(BlockCheck, OctantCentresCatchAStepOnTheMiddleSamplePlane) {
   // A lobe edge exactly on the middle sample plane: 0, 0.5·E, E at x = 0, ½, 1 is linear to
   // the 3×3×3 lattice, but the octant centres (x = ¼, ¾) see 0 and E where the fill says ¼ E
