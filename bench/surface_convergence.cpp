@@ -3,7 +3,7 @@
 // costs per observer beside the exact shape on the same scene.
 //
 //   glint_surface_bench [--out surfaces.csv] [--quick] [--shapes sphere,cylinder,...]
-//                       [--tolerance 1e-4]
+//                       [--scenes far,diffuse,near,wide] [--tolerance 1e-4]
 //
 // Meshes (tests/support/test_meshes.h) carry their shape's exact vertex normals, or those
 // normals turned by 0.5 (h/R)² (an estimate of second-order accuracy, R the smallest curvature
@@ -96,6 +96,8 @@ Result integrate(Target target, const Beam& beam, const std::vector<Vec3>& obser
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const auto n = static_cast<double>(observers.size());
   for (const std::int64_t e : evaluations) r.evaluations_per_observer += static_cast<double>(e) / n;
+  // The diffuse moments' evaluations (once per lit facet) shared out over the observers.
+  r.evaluations_per_observer += static_cast<double>(fi.diffuseMomentEvaluations()) / n;
   r.seconds_per_observer = seconds / n;
   return r;
 }
@@ -142,6 +144,9 @@ int main(int argc, char** argv) {
   app.add_flag("--quick", quick, "coarser tessellations and fewer cases (about a minute)");
   std::string only;
   app.add_option("--shapes", only, "comma-separated shapes to run (default: all)");
+  std::string only_scenes;
+  app.add_option("--scenes", only_scenes,
+                 "comma-separated scenes to run: far, diffuse, near, wide (default: all)");
   app.add_option("--tolerance", tolerance,
                  "integration tolerance of the meshes and the analytic "
                  "shape (the reference: 1e-7)");
@@ -221,6 +226,10 @@ int main(int argc, char** argv) {
                                           : std::vector<Scene>{{"far", 0.01, 0.0, 2.0, 45.0}};
     for (const Scene& scene : scenes) {
       if (quick && scene.name != "far" && scene.name != "near") continue;
+      if (!only_scenes.empty() &&
+          ("," + only_scenes + ",").find("," + scene.name + ",") == std::string::npos) {
+        continue;
+      }
       const Material material{0.95, scene.rho_d, Beckmann{scene.sigma}};
       const std::vector<Vec3> observers =
           test::glintObservers(shape.mesh(shape.tessellations.back()), shape.beam, scene.sigma,

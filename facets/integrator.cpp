@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "facets/detail/diffuse_moments.h"
 #include "facets/detail/patch_models.h"
 #include "facets/detail/schemes.h"
 #include "facets/detail/workspace.h"
@@ -70,6 +71,20 @@ FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const Integrat
   }
   maps_ = std::move(maps);
   if (options_.scheme == IntegrationScheme::Lobe) buildClusters();
+  buildDiffuseMoments();
+}
+
+std::int64_t FacetIntegrator::diffuseMomentEvaluations() const {
+  return diffuse_moments_ ? diffuse_moments_->evaluations() : 0;
+}
+
+void FacetIntegrator::buildDiffuseMoments() {
+  diffuse_moments_.reset();
+  const bool diffuse = std::any_of(target_->materials.begin(), target_->materials.end(),
+                                   [](const Material& m) { return m.diffuse_reflectance > 0.0; });
+  if (options_.scheme == IntegrationScheme::Lobe && diffuse) {
+    diffuse_moments_ = std::make_shared<const detail::DiffuseMomentCache>(target_->facetCount());
+  }
 }
 
 FacetIntegrator FacetIntegrator::withBeam(const Beam& beam) const {
@@ -84,6 +99,9 @@ FacetIntegrator FacetIntegrator::withBeam(const Beam& beam) const {
   copy.cull_ = CullStats{};
   copy.cull();
   if (options_.scheme == IntegrationScheme::Lobe) copy.buildClusters();
+  // An instant's beam serves the few observers of that instant: the moments (164 evaluations a
+  // facet) would cost more than they save.
+  copy.diffuse_moments_.reset();
   return copy;
 }
 
@@ -94,8 +112,9 @@ detail::ObserverSetting FacetIntegrator::prepareObserver(const Vec3& observer_m,
   for (std::size_t k = 0; k < target_->objects.size(); ++k) {
     ws.observer_local_m[k] = observer_m - target_->objects[k].origin_m;
   }
-  return {*target_,   options_,        object_beams_, *maps_,         ws.observer_local_m,
-          observer_m, occluder_.get(), lit_,          clusters_.get()};
+  return {*target_,   options_,        object_beams_,   *maps_,
+          ws.observer_local_m, observer_m, occluder_.get(), lit_,
+          clusters_.get(),     diffuse_moments_.get()};
 }
 
 ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,

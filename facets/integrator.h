@@ -144,6 +144,7 @@ struct BallBound {
 
 namespace detail {
 struct Workspace;
+class DiffuseMomentCache;
 struct ObserverSetting;
 }  // namespace detail
 
@@ -197,6 +198,12 @@ class FacetIntegrator {
   /// evaluated once by the same kernel. Its error estimate is not computed (reported as 0).
   ObserverResult uniform(const Vec3& observer_m, int level, IntegratorWorkspace& ws) const;
 
+  /// @brief Kernel evaluations spent so far on the lobe scheme's diffuse moments (each lit
+  /// facet's once, when a far observer first needs it; shared by the withAccuracy() and
+  /// withReturnExtinction() copies), which no observer's count includes. An integrator from
+  /// withBeam() (an engagement's instant, which few observers share) computes none.
+  [[nodiscard]] std::int64_t diffuseMomentEvaluations() const;
+
   [[nodiscard]] const CullStats& cullStats() const { return cull_; }
   [[nodiscard]] const IntegratorOptions& options() const { return options_; }
   [[nodiscard]] const Target& target() const { return *target_; }
@@ -228,6 +235,8 @@ class FacetIntegrator {
   // Builds occluder_ where the options and the target ask for it.
   void buildOccluder();
   void buildClusters();
+  // A diffuse moment cache for beam_ where the lobe scheme meets a diffuse material.
+  void buildDiffuseMoments();
 
   // Shared by the copies withAccuracy() makes; the surface maps point into it.
   std::shared_ptr<const Target> target_;
@@ -241,6 +250,9 @@ class FacetIntegrator {
   std::shared_ptr<const std::vector<SurfaceMap>> maps_;
   CullStats cull_;
   std::shared_ptr<const Occluder> occluder_;  // null where the target cannot shadow itself
+  // The lobe scheme's diffuse moments under beam_ (null without a diffuse term), shared by the
+  // copies that keep the beam.
+  std::shared_ptr<const detail::DiffuseMomentCache> diffuse_moments_;
   // Unique to this integrator: a workspace's geometry memo is kept while it serves the
   // same integrator (or a copy) and cleared when it moves to another.
   std::uint64_t id_ = 0;

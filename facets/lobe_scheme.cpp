@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "facets/detail/refine.h"
@@ -30,6 +31,9 @@ struct LobePiece {
   std::uint32_t nodes = 0;  // offset of its 15 nodes in the pool, once sampled
   bool sampled = false;
   bool refined_ok = false;      // value and error known (by its children, or embedded)
+  // Value and error from the coarse facet's diffuse moments, not yet sampled: where the error is
+  // among the largest, the facet is sampled as any other (and keeps the moments until then).
+  bool from_moments = false;
   bool children_known = false;  // child_estimate and nodes 6–14 hold its children's
 
   [[nodiscard]] double value() const { return refined_ok ? refined : estimate; }
@@ -95,10 +99,11 @@ class LobeRule {
                                  ? lit.facet
                                  : surfaces_.subFacet(s_.maps[lit.facet.coarse], lit.facet.bary,
                                                       lit.facet.depth, lit.facet.rim_edges);
-      const Piece piece = bounded(facet, f);
+      Piece piece = bounded(facet, f);
       // The occlusion ray last: of a mesh's thousands of lit facets an observer's bound keeps a
       // few, and the ray costs more than the bound.
       if (piece.upper == 0.0 || !s_.visible(lit)) return;
+      if (lit.facet.depth == 0) fromMoments(piece, lit, f);
       r.add(piece);
     };
     if (s_.clusters != nullptr && candidates_.data() == s_.lit.data()) {
@@ -119,7 +124,7 @@ class LobeRule {
   }
 
   [[nodiscard]] static Step next(const Piece& piece, int max_depth) {
-    if (piece.unresolved == 0.0 && !piece.refined_ok) return Step::Improve;
+    if (piece.unresolved == 0.0 && (!piece.refined_ok || piece.from_moments)) return Step::Improve;
     return piece.facet.depth + 1 >= max_depth ? Step::Freeze : Step::Split;
   }
 
@@ -127,6 +132,11 @@ class LobeRule {
   // embedded estimate settles it, its four children: the change is the piece's error estimate,
   // and the children's sum its value.
   void improve(Piece& piece, Refinement<LobeRule>& r) {
+    if (piece.from_moments) {  // the moments' error was too large: sampled as any other piece
+      piece.from_moments = false;
+      piece.refined_ok = false;
+      piece.refined = piece.estimate = 0.0;
+    }
     const Frame f = s_.frame(s_.target.object[piece.facet.coarse]);
     const SurfaceMap& map = s_.maps[piece.facet.coarse];
     const double sigma = f.material.lobe.sigma;
@@ -236,6 +246,31 @@ class LobeRule {
   }
 
  private:
+  // A whole coarse facet far from the observer whose specular part is bounded below what its
+  // diffuse moments leave uncertain: known from them (diffuse_moments.h) to within their error
+  // and the specular bound, without a sample. Where that error is among the largest, the facet
+  // is sampled as if it had never had them (the remainder bound is a worst case; the rules on
+  // the whole facet are cheaper than four children).
+  void fromMoments(Piece& piece, const Candidate& lit, const Frame& f) {
+    if (s_.diffuse_moments == nullptr || !(f.material.diffuse_reflectance > 0.0) ||
+        f.beam.return_extinction_per_m > 0.0) {
+      return;
+    }
+    const SurfaceMap& map = s_.maps[lit.facet.coarse];
+    // The bounds of the facet as its map places it, as the piece's own (bounded()).
+    const PatchGeometry g = surfaces_.geometry(s_.target, map, lit.facet);
+    const std::optional<DiffuseEstimate> e = diffuseFromMoments(
+        s_.diffuse_moments->get(map, g, f.beam, f.material), g, f.observer_m);
+    if (!e || !(piece.specular_upper <= e->error_w_m2)) return;
+    piece.refined_ok = true;
+    piece.from_moments = true;
+    piece.refined = std::min(e->irradiance_w_m2, piece.upper);
+    piece.estimate = piece.refined;
+    piece.error = e->error_w_m2 + piece.specular_upper;
+    // Beyond the rigorous bound the model has failed: known only to within that bound.
+    if (!(e->irradiance_w_m2 <= piece.upper)) piece.error = std::max(piece.error, piece.upper);
+  }
+
   // The piece known by its bound alone.
   Piece bounded(const SubFacet& facet, const Frame& f) {
     const PatchGeometry g = surfaces_.geometry(s_.target, s_.maps[facet.coarse], facet);

@@ -524,6 +524,8 @@ void finishRun(const RunContext& c, const std::filesystem::path& dir,
   s.j["files"] = c.outputs.names();
   if (!stale.empty()) s.j["earlier_files_kept"] = stale;
   s.j["warnings"] = s.warnings;
+  // Spent once per lit facet, outside every region's count (FacetIntegrator).
+  s.j["diffuse_moment_evaluations"] = c.target.integrator.diffuseMomentEvaluations();
   *c.outputs.summary() << s.j.dump(2) << "\n";
   c.watch.check("writing the outputs");  // a file written short of memory is not committed
   c.outputs.commit([&] { pauseForTestsAfterFirstOutput(c.err); });

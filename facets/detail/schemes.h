@@ -9,6 +9,7 @@
 
 #include "facets/beam.h"
 #include "facets/detail/culling.h"
+#include "facets/detail/diffuse_moments.h"
 #include "facets/detail/workspace.h"
 #include "facets/integrator.h"
 #include "facets/material.h"
@@ -37,6 +38,9 @@ struct ObserverSetting {
   const Occluder* occluder;                // null where the target cannot shadow itself
   std::span<const Candidate> lit;          // every lit coarse facet
   const LitClusters* clusters;             // bounds over runs of `lit`, or null
+  // Coarse facets' diffuse moments, for the lobe scheme where a material has a diffuse term;
+  // null otherwise.
+  const DiffuseMomentCache* diffuse_moments;
 
   [[nodiscard]] Frame frame(std::uint32_t object) const {
     return {observer_local_m[object], object_beams[object],

@@ -270,9 +270,13 @@ TEST(Examples, FinnedMissileRunsThroughGlintRun) {
   ASSERT_EQ(check["probes"].size(), 1u) << check.dump();
   const auto& probe = check["probes"][0];
   EXPECT_EQ(probe["where"], "plane eye_level's peak");
+  // The same point at the same accuracy, though not the same candidates: the plane's block
+  // dropped some facets' light (at most its allowance) and its refinement may settle a far
+  // facet's diffuse light from the facet's moments where the probe's splits it, each within
+  // its error. Both are within the tolerance (1e-3) of the truth; they agree to 8e-6.
   EXPECT_NEAR(probe["irradiance_w_m2"].get<double>() /
                   summary["planes"][0]["peak_irradiance_w_m2"].get<double>(),
-              1.0, 1e-6)
+              1.0, 1e-4)
       << "the probe is the plane's peak, integrated at the plane's accuracy";
   // The body is a cylinder with its exporter's normals, where every surface converges at second
   // order: they agree on the plane's peak to 2e-5 (a quadric fit that bulged on its long facets
