@@ -4,13 +4,15 @@
 # and the observer side (adaptive field against its dense twin over tolerances and voxel sizes). Writes
 # CSV files and PNG plots into OUT (default build/bench-results) and bench/RESULTS.md.
 #
-#   bash bench/run_all.sh [--quick | --field-one]
+#   bash bench/run_all.sh [--quick | --field-one | --facets-only]
 #
 # Plots need Debian's python3-matplotlib, hence /usr/bin/python3 (not a python3 earlier on PATH).
 # --quick runs two tolerances and the coarsest voxel size per scene (about 15 minutes on two
 # cores); the full run takes about two hours. --field-one runs the facet side in full but the
 # observer side on the cylinder quarter only (0.1 m with each scheme, 0.05 m against its dense
-# twin, and the sampled rows), about 20 minutes. Every run ends with the sampled rows: the
+# twin, and the sampled rows), about 20 minutes. --facets-only runs the Figure 4 sweeps alone and
+# replaces that section of bench/RESULTS.md (its plot committed as bench/figure4.png).
+# Every other run ends with the sampled rows: the
 # octree against anisotropic refinement at 0.05 m, and 0.025 m with the dense twin estimated.
 # Run it on an otherwise idle machine, and build nothing meanwhile: it measures time, and a
 # rebuilt library under a running benchmark ends it.
@@ -18,16 +20,19 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${BUILD:-build}
 out=${OUT:-build/bench-results}
-quick=0 field_one=0
+quick=0 field_one=0 facets_only=0
 [[ "${1:-}" == "--quick" ]] && quick=1
 [[ "${1:-}" == "--field-one" ]] && field_one=1
+[[ "${1:-}" == "--facets-only" ]] && facets_only=1
 command="bash bench/run_all.sh $*"
 mkdir -p "$out"
 cmake --build "$build" --target glint_kernel_bench glint_sweep glint_field_bench glint_hard_bench \
   glint_surface_bench >/dev/null
 
-echo "== kernel throughput" >&2
-"$build/glint_kernel_bench" --benchmark_out="$out/kernel.csv" --benchmark_out_format=csv
+if [[ $facets_only == 0 ]]; then
+  echo "== kernel throughput" >&2
+  "$build/glint_kernel_bench" --benchmark_out="$out/kernel.csv" --benchmark_out_format=csv
+fi
 
 echo "== facet side: the paper's 186 observers (Figure 4)" >&2
 # Loose tolerances too: the adaptive integration is far more accurate than its tolerance, and
@@ -54,6 +59,12 @@ for case in "cylinder 0.003" "cylinder_broad 0.03"; do
       tee "$out/facets_sigma$2_$normals.log" >&2
   done
 done
+
+if [[ $facets_only == 1 ]]; then
+  echo "== report (the facet side only)" >&2
+  /usr/bin/python3 bench/report.py "$out" bench/RESULTS.md "$command" --facets-only
+  exit 0
+fi
 
 echo "== hard observers: each scheme against a brute-force reference" >&2
 # Beam edge across a glint, near a sphere's terminator, grazing forward scatter, near field
