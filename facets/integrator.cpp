@@ -112,9 +112,8 @@ detail::ObserverSetting FacetIntegrator::prepareObserver(const Vec3& observer_m,
   for (std::size_t k = 0; k < target_->objects.size(); ++k) {
     ws.observer_local_m[k] = observer_m - target_->objects[k].origin_m;
   }
-  return {*target_,   options_,        object_beams_,   *maps_,
-          ws.observer_local_m, observer_m, occluder_.get(), lit_,
-          clusters_.get(),     diffuse_moments_.get()};
+  return {*target_,   options_,        object_beams_, *maps_,          ws.observer_local_m,
+          observer_m, occluder_.get(), lit_,          clusters_.get(), diffuse_moments_.get()};
 }
 
 ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,

@@ -30,7 +30,7 @@ struct LobePiece {
   std::array<double, 4> child_estimate{};
   std::uint32_t nodes = 0;  // offset of its 15 nodes in the pool, once sampled
   bool sampled = false;
-  bool refined_ok = false;      // value and error known (by its children, or embedded)
+  bool refined_ok = false;  // value and error known (by its children, or embedded)
   // Value and error from the coarse facet's diffuse moments, not yet sampled: where the error is
   // among the largest, the facet is sampled as any other (and keeps the moments until then).
   bool from_moments = false;
@@ -259,8 +259,8 @@ class LobeRule {
     const SurfaceMap& map = s_.maps[lit.facet.coarse];
     // The bounds of the facet as its map places it, as the piece's own (bounded()).
     const PatchGeometry g = surfaces_.geometry(s_.target, map, lit.facet);
-    const std::optional<DiffuseEstimate> e = diffuseFromMoments(
-        s_.diffuse_moments->get(map, g, f.beam, f.material), g, f.observer_m);
+    const std::optional<DiffuseEstimate> e =
+        diffuseFromMoments(s_.diffuse_moments->get(map, g, f.beam, f.material), g, f.observer_m);
     if (!e || !(piece.specular_upper <= e->error_w_m2)) return;
     piece.refined_ok = true;
     piece.from_moments = true;

@@ -168,8 +168,8 @@ std::optional<DiffuseEstimate> diffuseFromMoments(const DiffuseMoments& m, const
     }
   }
   const double d2 = d * d, d3 = d2 * d, d5 = d3 * d2;
-  const double value = (rm + 3.0 * rmr / d2 - trace) / d3 +
-                       0.5 * (-6.0 * a - 3.0 * b + 15.0 * c / d2) / d5;
+  const double value =
+      (rm + 3.0 * rmr / d2 - trace) / d3 + 0.5 * (-6.0 * a - 3.0 * b + 15.0 * c / d2) / d5;
   // The Taylor remainder (see the header), and what the moments' own quadrature error moves the
   // value by: |Δm| |r| / |r|³; (3 ‖ΔM‖₂ + |tr ΔM|) / |r|³ ≤ (3 + √3) ‖ΔM‖_F / |r|³; and
   // ½ (6√3 + 3√3 + 15) ‖ΔT‖_F / |r|⁴ for the second order, each contraction of ΔT with unit

@@ -10,11 +10,11 @@
 // needs only the moments ∫ g n, ∫ g n δᵀ and ∫ g n δ δᵀ (diffuseFromMoments() writes it out),
 // with a remainder of at most (24 / 6) R³ G / (|r| − R)⁵ for r = o − c, G = ∫ g dA and R the
 // facet's bounding radius about c (|∇³K[e, e, e]| ≤ 4! / |y|⁵ for unit n and e: see
-// kThirdDerivativeBound). The moments
-// are integrated once per facet, on demand (a degree-9 rule on its four quarters, its error
-// taken as the change from degree 7: 164 evaluations), so that a facet far from an observer costs no kernel evaluation
-// there, where the rules cost 19 or more: a diffuse target's glow, which every observer
-// receives from every lit facet it sees, stops costing thousands of evaluations per point.
+// kThirdDerivativeBound). The moments are integrated once per facet, on demand (a degree-9
+// rule on its four quarters, its error taken as the change from degree 7: 164 evaluations), so
+// that a facet far from an observer costs no kernel evaluation there, where the rules cost 19
+// or more: a diffuse target's glow, which every observer receives from every lit facet it
+// sees, stops costing thousands of evaluations per point.
 
 #include <array>
 #include <atomic>
@@ -39,8 +39,8 @@ struct DiffuseMoments {
   bool usable = false;  // false where the facet is not lit whole, or a node was invalid
   Vec3 centre_m{0.0};   // c: the facet's bounding ball (PatchGeometry)
   double radius_m = 0.0;
-  double total = 0.0;  // G = ∫ g dA, W/sr
-  std::array<double, 3> first{};                // m = ∫ g n dA
+  double total = 0.0;                             // G = ∫ g dA, W/sr
+  std::array<double, 3> first{};                  // m = ∫ g n dA
   std::array<std::array<double, 3>, 3> second{};  // M[k][l] = ∫ g n_k (x − c)_l dA, W m/sr
   Tensor3 third{};  // T[k][l][j] = ∫ g n_k (x − c)_l (x − c)_j dA, W m²/sr
   // The quadrature's error estimates (the change from the coarser rule).

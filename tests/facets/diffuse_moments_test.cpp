@@ -32,7 +32,8 @@ double bruteForce(const SurfaceMap& map, const Beam& beam, double rho_d, const V
   double sum = 0.0;
   for (const auto& c : pieces) {
     for (const TriangleNode& node : conicalProductRule(6)) {
-      const SurfacePoint p = map.at(node.bary[0] * c[0] + node.bary[1] * c[1] + node.bary[2] * c[2]);
+      const SurfacePoint p =
+          map.at(node.bary[0] * c[0] + node.bary[1] * c[1] + node.bary[2] * c[2]);
       const Beam::Sample b = beam.at(p.position_m);
       const Vec3 to = observer_m - p.position_m;
       const double d = glm::length(to);
@@ -72,8 +73,8 @@ TEST(DiffuseMoments, AFacetsGlowFromItsMomentsIsWithinItsReportedErrorAtEveryDis
     if (!m.usable) continue;
     ++usable;
     EXPECT_EQ(evaluations, 4 * 25 + 4 * 16) << "facet " << k;
-    for (const Vec3& dir : {Vec3(0, 0, 1), glm::normalize(Vec3(1, 0, 1)), glm::normalize(Vec3(-1, 2, 2)),
-                            glm::normalize(g.normal)}) {
+    for (const Vec3& dir : {Vec3(0, 0, 1), glm::normalize(Vec3(1, 0, 1)),
+                            glm::normalize(Vec3(-1, 2, 2)), glm::normalize(g.normal)}) {
       for (const double radii : {3.0, 10.0, 30.0, 300.0}) {
         const Vec3 observer = g.centre_m + radii * g.radius_m * dir;
         const std::optional<DiffuseEstimate> e = diffuseFromMoments(m, g, observer);
@@ -120,8 +121,8 @@ TEST(DiffuseMoments, AFacetCutByTheTerminatorOrSeenPastItsHorizonHasNone) {
     std::int64_t evaluations = 0;
     const DiffuseMoments m = diffuseMoments(map, g, beam, material, evaluations);
     // A facet whose normals reach the equator is cut by the terminator (or dark): none.
-    const bool reaches_equator = std::abs(g.normal.z) <= std::sin(g.cone_rad) + 1e-12 ||
-                                 g.normal.z < 0.0;
+    const bool reaches_equator =
+        std::abs(g.normal.z) <= std::sin(g.cone_rad) + 1e-12 || g.normal.z < 0.0;
     if (reaches_equator) {
       EXPECT_FALSE(m.usable) << "facet " << k << " normal z " << g.normal.z;
       ++cut;
