@@ -402,24 +402,30 @@ SURFACES_ABOUT = ("Meshes of a sphere, an open cylinder, an ellipsoid and a toru
                   "tolerance 1e-4; `surfaces.png` is committed beside this file.")
 
 
-def splice_surfaces(out, report, command):
-    """Replaces (or inserts before the observer side) the mesh-surface section of an existing
-    report, with its own provenance line: what a run of the surface bench alone updates."""
+def splice_section(report, heading, section, insert_before="## Observer side"):
+    """Replaces the section under `heading` of an existing report (up to the next `## `) with
+    `section`, or inserts it before the first line starting with `insert_before`."""
     with open(report) as f:
         text = f.read().split("\n")
-    section = [SURFACES_HEADING, "", f"Machine: {machine()}; produced by `{command}`.", "",
-               SURFACES_ABOUT, ""]
-    section += surfaces_section(out, os.path.dirname(os.path.abspath(report))) + [""]
-    if SURFACES_HEADING in text:
-        start = text.index(SURFACES_HEADING)
+    if heading in text:
+        start = text.index(heading)
         end = next((i for i in range(start + 1, len(text)) if text[i].startswith("## ")),
                    len(text))
     else:
-        start = end = next((i for i, l in enumerate(text) if l.startswith("## Observer side")),
+        start = end = next((i for i, l in enumerate(text) if l.startswith(insert_before)),
                            len(text))
     text[start:end] = section
     with open(report, "w") as f:
         f.write("\n".join(text))
+
+
+def splice_surfaces(out, report, command):
+    """Replaces (or inserts before the observer side) the mesh-surface section of an existing
+    report, with its own provenance line: what a run of the surface bench alone updates."""
+    section = [SURFACES_HEADING, "", f"Machine: {machine()}; produced by `{command}`.", "",
+               SURFACES_ABOUT, ""]
+    section += surfaces_section(out, os.path.dirname(os.path.abspath(report))) + [""]
+    splice_section(report, SURFACES_HEADING, section)
 
 
 FACETS_HEADING = "## Facet side: the paper's Figure 4 (`glint_sweep`, 186 observers)"
@@ -434,8 +440,6 @@ def splice_facets(out, report, command):
     """Replaces the facet-side section of an existing report with one from RESULTS_DIR's sweeps,
     with its own provenance line, and commits its plot beside the report as figure4.png: what a
     run of the sweeps alone (run_all.sh --facets-only) updates."""
-    with open(report) as f:
-        text = f.read().split("\n")
     section = [FACETS_HEADING, "", f"Machine: {machine()}; produced by `{command}`.", "",
                FACETS_ABOUT, ""]
     section += facet_sections(out)
@@ -446,11 +450,7 @@ def splice_facets(out, report, command):
                     "lobe width (the seed paper's Figure 4 is not in its extracted text; its "
                     "stated saving, about 20x at sigma = 0.003 and 2x at 0.03, is quoted in the "
                     "notes above):", "", "![run time against error](figure4.png)", ""]
-    start = text.index(FACETS_HEADING)
-    end = next((i for i in range(start + 1, len(text)) if text[i].startswith("## ")), len(text))
-    text[start:end] = section
-    with open(report, "w") as f:
-        f.write("\n".join(text))
+    splice_section(report, FACETS_HEADING, section, insert_before="## Hard observers")
 
 
 def main():

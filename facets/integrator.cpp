@@ -79,7 +79,6 @@ std::int64_t FacetIntegrator::diffuseMomentEvaluations() const {
 }
 
 void FacetIntegrator::buildDiffuseMoments() {
-  diffuse_moments_.reset();
   const bool diffuse = std::any_of(target_->materials.begin(), target_->materials.end(),
                                    [](const Material& m) { return m.diffuse_reflectance > 0.0; });
   if (options_.scheme == IntegrationScheme::Lobe && diffuse) {

@@ -99,11 +99,12 @@ class LobeRule {
                                  ? lit.facet
                                  : surfaces_.subFacet(s_.maps[lit.facet.coarse], lit.facet.bary,
                                                       lit.facet.depth, lit.facet.rim_edges);
-      Piece piece = bounded(facet, f);
+      const PatchGeometry g = surfaces_.geometry(s_.target, s_.maps[facet.coarse], facet);
+      Piece piece = bounded(facet, g, f);
       // The occlusion ray last: of a mesh's thousands of lit facets an observer's bound keeps a
       // few, and the ray costs more than the bound.
       if (piece.upper == 0.0 || !s_.visible(lit)) return;
-      if (lit.facet.depth == 0) fromMoments(piece, lit, f);
+      if (lit.facet.depth == 0) fromMoments(piece, g, f);
       r.add(piece);
     };
     if (s_.clusters != nullptr && candidates_.data() == s_.lit.data()) {
@@ -251,14 +252,13 @@ class LobeRule {
   // and the specular bound, without a sample. Where that error is among the largest, the facet
   // is sampled as if it had never had them (the remainder bound is a worst case; the rules on
   // the whole facet are cheaper than four children).
-  void fromMoments(Piece& piece, const Candidate& lit, const Frame& f) {
+  // @p g bounds the facet as its map places it (the piece's own bounds).
+  void fromMoments(Piece& piece, const PatchGeometry& g, const Frame& f) const {
     if (s_.diffuse_moments == nullptr || !(f.material.diffuse_reflectance > 0.0) ||
         f.beam.return_extinction_per_m > 0.0) {
       return;
     }
-    const SurfaceMap& map = s_.maps[lit.facet.coarse];
-    // The bounds of the facet as its map places it, as the piece's own (bounded()).
-    const PatchGeometry g = surfaces_.geometry(s_.target, map, lit.facet);
+    const SurfaceMap& map = s_.maps[piece.facet.coarse];
     const std::optional<DiffuseEstimate> e =
         diffuseFromMoments(s_.diffuse_moments->get(map, g, f.beam, f.material), g, f.observer_m);
     if (!e || !(piece.specular_upper <= e->error_w_m2)) return;
@@ -273,7 +273,10 @@ class LobeRule {
 
   // The piece known by its bound alone.
   Piece bounded(const SubFacet& facet, const Frame& f) {
-    const PatchGeometry g = surfaces_.geometry(s_.target, s_.maps[facet.coarse], facet);
+    return bounded(facet, surfaces_.geometry(s_.target, s_.maps[facet.coarse], facet), f);
+  }
+  // The same, its bound geometry @p g already at hand.
+  static Piece bounded(const SubFacet& facet, const PatchGeometry& g, const Frame& f) {
     const ContributionBound b =
         contributionBound(g, f.observer_m, f.beam, f.material, lobeLimits(f.material.lobe.sigma));
     Piece piece;

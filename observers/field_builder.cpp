@@ -70,7 +70,8 @@ class FieldBuilder {
  public:
   FieldBuilder(const FacetIntegrator& integrator, const FieldSpec& spec, const ExcludedFn& excluded,
                WorkCounter* counter, PointExchange* exchange)
-      : integrator_(classifyingAccuracy(integrator, spec)),
+      : classifying_(classifyingAccuracy(integrator, spec)),
+        integrator_(classifying_ ? *classifying_ : integrator),
         spec_(spec),
         excluded_(excluded),
         counter_(counter),
@@ -810,15 +811,18 @@ class FieldBuilder {
   // A classifying field's points need, below the threshold, only the accuracy of a point at
   // it (FieldSpec::classify_above_w_m2): a point far below it, where the diffuse glow of a
   // whole lit side is summed to a thousandth, is then settled by a few pieces.
-  static FacetIntegrator classifyingAccuracy(const FacetIntegrator& integrator,
-                                             const FieldSpec& spec) {
-    if (!(spec.classify_above_w_m2 > 0.0)) return integrator;
+  // None for a field that resolves its values: it integrates with the caller's integrator,
+  // not a copy (whose candidates a mesh's lit facets make large).
+  static std::optional<FacetIntegrator> classifyingAccuracy(const FacetIntegrator& integrator,
+                                                            const FieldSpec& spec) {
+    if (!(spec.classify_above_w_m2 > 0.0)) return std::nullopt;
     return integrator.withAccuracy(
         integrator.options().tolerance,
         std::max(integrator.options().floor_w_m2, spec.tolerance * spec.hazard_threshold_w_m2));
   }
 
-  const FacetIntegrator integrator_;
+  const std::optional<FacetIntegrator> classifying_;
+  const FacetIntegrator& integrator_;  // classifying_, or the caller's
   const FieldSpec& spec_;
   const ExcludedFn& excluded_;
   WorkCounter* counter_;

@@ -23,34 +23,22 @@ struct Sums {
   bool ok = true;
 };
 
-using Corners = std::array<Vec3, 3>;  // barycentric corners in the coarse facet
+// The facet's four quarters (1→4 midpoint split), by their barycentric corners.
+const std::array<std::array<Vec3, 3>, 4> kQuarters{{
+    {Vec3(1.0, 0.0, 0.0), Vec3(0.5, 0.5, 0.0), Vec3(0.5, 0.0, 0.5)},
+    {Vec3(0.5, 0.5, 0.0), Vec3(0.0, 1.0, 0.0), Vec3(0.0, 0.5, 0.5)},
+    {Vec3(0.5, 0.0, 0.5), Vec3(0.0, 0.5, 0.5), Vec3(0.0, 0.0, 1.0)},
+    {Vec3(0.5, 0.5, 0.0), Vec3(0.0, 0.5, 0.5), Vec3(0.5, 0.0, 0.5)},
+}};
 
-// The 4^level sub-triangles of the facet, by 1→4 midpoint splits.
-std::vector<Corners> subdivide(int level) {
-  std::vector<Corners> out{{Vec3(1.0, 0.0, 0.0), Vec3(0.0, 1.0, 0.0), Vec3(0.0, 0.0, 1.0)}};
-  for (int l = 0; l < level; ++l) {
-    std::vector<Corners> next;
-    next.reserve(out.size() * 4);
-    for (const Corners& c : out) {
-      const Vec3 m01 = 0.5 * (c[0] + c[1]), m12 = 0.5 * (c[1] + c[2]), m20 = 0.5 * (c[2] + c[0]);
-      next.push_back({c[0], m01, m20});
-      next.push_back({m01, c[1], m12});
-      next.push_back({m20, m12, c[2]});
-      next.push_back({m01, m12, m20});
-    }
-    out = std::move(next);
-  }
-  return out;
-}
-
+// The moments by the points × points conical product rule on each quarter.
 Sums integrate(const SurfaceMap& map, const Vec3& centre_m, const Beam& beam, double rho_d,
-               int level, int points, std::int64_t& evaluations) {
+               int points, std::int64_t& evaluations) {
   const std::span<const TriangleNode> rule = conicalProductRule(points);
   Sums s;
-  const std::vector<Corners> pieces = subdivide(level);
-  // Each piece covers 1 / 4^level of the facet's parameter triangle, of area ½.
-  const double area_uv = 0.5 / static_cast<double>(pieces.size());
-  for (const Corners& c : pieces) {
+  // Each quarter covers ⅛ of the facet's parameter triangle, of area ½.
+  constexpr double area_uv = 0.125;
+  for (const std::array<Vec3, 3>& c : kQuarters) {
     for (const TriangleNode& node : rule) {
       const Vec3 bary = node.bary[0] * c[0] + node.bary[1] * c[1] + node.bary[2] * c[2];
       const SurfacePoint p = map.at(bary);
@@ -71,8 +59,8 @@ Sums integrate(const SurfaceMap& map, const Vec3& centre_m, const Beam& beam, do
       const Vec3 delta = p.position_m - centre_m;
       s.total += g;
       for (int k = 0; k < 3; ++k) {
-        s.first[static_cast<std::size_t>(k)] += g * p.normal[k];
         const auto ku = static_cast<std::size_t>(k);
+        s.first[ku] += g * p.normal[k];
         for (int l = 0; l < 3; ++l) {
           const auto lu = static_cast<std::size_t>(l);
           s.second[ku][lu] += g * p.normal[k] * delta[l];
@@ -109,9 +97,9 @@ DiffuseMoments diffuseMoments(const SurfaceMap& map, const PatchGeometry& g, con
 
   const double rho_d = material.diffuse_reflectance;
   // On the facet's four quarters, a degree-9 rule, its error taken as its change from degree 7.
-  const Sums fine = integrate(map, g.centre_m, beam, rho_d, 1, 5, evaluations);
+  const Sums fine = integrate(map, g.centre_m, beam, rho_d, 5, evaluations);
   if (!fine.ok) return m;
-  const Sums coarse = integrate(map, g.centre_m, beam, rho_d, 1, 4, evaluations);
+  const Sums coarse = integrate(map, g.centre_m, beam, rho_d, 4, evaluations);
   if (!coarse.ok) return m;
   m.total = fine.total;
   m.first = fine.first;

@@ -15,22 +15,20 @@ namespace glint::detail {
 namespace {
 
 // ∫ ρd E cos θi cos θr / (π d²) dA over the whole facet: 64 pieces, a degree-11 rule on each.
-double bruteForce(const SurfaceMap& map, const Beam& beam, double rho_d, const Vec3& observer_m) {
-  std::vector<std::array<Vec3, 3>> pieces{{Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)}};
+double bruteForce(const Target& t, const SurfaceMap& map, const Beam& beam, double rho_d,
+                  const Vec3& observer_m) {
+  std::vector<SubFacet> pieces{coarseSubFacet(t, map.facet())};
   for (int level = 0; level < 3; ++level) {
-    std::vector<std::array<Vec3, 3>> next;
-    for (const auto& c : pieces) {
-      const Vec3 m01 = 0.5 * (c[0] + c[1]), m12 = 0.5 * (c[1] + c[2]), m20 = 0.5 * (c[2] + c[0]);
-      next.push_back({c[0], m01, m20});
-      next.push_back({m01, c[1], m12});
-      next.push_back({m20, m12, c[2]});
-      next.push_back({m01, m12, m20});
+    std::vector<SubFacet> next;
+    for (const SubFacet& f : pieces) {
+      for (const SubFacet& c : map.split(f)) next.push_back(c);
     }
-    pieces = next;
+    pieces = std::move(next);
   }
   const double area_uv = 0.5 / static_cast<double>(pieces.size());
   double sum = 0.0;
-  for (const auto& c : pieces) {
+  for (const SubFacet& f : pieces) {
+    const std::array<Vec3, 3>& c = f.bary;
     for (const TriangleNode& node : conicalProductRule(6)) {
       const SurfacePoint p =
           map.at(node.bary[0] * c[0] + node.bary[1] * c[1] + node.bary[2] * c[2]);
@@ -46,14 +44,20 @@ double bruteForce(const SurfaceMap& map, const Beam& beam, double rho_d, const V
   return sum;
 }
 
+// The target of both tests: a 0.3 m sphere of 16 segments, its facets about 0.1 m across.
+Target sphere() {
+  Target t;
+  t.addMaterial({});
+  addSphere(t, {Vec3(0.0), 0.3}, 0, 16, Vec3(0.0, -1.0, 0.0));
+  return t;
+}
+
 // Every lit facet of a sphere under a Gaussian beam, seen from 3 to 300 facet radii along
 // several directions: the moments' estimate stays within the error it reports, and that error
 // falls as the cube of radius / distance (a first-order expansion alone would miss by the
 // square: the test fails if the second-order term is dropped).
 TEST(DiffuseMoments, AFacetsGlowFromItsMomentsIsWithinItsReportedErrorAtEveryDistance) {
-  Target t;
-  t.addMaterial({});
-  addSphere(t, {Vec3(0.0), 0.3}, 0, 16, Vec3(0.0, -1.0, 0.0));
+  const Target t = sphere();
   Beam beam;
   beam.origin_m = Vec3(0.1, 0.0, 20.0);
   beam.direction = glm::normalize(Vec3(-0.02, 0.0, -1.0));
@@ -80,7 +84,7 @@ TEST(DiffuseMoments, AFacetsGlowFromItsMomentsIsWithinItsReportedErrorAtEveryDis
         const std::optional<DiffuseEstimate> e = diffuseFromMoments(m, g, observer);
         if (!e) continue;  // some normal of the facet faces away from this observer
         ++compared;
-        const double truth = bruteForce(map, beam, material.diffuse_reflectance, observer);
+        const double truth = bruteForce(t, map, beam, material.diffuse_reflectance, observer);
         const double miss = std::abs(e->irradiance_w_m2 - truth);
         EXPECT_LE(miss, e->error_w_m2)
             << "facet " << k << " at " << radii << " radii: estimate " << e->irradiance_w_m2
@@ -106,9 +110,7 @@ TEST(DiffuseMoments, AFacetsGlowFromItsMomentsIsWithinItsReportedErrorAtEveryDis
 }
 
 TEST(DiffuseMoments, AFacetCutByTheTerminatorOrSeenPastItsHorizonHasNone) {
-  Target t;
-  t.addMaterial({});
-  addSphere(t, {Vec3(0.0), 0.3}, 0, 16, Vec3(0.0, -1.0, 0.0));
+  const Target t = sphere();
   Beam beam;
   beam.origin_m = Vec3(0.0, 0.0, 20.0);
   beam.direction = Vec3(0.0, 0.0, -1.0);
