@@ -23,8 +23,8 @@
 #include <vector>
 
 #include "observers/far_field.h"
-#include "pipeline/scene.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/setup/target_builder.h"
 
 using namespace glint;
 

@@ -39,9 +39,9 @@
 #include <random>
 
 #include "observers/field_compare.h"
-#include "pipeline/input_error.h"
-#include "pipeline/scene.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/base/input_error.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/setup/target_builder.h"
 
 using namespace glint;
 
@@ -109,7 +109,7 @@ std::vector<Index3> featurePoints(const Scene& scene, const FieldSpec& spec) {
           const AnalyticShape* shape = o.analytic();
           const CylinderShape* c = shape ? std::get_if<CylinderShape>(shape) : nullptr;
           if (!c) continue;
-          const Vec3 v = x - c->center_m;
+          const Vec3 v = x - c->centre_m;
           const bool rim =
               std::abs(std::abs(glm::dot(v, c->axis)) - 0.5 * c->length_m) <= spec.voxel_m;
           const Vec3 across = glm::cross(c->axis, beam);

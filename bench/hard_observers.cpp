@@ -24,9 +24,9 @@
 #include <sstream>
 
 #include "observers/point_set.h"
-#include "pipeline/points_file.h"
-#include "pipeline/scene.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/input/points_file.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/setup/target_builder.h"
 #include "support/brute_force.h"
 
 using namespace glint;
@@ -53,7 +53,7 @@ test::brute::Parametrisation parametrisation(const ObjectSpec& o, const Beam& be
   // The glint lies in the plane of the beam, the centre and the observer: its normal as the
   // pole keeps the glint on the equator, far from the parametrisation's poles.
   const auto& sphere = std::get<SphereShape>(*shape);
-  const Vec3 to = observer_m - sphere.center_m;
+  const Vec3 to = observer_m - sphere.centre_m;
   Vec3 pole = glm::cross(beam.direction, to);
   if (glm::length(pole) < 1e-6 * glm::length(to)) {
     pole = glm::cross(beam.direction, Vec3(0.3, 0.5, 0.7));

@@ -10,9 +10,9 @@
 
 #include "facets/reflection.h"
 #include "observers/point_set.h"
-#include "pipeline/points_file.h"
-#include "pipeline/scene.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/input/points_file.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/setup/target_builder.h"
 
 namespace glint {
 namespace {

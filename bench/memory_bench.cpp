@@ -1,7 +1,8 @@
 // What a target and a far field take in memory, stage by stage: the resident set after each
 // stage and its peak during it (Linux VmHWM, reset before each stage through
 // /proc/self/clear_refs), per coarse facet, beside the estimate glint refuses by
-// (targetMemory(), pipeline/target_builder.h; farFieldMemoryFloorBytes(), observers/far_field.h).
+// (targetMemory(), pipeline/setup/target_builder.h; farFieldMemoryFloorBytes(),
+// observers/far_field.h).
 //
 //   glint_memory_bench SCENE.json [--segments N] [--points FILE.csv] [--far N] [--threads N]
 //
@@ -21,10 +22,10 @@
 
 #include "observers/far_field.h"
 #include "observers/point_set.h"
-#include "pipeline/memory_budget.h"
-#include "pipeline/points_file.h"
-#include "pipeline/scene.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/base/memory_budget.h"
+#include "pipeline/input/points_file.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/setup/target_builder.h"
 
 using namespace glint;
 

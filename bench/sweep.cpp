@@ -30,9 +30,9 @@
 #include <sstream>
 
 #include "observers/point_set.h"
-#include "pipeline/points_file.h"
-#include "pipeline/scene.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/input/points_file.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/setup/target_builder.h"
 
 using namespace glint;
 

@@ -42,7 +42,7 @@
 namespace glint {
 namespace {
 
-// The .vti's budget (pipeline/run_command.cpp, vtiStride): the AMR keeps to it too.
+// The .vti's budget (pipeline/commands/run_command.cpp, vtiStride): the AMR keeps to it too.
 constexpr double kAmrPointBudget = 16.7e6;
 // Each AMR block is a file: a folder of many thousands is slow to open and to copy.
 constexpr std::size_t kAmrFileBudget = 10000;

@@ -11,12 +11,12 @@ const double kGaussianReach = std::sqrt(std::log(1e15) / 2.0);
 
 double Beam::reachFactor() const { return profile == BeamProfile::Gaussian ? kGaussianReach : 1.0; }
 
-double Beam::sweptRadius(const Vec3& center_m, double radius_m_ball) const {
+double Beam::sweptRadius(const Vec3& centre_m, double radius_m_ball) const {
   if (!swept()) return radius_m_ball;
   // A beam of the sweep is this one turned about its origin by at most α and moved by at most s:
   // seen from it, a point q sits where this beam has a point within s + 2 sin(α/2)|q − origin|
   // ≤ s + α (|center − origin| + r) of q.
-  const double lever_m = glm::length(center_m - origin_m) + radius_m_ball;
+  const double lever_m = glm::length(centre_m - origin_m) + radius_m_ball;
   return radius_m_ball + sweep_offset_m + std::min(sweep_angle_rad, kPi) * lever_m;
 }
 
@@ -76,9 +76,9 @@ Beam::Footprint Beam::footprint(const Vec3& x_m) const {
   return f;
 }
 
-double Beam::maxIrradianceInBall(const Vec3& center_m, double own_radius_m) const {
-  const double radius_m_ball = sweptRadius(center_m, own_radius_m);
-  const Vec3 rel = center_m - origin_m;
+double Beam::maxIrradianceInBall(const Vec3& centre_m, double own_radius_m) const {
+  const double radius_m_ball = sweptRadius(centre_m, own_radius_m);
+  const Vec3 rel = centre_m - origin_m;
   const double zc = glm::dot(rel, direction);
   if (zc + radius_m_ball < 0.0) return 0.0;
   const double rho_c = glm::length(rel - zc * direction);
@@ -96,9 +96,9 @@ double Beam::maxIrradianceInBall(const Vec3& center_m, double own_radius_m) cons
   return power_w / area_near * t;
 }
 
-bool Beam::edgeMayCrossBall(const Vec3& center_m, double own_radius_m) const {
-  const double radius_m_ball = sweptRadius(center_m, own_radius_m);
-  const Vec3 rel = center_m - origin_m;
+bool Beam::edgeMayCrossBall(const Vec3& centre_m, double own_radius_m) const {
+  const double radius_m_ball = sweptRadius(centre_m, own_radius_m);
+  const Vec3 rel = centre_m - origin_m;
   const double zc = glm::dot(rel, direction);
   if (zc - radius_m_ball < 0.0 && zc + radius_m_ball >= 0.0) return true;
   if (profile != BeamProfile::FlatTop) return false;
@@ -108,9 +108,9 @@ bool Beam::edgeMayCrossBall(const Vec3& center_m, double own_radius_m) const {
   return rho_c - radius_m_ball <= r_far && rho_c + radius_m_ball > r_near;
 }
 
-bool Beam::profileMayBendInBall(const Vec3& center_m, double own_radius_m) const {
-  const double radius_m_ball = sweptRadius(center_m, own_radius_m);
-  const double z_near = glm::dot(center_m - origin_m, direction) - radius_m_ball;
+bool Beam::profileMayBendInBall(const Vec3& centre_m, double own_radius_m) const {
+  const double radius_m_ball = sweptRadius(centre_m, own_radius_m);
+  const double z_near = glm::dot(centre_m - origin_m, direction) - radius_m_ball;
   const double width_m = radiusAt(std::max(z_near, 0.0));
   if (profile == BeamProfile::Gaussian) {
     // Across ±w/2 the Gaussian falls to e^{-1/2} of its top: a quadratic through six nodes
@@ -124,7 +124,7 @@ bool Beam::profileMayBendInBall(const Vec3& center_m, double own_radius_m) const
   // sagitta, R²/2a, at most a/200) for that line to follow it, and a piece wider than the
   // beam can hold the whole spot between corners that all lie outside it. Before this, a
   // 0.5 m beam on a 3 m mirror facet read 2e-8 W/m² where 110 W/m² fall.
-  return radius_m_ball > 0.1 * width_m && edgeMayCrossBall(center_m, own_radius_m);
+  return radius_m_ball > 0.1 * width_m && edgeMayCrossBall(centre_m, own_radius_m);
 }
 
 double Beam::directionSpreadInBall(double radius_m_ball) const {

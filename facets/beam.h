@@ -81,19 +81,19 @@ struct Beam {
   /// @brief Irradiance on the axis at the laser: P / (π a²) or 2P / (π w²), the most anywhere.
   [[nodiscard]] double peakIrradiance() const;
 
-  /// @brief An upper bound of the irradiance over the ball (@p center_m, @p radius_m),
+  /// @brief An upper bound of the irradiance over the ball (@p centre_m, @p radius_m),
   /// attenuation included; 0 when no point of the ball is lit.
-  [[nodiscard]] double maxIrradianceInBall(const Vec3& center_m, double radius_m) const;
+  [[nodiscard]] double maxIrradianceInBall(const Vec3& centre_m, double radius_m) const;
 
   /// @brief True when a discontinuity of the beam (a flat-top edge, or the laser's own plane)
   /// may pass through the ball, so that samples inside it cannot be trusted to be smooth.
-  [[nodiscard]] bool edgeMayCrossBall(const Vec3& center_m, double radius_m) const;
+  [[nodiscard]] bool edgeMayCrossBall(const Vec3& centre_m, double radius_m) const;
 
   /// @brief True when the profile may bend across the ball faster than a rule's few nodes
   /// can follow: a Gaussian whose width w(z) at the ball's near end is under twice the ball's
   /// radius; a flat top whose edge may cross a ball wider than a tenth of its radius a(z) (a
   /// rule that clips at the edge draws it straight between its nodes).
-  [[nodiscard]] bool profileMayBendInBall(const Vec3& center_m, double radius_m) const;
+  [[nodiscard]] bool profileMayBendInBall(const Vec3& centre_m, double radius_m) const;
 
   /// @brief An upper bound, in radians, of the angle between ωi at the centre of a ball of
   /// radius @p radius_m and ωi anywhere in it (0 for a collimated beam).
@@ -104,9 +104,9 @@ struct Beam {
 
  private:
   [[nodiscard]] double reachFactor() const;
-  /// The radius of a ball about @p center_m that holds, for every beam of the sweep, the point
-  /// of this beam's frame where a point of the ball (@p center_m, @p radius_m) lies in its own.
-  [[nodiscard]] double sweptRadius(const Vec3& center_m, double radius_m) const;
+  /// The radius of a ball about @p centre_m that holds, for every beam of the sweep, the point
+  /// of this beam's frame where a point of the ball (@p centre_m, @p radius_m) lies in its own.
+  [[nodiscard]] double sweptRadius(const Vec3& centre_m, double radius_m) const;
   /// exp(−μ z) for z ≥ 0 along the axis, exactly 1 in vacuum.
   [[nodiscard]] double transmission(double z_m) const {
     return extinction_per_m > 0.0 ? std::exp(-extinction_per_m * std::max(z_m, 0.0)) : 1.0;

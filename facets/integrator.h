@@ -230,10 +230,11 @@ class FacetIntegrator {
  private:
   // Readies the workspace for the observer and returns what a scheme sees of both.
   detail::ObserverSetting prepareObserver(const Vec3& observer_m, detail::Workspace& ws) const;
-  // The culling (culling.cpp): lit_ and cull_ under beam_, then the lobe scheme's clusters_.
+  // The culling (culling.cpp): lit_ and cull_ under beam_.
   void cull();
   // Builds occluder_ where the options and the target ask for it.
   void buildOccluder();
+  // The lobe scheme's clusters_ over lit_ (culling.cpp), once cull() has found them.
   void buildClusters();
   // A diffuse moment cache for beam_ where the lobe scheme meets a diffuse material.
   void buildDiffuseMoments();

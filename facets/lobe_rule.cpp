@@ -337,8 +337,9 @@ struct SpecularPart {
 };
 
 // False where the rule cannot be applied (the map breaks down, or a wide lobe lacks a model).
-bool integrateLobe(const LobeSampler& sampler, const std::array<const LobeNode*, 6>& nodes,
-                   const ConvexPolygon& poly, double sigma, double negligible, SpecularPart& part) {
+bool integrateSpecularPart(const LobeSampler& sampler, const std::array<const LobeNode*, 6>& nodes,
+                           const ConvexPolygon& poly, double sigma, double negligible,
+                           SpecularPart& part) {
   // A node past θN = 90° leaves q without a model. The piece's normals spread less than 0.3 rad
   // (the lobe scheme's resolution), so all of it then lies beyond θN = 73°, where for σ < 0.2
   // the lobe is below e^-130 of its peak: nothing.
@@ -545,7 +546,7 @@ LobeEstimate lobeRule(const LobeSampler& sampler, const std::array<const LobeNod
   if (std::any_of(nodes.begin(), nodes.end(),
                   [](const LobeNode* n) { return n->specular != 0.0; })) {
     const double negligible = area_uv > 0.0 ? negligible_w_m2 / (2.0 * area_uv) : 0.0;
-    if (!integrateLobe(sampler, nodes, poly, sigma, negligible, specular)) return result;
+    if (!integrateSpecularPart(sampler, nodes, poly, sigma, negligible, specular)) return result;
     result.evaluations += specular.evaluations;
   }
   const double value = 2.0 * area_uv * (specular.value + diffuse);

@@ -27,13 +27,6 @@ struct Material {
     if (specular_reflectance > 0.0) f += 0.25 * specular_reflectance * lobe.xi(n, wi + wo);
     return f;
   }
-
-  /// @brief An upper bound of f_r cos θi cos θr over all geometries with tan²θN ≥ @p tan2_min.
-  [[nodiscard]] double maxCosineWeightedBrdf(double tan2_min) const {
-    double f = diffuse_reflectance / kPi;
-    if (specular_reflectance > 0.0) f += 0.25 * specular_reflectance * lobe.maxXiBeyond(tan2_min);
-    return f;
-  }
 };
 
 /// @brief The narrowest specular lobe of @p materials (smallest σ among those with a specular

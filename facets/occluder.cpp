@@ -66,8 +66,7 @@ Occluder::Occluder(const Target& target, int level, bool target_shadows, const S
     }
     lift_m_[i] = 1.5 * bulge;
   }
-  terrain_triangles_ = terrain != nullptr ? terrain->triangles.size() : 0;
-  triangles_ = pieces.triangles.size() + terrain_triangles_;
+  triangles_ = pieces.triangles.size() + (terrain != nullptr ? terrain->triangles.size() : 0);
   if (triangles_ == 0) return;
 
   impl_->frame_origin_m = 0.5 * (lo + hi);

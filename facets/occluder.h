@@ -56,9 +56,6 @@ class Occluder {
   /// starts.
   [[nodiscard]] double lift_m(std::uint32_t coarse) const { return lift_m_[coarse]; }
 
-  /// @brief The terrain's triangles among them.
-  [[nodiscard]] std::size_t terrainTriangleCount() const { return terrain_triangles_; }
-
   /// @brief Triangles in the Embree scene.
   [[nodiscard]] std::size_t triangleCount() const { return triangles_; }
 
@@ -67,7 +64,6 @@ class Occluder {
   std::unique_ptr<Impl> impl_;
   std::vector<double> lift_m_;
   std::size_t triangles_ = 0;
-  std::size_t terrain_triangles_ = 0;
 };
 
 }  // namespace glint

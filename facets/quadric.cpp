@@ -27,15 +27,15 @@ Quadric::Quadric(const glm::dmat3& a, const Vec3& b, double c) : a_(a), b_(b), c
   }
 }
 
-Quadric Quadric::cylinder(const Vec3& center_m, const Vec3& unit_axis, double radius_m) {
+Quadric Quadric::cylinder(const Vec3& centre_m, const Vec3& unit_axis, double radius_m) {
   // |x − c|² − ((x − c)·a)² − R² with A = I − a aᵀ.
   const glm::dmat3 a = glm::dmat3(1.0) - glm::outerProduct(unit_axis, unit_axis);
-  const Vec3 ac = a * center_m;
-  return Quadric(a, -ac, glm::dot(center_m, ac) - radius_m * radius_m);
+  const Vec3 ac = a * centre_m;
+  return Quadric(a, -ac, glm::dot(centre_m, ac) - radius_m * radius_m);
 }
 
-Quadric Quadric::sphere(const Vec3& center_m, double radius_m) {
-  return Quadric(glm::dmat3(1.0), -center_m, glm::dot(center_m, center_m) - radius_m * radius_m);
+Quadric Quadric::sphere(const Vec3& centre_m, double radius_m) {
+  return Quadric(glm::dmat3(1.0), -centre_m, glm::dot(centre_m, centre_m) - radius_m * radius_m);
 }
 
 Quadric Quadric::plane(const Vec3& point_m, const Vec3& unit_normal) {

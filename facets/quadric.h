@@ -23,9 +23,9 @@ class Quadric {
   Quadric(const glm::dmat3& a, const Vec3& b, double c);
 
   /// @brief The open side of a cylinder, gradient pointing away from the axis.
-  static Quadric cylinder(const Vec3& center_m, const Vec3& unit_axis, double radius_m);
+  static Quadric cylinder(const Vec3& centre_m, const Vec3& unit_axis, double radius_m);
   /// @brief A sphere, gradient pointing outward.
-  static Quadric sphere(const Vec3& center_m, double radius_m);
+  static Quadric sphere(const Vec3& centre_m, double radius_m);
   /// @brief A plane through @p point_m, gradient along @p unit_normal.
   static Quadric plane(const Vec3& point_m, const Vec3& unit_normal);
 
@@ -72,15 +72,15 @@ class Quadric {
 /// boundary edge are placed on it, so refinement converges to the true outline, not to the
 /// inscribed polygon of the coarse facets.
 struct RimCircle {
-  Vec3 center_m{0.0};
+  Vec3 centre_m{0.0};
   Vec3 normal{0.0, 0.0, 1.0};  ///< unit normal of the circle's plane
   double radius_m = 1.0;
 
   /// @brief The point of the circle nearest to @p x (x itself when it lies on the axis).
   [[nodiscard]] Vec3 project(const Vec3& x) const {
-    const Vec3 rel = x - center_m;
+    const Vec3 rel = x - centre_m;
     const auto radial = tryNormalize(rel - glm::dot(rel, normal) * normal);
-    return radial ? center_m + radius_m * *radial : x;
+    return radial ? centre_m + radius_m * *radial : x;
   }
 };
 

@@ -52,7 +52,7 @@ SurfaceMap::SurfaceMap(const Target& target, std::uint32_t facet)
       const RimCircle& rim = *obj.rim;
       for (int e = 0; e < 3; ++e) {
         if (!(target.rim_edges[facet] >> e & 1u)) continue;
-        const Vec3 a = corner_m_[e] - rim.center_m, b = corner_m_[(e + 1) % 3] - rim.center_m;
+        const Vec3 a = corner_m_[e] - rim.centre_m, b = corner_m_[(e + 1) % 3] - rim.centre_m;
         const auto e1 = tryNormalize(a - glm::dot(a, rim.normal) * rim.normal);
         if (!e1) continue;
         // e2 turns from a toward b in the rim's plane: the arc is the short one between them.
@@ -60,7 +60,7 @@ SurfaceMap::SurfaceMap(const Target& target, std::uint32_t facet)
         if (glm::dot(e2, b) < 0.0) e2 = -e2;
         RimArc& arc = rim_[e];
         arc.present = true;
-        arc.center_m = rim.center_m;
+        arc.centre_m = rim.centre_m;
         arc.e1 = *e1;
         arc.e2 = e2;
         arc.radius_m = rim.radius_m;
@@ -91,7 +91,7 @@ void SurfaceMap::blended(const Vec3& bary, Vec3& p, Vec3& p_u, Vec3& p_v) const 
     const Vec3& b = corner_m_[f];
     const double phi = t * arc.angle_rad;
     const Vec3 radial = std::cos(phi) * arc.e1 + std::sin(phi) * arc.e2;
-    const Vec3 d = arc.center_m + arc.radius_m * radial - (a + t * (b - a));
+    const Vec3 d = arc.centre_m + arc.radius_m * radial - (a + t * (b - a));
     const Vec3 d_t =
         arc.radius_m * arc.angle_rad * (-std::sin(phi) * arc.e1 + std::cos(phi) * arc.e2) - (b - a);
     p += s * s * d;

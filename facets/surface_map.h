@@ -87,7 +87,7 @@ class SurfaceMap {
  private:
   struct RimArc {
     bool present = false;
-    Vec3 center_m{0.0}, e1{0.0}, e2{0.0};  // arc(t) = c + R (cos tΔ e1 + sin tΔ e2)
+    Vec3 centre_m{0.0}, e1{0.0}, e2{0.0};  // arc(t) = c + R (cos tΔ e1 + sin tΔ e2)
     double radius_m = 0.0, angle_rad = 0.0;
   };
   // The chord point with rim blending, and its derivatives along u and v.

@@ -57,20 +57,20 @@ double CylinderShape::rings(int segments) const {
 }
 
 bool CylinderShape::nearOrInside(const Vec3& x_m, double margin_m) const {
-  const Vec3 v = x_m - center_m;
+  const Vec3 v = x_m - centre_m;
   const double along = glm::dot(v, axis);
   const double across = glm::length(v - along * axis);
   return std::abs(along) < 0.5 * length_m + margin_m && across < radius_m + margin_m;
 }
 
 bool SphereShape::nearOrInside(const Vec3& x_m, double margin_m) const {
-  return glm::length(x_m - center_m) < radius_m + margin_m;
+  return glm::length(x_m - centre_m) < radius_m + margin_m;
 }
 
 double DiskShape::rings(int segments) { return std::max(1.0, std::round(segments / (2.0 * kPi))); }
 
 bool DiskShape::nearOrInside(const Vec3& x_m, double margin_m) const {
-  const Vec3 v = x_m - center_m;
+  const Vec3 v = x_m - centre_m;
   const double along = glm::dot(v, normal);
   const double across = glm::length(v - along * normal);
   return std::abs(along) < margin_m && across < radius_m + margin_m;
@@ -105,7 +105,7 @@ bool isConvex(const AnalyticShape& shape) {
 }
 
 Vec3 centreOf(const AnalyticShape& shape) {
-  return std::visit([](const auto& s) { return s.center_m; }, shape);
+  return std::visit([](const auto& s) { return s.centre_m; }, shape);
 }
 
 std::optional<Vec3> axisOf(const AnalyticShape& shape) {
@@ -116,7 +116,7 @@ std::optional<Vec3> axisOf(const AnalyticShape& shape) {
 
 AnalyticShape placed(const AnalyticShape& shape, const Vec3& centre_m, const glm::dquat& turn) {
   AnalyticShape out = shape;
-  std::visit([&](auto& s) { s.center_m = centre_m; }, out);
+  std::visit([&](auto& s) { s.centre_m = centre_m; }, out);
   // A unit axis turned by a unit quaternion is a unit vector to rounding, never zero.
   if (auto* c = std::get_if<CylinderShape>(&out)) c->axis = *tryNormalize(turn * c->axis);
   if (auto* d = std::get_if<DiskShape>(&out)) d->normal = *tryNormalize(turn * d->normal);
@@ -126,7 +126,7 @@ AnalyticShape placed(const AnalyticShape& shape, const Vec3& centre_m, const glm
 std::uint32_t addCylinder(Target& target, const CylinderShape& s, std::uint32_t material,
                           int segments, const Vec3& reference) {
   const std::uint32_t obj =
-      target.addObject({s.center_m, material, std::nullopt, CylinderShape::kConvex});
+      target.addObject({s.centre_m, material, std::nullopt, CylinderShape::kConvex});
   const std::uint32_t q = target.addQuadric(Quadric::cylinder(Vec3(0.0), s.axis, s.radius_m));
   const Vec3 u = perpendicularToward(s.axis, reference);
   const Vec3 v = glm::cross(s.axis, u);
@@ -150,7 +150,7 @@ std::uint32_t addCylinder(Target& target, const CylinderShape& s, std::uint32_t 
 std::uint32_t addSphere(Target& target, const SphereShape& s, std::uint32_t material, int segments,
                         const Vec3& reference) {
   const std::uint32_t obj =
-      target.addObject({s.center_m, material, std::nullopt, SphereShape::kConvex});
+      target.addObject({s.centre_m, material, std::nullopt, SphereShape::kConvex});
   const std::uint32_t q = target.addQuadric(Quadric::sphere(Vec3(0.0), s.radius_m));
   const Vec3 pole = reference;
   const Vec3 e1 = anyPerpendicular(pole);
@@ -179,7 +179,7 @@ std::uint32_t addSphere(Target& target, const SphereShape& s, std::uint32_t mate
 std::uint32_t addDisk(Target& target, const DiskShape& s, std::uint32_t material, int segments,
                       const Vec3& reference) {
   const RimCircle rim{Vec3(0.0), s.normal, s.radius_m};
-  const std::uint32_t obj = target.addObject({s.center_m, material, rim, DiskShape::kConvex});
+  const std::uint32_t obj = target.addObject({s.centre_m, material, rim, DiskShape::kConvex});
   const std::uint32_t q = target.addQuadric(Quadric::plane(Vec3(0.0), s.normal));
   const Vec3 u = perpendicularToward(s.normal, reference);
   const Vec3 v = glm::cross(s.normal, u);

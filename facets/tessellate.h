@@ -23,7 +23,7 @@ namespace glint {
 
 /// @brief The open side surface of a right circular cylinder (no caps), reflecting outward.
 struct CylinderShape {
-  Vec3 center_m{0.0};
+  Vec3 centre_m{0.0};
   Vec3 axis{0.0, 0.0, 1.0};  ///< unit
   double radius_m = 1.0;
   double length_m = 1.0;
@@ -40,7 +40,7 @@ struct CylinderShape {
 
 /// @brief A sphere, reflecting outward.
 struct SphereShape {
-  Vec3 center_m{0.0};
+  Vec3 centre_m{0.0};
   double radius_m = 1.0;
 
   /// @brief Latitude bands pole to pole.
@@ -56,7 +56,7 @@ struct SphereShape {
 
 /// @brief A one-sided disk: only the side its normal points to reflects.
 struct DiskShape {
-  Vec3 center_m{0.0};
+  Vec3 centre_m{0.0};
   Vec3 normal{0.0, 0.0, 1.0};  ///< unit
   double radius_m = 1.0;
 

@@ -72,9 +72,6 @@ class Terrain {
   [[nodiscard]] std::size_t posts() const { return posts_; }
   /// @brief The largest distance between neighbouring posts (m): the model's resolution.
   [[nodiscard]] double postSpacingM() const { return post_spacing_m_; }
-  /// @brief The local heights the surface spans (m).
-  [[nodiscard]] double minZ() const { return min_z_; }
-  [[nodiscard]] double maxZ() const { return max_z_; }
   /// @brief What GDAL says the model's coordinate system is.
   [[nodiscard]] const std::string& crsName() const { return crs_name_; }
 
@@ -86,7 +83,7 @@ class Terrain {
   std::size_t posts_ = 0;
   std::size_t window_posts_ = 0;
   double post_spacing_m_ = 0.0;
-  double min_z_ = 0.0, max_z_ = 0.0;
+  double min_z_ = 0.0, max_z_ = 0.0;  // the local heights the surface spans (m)
   std::string crs_name_;
 };
 

@@ -3,7 +3,7 @@
 /// @brief The hazard a scene is judged for, in one place: the exposure and its MPE (continuous,
 /// single pulse or pulse train), the air's extinction, an optical aid, and the ratios and zones
 /// the outputs report (docs/hazard.md). Physics only: what the outputs make of it (JSON, maps,
-/// volume arrays) is built in pipeline/hazard_report.h.
+/// volume arrays) is built in pipeline/report/hazard_report.h.
 ///
 /// Everything glint integrates is the mean irradiance over the exposure, E (W/m²), from the
 /// laser's mean power. The limits reduce to one number it is compared with, `mpe_w_m2`: the MPE

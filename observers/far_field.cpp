@@ -68,27 +68,6 @@ std::uint64_t narrowKey(int a, int b, int face_pixels) {
 
 }  // namespace
 
-LitBall litBall(const FacetIntegrator& integrator) {
-  const std::span<const Candidate> lit = integrator.candidates();
-  if (lit.empty()) return {};
-  const Target& target = integrator.target();
-  Vec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
-  for (const Candidate& c : lit) {
-    const Vec3 origin = target.objects[c.object].origin_m;
-    for (const Vec3& corner : c.geometry.corner_m) {
-      lo = glm::min(lo, origin + corner);
-      hi = glm::max(hi, origin + corner);
-    }
-  }
-  LitBall ball{0.5 * (lo + hi), 0.0};
-  for (const Candidate& c : lit) {
-    const Vec3 centre = target.objects[c.object].origin_m + c.geometry.centre_m;
-    ball.radius_m =
-        std::max(ball.radius_m, glm::length(centre - ball.centre_m) + c.geometry.radius_m);
-  }
-  return ball;
-}
-
 double farRadius(double lit_radius_m, double narrowest_sigma, double tolerance,
                  double forward_angle_rad) {
   // sin(ψ/2) ≤ 0 only exactly forward: the bound is then infinite, as it should be.

@@ -24,20 +24,10 @@
 #include <vector>
 
 #include "facets/integrator.h"
+#include "facets/lit_ball.h"
 #include "observers/field.h"
 
 namespace glint {
-
-/// @brief The ball around the lit facets: the far field's origin and size.
-struct LitBall {
-  /// The centre of the lit facets' corners' bounding box (the adaptive field's centre of
-  /// spread too, FieldBuilder): distances and directions of the far field are taken from here.
-  Vec3 centre_m{0.0};
-  double radius_m = 0.0;  ///< holds every lit curved patch (their bounding balls)
-};
-
-/// @brief The ball of @p integrator's lit facets; radius 0 when nothing is lit.
-LitBall litBall(const FacetIntegrator& integrator);
 
 /// @brief The far radius: beyond it, E(c + r ω) r² differs from I(ω) by at most @p tolerance ×
 /// the intensity of the brightest direction the parallax can reach (first order in a/r).

@@ -178,7 +178,7 @@ struct FieldStats {
   /// none of them can be hazardous however the integration would have ended.
   double unconverged_max_upper_w_m2 = 0.0;
   /// Integrated points whose irradiance is not a finite number (never written to the grids):
-  /// none for a scene within pipeline/limits.h; any is an error the caller must report.
+  /// none for a scene within pipeline/base/limits.h; any is an error the caller must report.
   std::int64_t non_finite_points = 0;
   Vec3 non_finite_at_m{0.0};         ///< one of them
   std::int64_t blocks_skipped = 0;   ///< proven below the floor

@@ -14,10 +14,10 @@
 #include <string>
 #include <unordered_map>
 
+#include "facets/lit_ball.h"
 #include "observers/block_check.h"
 #include "observers/detail/field_common.h"
 #include "observers/detail/piece_pool.h"
-#include "observers/far_field.h"
 #include "observers/field.h"
 
 namespace glint {

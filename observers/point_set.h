@@ -22,7 +22,7 @@ struct WorkCounter {
   /// Items known so far, where the total is not known in advance (the adaptive field learns
   /// its points level by level).
   std::atomic<std::size_t> items_scheduled{0};
-  /// Raised by whoever watches the run (pipeline/memory_budget.h); the work then stops at its
+  /// Raised by whoever watches the run (pipeline/base/memory_budget.h); the work then stops at its
   /// next item and throws WorkStopped from outside its parallel loops.
   const std::atomic<bool>* stop = nullptr;
 
@@ -31,9 +31,10 @@ struct WorkCounter {
   }
 };
 
-/// @brief The processes that share one field's point evaluations (an MPI job: pipeline/cluster.h).
-/// Each evaluates its share of every level's new points and all receive every value, so every
-/// process holds the same field, as one process would have computed it.
+/// @brief The processes that share one field's point evaluations (an MPI job:
+/// pipeline/commands/cluster.h). Each evaluates its share of every level's new points and all
+/// receive every value, so every process holds the same field, as one process would have computed
+/// it.
 class PointExchange {
  public:
   virtual ~PointExchange() = default;

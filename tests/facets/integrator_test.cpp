@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "facets/tessellate.h"
-#include "pipeline/scene.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/setup/target_builder.h"
 #include "support/quadrature.h"
 #include "support/references.h"
 #include "support/scenes.h"

@@ -76,8 +76,8 @@ TEST(Quadric, SubdivisionPointsLieOnTheSurface) {
             << "facet " << i << " depth " << int(f.depth);
         // Corners on a rim edge lie on the true circle, not on the coarse polygon.
         if (obj.rim && (f.rim_edges >> k & 1u)) {
-          ASSERT_NEAR(glm::length(f.corner_m[k] - obj.rim->center_m), obj.rim->radius_m, 1e-13);
-          ASSERT_NEAR(glm::length(f.corner_m[(k + 1) % 3] - obj.rim->center_m), obj.rim->radius_m,
+          ASSERT_NEAR(glm::length(f.corner_m[k] - obj.rim->centre_m), obj.rim->radius_m, 1e-13);
+          ASSERT_NEAR(glm::length(f.corner_m[(k + 1) % 3] - obj.rim->centre_m), obj.rim->radius_m,
                       1e-13);
         }
       }

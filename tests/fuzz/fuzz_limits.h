@@ -7,7 +7,7 @@
 // crease normals at any valence) has its tests in tests/facets/mesh_test.cpp.
 #include <cstdint>
 
-#include "pipeline/gltf_loader.h"
+#include "pipeline/input/gltf_loader.h"
 
 namespace glint::fuzz {
 

@@ -8,8 +8,8 @@
 #include <span>
 
 #include "fuzz_limits.h"
-#include "pipeline/gltf_loader.h"
-#include "pipeline/input_error.h"
+#include "pipeline/base/input_error.h"
+#include "pipeline/input/gltf_loader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   // External buffer uris resolve in the seed corpus folder, so inputs can reach real files

@@ -10,8 +10,8 @@
 #include <string_view>
 
 #include "fuzz_limits.h"
-#include "pipeline/input_error.h"
-#include "pipeline/scene.h"
+#include "pipeline/base/input_error.h"
+#include "pipeline/input/scene.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const std::optional<std::filesystem::path> folder{GLINT_FUZZ_GLTF_DIR};

@@ -13,8 +13,8 @@
 
 #include "hazard/exposure_window.h"
 #include "observers/motion.h"
-#include "pipeline/scene.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/setup/target_builder.h"
 #include "support/exposure_compare.h"
 
 namespace glint {

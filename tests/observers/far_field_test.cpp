@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/scene.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/setup/target_builder.h"
 
 namespace glint {
 namespace {

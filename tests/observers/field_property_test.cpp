@@ -13,8 +13,8 @@
 
 #include "observers/field.h"
 #include "observers/field_compare.h"
-#include "pipeline/scene.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/setup/target_builder.h"
 
 namespace glint {
 namespace {

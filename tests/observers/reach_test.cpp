@@ -10,8 +10,8 @@
 #include <string>
 
 #include "observers/far_field.h"
-#include "pipeline/scene.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/setup/target_builder.h"
 
 namespace glint {
 namespace {

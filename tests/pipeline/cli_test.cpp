@@ -1,4 +1,4 @@
-#include "pipeline/cli.h"
+#include "pipeline/commands/cli.h"
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>

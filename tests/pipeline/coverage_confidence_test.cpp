@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "export/exr_map.h"
-#include "pipeline/study_maps.h"
+#include "pipeline/setup/study_maps.h"
 #include "support/cli.h"
 #include "support/files.h"
 

@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "observers/point_set.h"
-#include "pipeline/points_file.h"
-#include "pipeline/scene.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/input/points_file.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/setup/target_builder.h"
 #include "support/cli.h"
 
 namespace glint {

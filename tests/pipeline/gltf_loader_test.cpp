@@ -1,7 +1,7 @@
 // The glTF loader: node transforms, and the hostile files it must refuse with a clear message
 // (docs/meshes.md, "A file from a stranger": traversal, a folder as uri, deep nesting, bad
 // accessors, NaN vertices).
-#include "pipeline/gltf_loader.h"
+#include "pipeline/input/gltf_loader.h"
 
 #include <gtest/gtest.h>
 
@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/input_error.h"
-#include "pipeline/scene.h"
+#include "pipeline/base/input_error.h"
+#include "pipeline/input/scene.h"
 #include "support/refusal.h"
 
 namespace glint {

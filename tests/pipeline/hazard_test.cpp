@@ -6,9 +6,9 @@
 #include <nlohmann/json.hpp>
 
 #include "observers/far_field.h"
-#include "pipeline/hazard_report.h"
-#include "pipeline/scene.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/report/hazard_report.h"
+#include "pipeline/setup/target_builder.h"
 #include "support/refusal.h"
 
 namespace glint {

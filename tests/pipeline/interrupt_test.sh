@@ -7,7 +7,7 @@
 # as it was. A SIGKILL cannot be caught: its temporaries are removed by the next glint that
 # writes into the same folder, and its lock (a flock) went with the process.
 #
-# GLINT_TEST_PAUSE_AFTER=temporaries (pipeline/test_pause.h) makes each glint stop once its
+# GLINT_TEST_PAUSE_AFTER=temporaries (pipeline/base/test_pause.h) makes each glint stop once its
 # temporaries exist and say so, GLINT_TEST_PAUSE_AFTER=first-output once the first of its
 # outputs is in place: the signal lands there however fast or loaded the machine is.
 # No wait here is timed: a glint that ends without pausing fails the test at once, and one that

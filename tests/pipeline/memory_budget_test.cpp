@@ -1,7 +1,7 @@
 // The memory budget: sizes read as users write them, refusals that say what a region or a
 // target needs, floors that are floors, and a watch that raises its flag once the process
 // passes the budget.
-#include "pipeline/memory_budget.h"
+#include "pipeline/base/memory_budget.h"
 
 #include <gtest/gtest.h>
 #include <malloc.h>
@@ -14,9 +14,9 @@
 #include <vector>
 
 #include "observers/field.h"
-#include "pipeline/input_error.h"
-#include "pipeline/scene.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/base/input_error.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/setup/target_builder.h"
 #include "support/test_meshes.h"
 
 namespace glint {

@@ -14,7 +14,7 @@
 #include <sstream>
 #include <string>
 
-#include "pipeline/output_folder.h"
+#include "pipeline/report/output_folder.h"
 #include "support/cli.h"
 #include "support/files.h"
 #include "support/small_disk.h"

@@ -1,8 +1,8 @@
-#include "pipeline/points_file.h"
+#include "pipeline/input/points_file.h"
 
 #include <gtest/gtest.h>
 
-#include "pipeline/input_error.h"
+#include "pipeline/base/input_error.h"
 #include "support/refusal.h"
 
 namespace glint {

@@ -17,11 +17,11 @@
 
 #include "export/exr_map.h"
 #include "observers/detail/cube_faces.h"
-#include "pipeline/input_error.h"
-#include "pipeline/memory_budget.h"
-#include "pipeline/run_command.h"
-#include "pipeline/scene.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/base/input_error.h"
+#include "pipeline/base/memory_budget.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/setup/scene_regions.h"
+#include "pipeline/setup/target_builder.h"
 #include "support/cli.h"
 #include "support/files.h"
 
@@ -332,7 +332,7 @@ TEST(ReachRun, ALatticeBeyondTheMemoryBudgetIsRefusedBeforeItIsAllocated) {
   const std::uint64_t far_bytes = farFieldMemoryFloorBytes(far.spec());
   const MemoryWatch watch(far_bytes + 1024);  // the far field fits, the lattice does not
   try {
-    (void)sceneReach(target, scene, far, watch, "the hazard reach", nullptr, false);
+    (void)sceneReach(target, scene, far, {watch, "the hazard reach"});
     ADD_FAILURE() << "a lattice beyond the budget was computed";
   } catch (const InputError& e) {
     const std::string m = e.what();

@@ -10,7 +10,7 @@
 
 #include "observers/field.h"
 #include "observers/field_grids.h"
-#include "pipeline/run_command.h"
+#include "pipeline/setup/scene_regions.h"
 
 namespace glint {
 namespace {

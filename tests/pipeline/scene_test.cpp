@@ -1,12 +1,12 @@
-#include "pipeline/scene.h"
+#include "pipeline/input/scene.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <nlohmann/json.hpp>
 
-#include "pipeline/input_error.h"
-#include "pipeline/target_builder.h"
+#include "pipeline/base/input_error.h"
+#include "pipeline/setup/target_builder.h"
 #include "support/refusal.h"
 
 namespace glint {
@@ -240,7 +240,7 @@ TEST(Scene, RefusesNonFiniteNumbers) {
   EXPECT_EQ(refusal(in_array), "scene.json: /laser/position/2: must be finite");
 }
 
-// pipeline/limits.h: values past what double arithmetic carries from beam to summed
+// pipeline/base/limits.h: values past what double arithmetic carries from beam to summed
 // irradiance are refused at the boundary; a finite but huge power once ran to a clean
 // "no hazard" (the beam irradiance overflowed to infinity and every bound to NaN).
 TEST(Scene, RefusesValuesWhosePhysicsWouldOverflow) {

@@ -12,8 +12,8 @@
 
 #include "hazard/hazard.h"
 #include "hazard/mpe.h"
-#include "pipeline/hazard_report.h"
-#include "pipeline/scene.h"
+#include "pipeline/input/scene.h"
+#include "pipeline/report/hazard_report.h"
 #include "support/cli.h"
 #include "support/files.h"
 #include "support/refusal.h"

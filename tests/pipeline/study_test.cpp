@@ -1,5 +1,5 @@
 // Study files: expansion into scenarios, the pose and jitter they apply, and refusals.
-#include "pipeline/study.h"
+#include "pipeline/input/study.h"
 
 #include <gtest/gtest.h>
 
@@ -8,8 +8,8 @@
 #include <set>
 #include <string>
 
-#include "pipeline/input_error.h"
-#include "pipeline/scene.h"
+#include "pipeline/base/input_error.h"
+#include "pipeline/input/scene.h"
 #include "support/refusal.h"
 
 namespace glint {

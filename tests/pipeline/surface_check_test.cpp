@@ -1,13 +1,13 @@
-// The meshes' surface check (pipeline/surface_check.h): what it compares, and that on meshes of a
-// sphere its figure is at least the mesh's true error and falls with the tessellation.
-#include "pipeline/surface_check.h"
+// The meshes' surface check (pipeline/setup/surface_check.h): what it compares, and that on meshes
+// of a sphere its figure is at least the mesh's true error and falls with the tessellation.
+#include "pipeline/setup/surface_check.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <memory>
 
-#include "pipeline/target_builder.h"
+#include "pipeline/setup/target_builder.h"
 #include "support/test_meshes.h"
 
 namespace glint {

@@ -222,7 +222,7 @@ inline Parametrisation cylinder(const CylinderShape& s) {
   p.v_periodic = true;
   p.at = [=](double t, double phi) {
     const Vec3 n = std::cos(phi) * e1 + std::sin(phi) * e2;
-    return SurfacePoint{s.center_m + t * a + s.radius_m * n, n, s.radius_m};
+    return SurfacePoint{s.centre_m + t * a + s.radius_m * n, n, s.radius_m};
   };
   return p;
 }
@@ -238,7 +238,7 @@ inline Parametrisation sphere(const SphereShape& s, const Vec3& pole) {
   p.at = [=](double theta, double phi) {
     const Vec3 n =
         std::sin(theta) * (std::cos(phi) * e1 + std::sin(phi) * e2) + std::cos(theta) * a;
-    return SurfacePoint{s.center_m + s.radius_m * n, n, s.radius_m * s.radius_m * std::sin(theta)};
+    return SurfacePoint{s.centre_m + s.radius_m * n, n, s.radius_m * s.radius_m * std::sin(theta)};
   };
   return p;
 }
@@ -270,7 +270,7 @@ inline Parametrisation disk(const DiskShape& s) {
     const double h = std::sqrt(std::max(0.0, r * r - x * x));
     return std::pair{-h, h};
   };
-  p.at = [=](double x, double y) { return SurfacePoint{s.center_m + x * e1 + y * e2, n, 1.0}; };
+  p.at = [=](double x, double y) { return SurfacePoint{s.centre_m + x * e1 + y * e2, n, 1.0}; };
   return p;
 }
 

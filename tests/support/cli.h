@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/cli.h"
+#include "pipeline/commands/cli.h"
 
 namespace glint::test {
 

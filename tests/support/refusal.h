@@ -2,7 +2,7 @@
 // The message bad input is refused with, for tests that check what the user is told.
 #include <string>
 
-#include "pipeline/input_error.h"
+#include "pipeline/base/input_error.h"
 
 namespace glint::test {
 

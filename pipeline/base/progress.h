@@ -1,0 +1,48 @@
+#pragma once
+/// @file
+/// @brief Progress of long runs on standard error.
+
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <ostream>
+#include <string>
+#include <thread>
+
+#include "observers/point_set.h"
+
+namespace glint {
+
+/// @brief Reports a WorkCounter from a background thread: nothing for the first second, then
+/// every half second (one self-overwriting line on a terminal; a line every 10 s otherwise):
+/// items done, evaluations, elapsed time and the estimated time left.
+class ProgressReporter {
+ public:
+  /// @param total items in all; 0: as many as the counter has scheduled so far.
+  ProgressReporter(std::ostream& err, bool terminal, std::string noun, std::size_t total,
+                   const WorkCounter& counter);
+  ~ProgressReporter();
+  ProgressReporter(const ProgressReporter&) = delete;
+  ProgressReporter& operator=(const ProgressReporter&) = delete;
+
+  /// @brief Stops reporting and clears the progress line.
+  void stop();
+
+ private:
+  void run();
+  void print();
+
+  std::ostream& err_;
+  bool terminal_;
+  std::string noun_;
+  std::size_t total_;
+  const WorkCounter& counter_;
+  std::chrono::steady_clock::time_point start_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool stopping_ = false;
+  bool printed_ = false;
+  std::thread thread_;
+};
+
+}  // namespace glint

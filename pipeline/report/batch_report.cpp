@@ -1,0 +1,643 @@
+#include "pipeline/report/batch_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <ostream>
+
+#include "export/atomic_file.h"
+#include "export/exr_map.h"
+#include "export/geo_files.h"
+#include "export/lattice_vdb.h"
+#include "glint/version.h"
+#include "pipeline/base/number_format.h"
+#include "pipeline/base/output_names.h"
+#include "pipeline/report/engagement_report.h"
+
+namespace glint {
+namespace {
+
+// Linear interpolation between order statistics (Hyndman and Fan's type 7, as numpy's default).
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const double h = q * static_cast<double>(v.size() - 1);
+  const auto lo = static_cast<std::size_t>(std::floor(h));
+  const std::size_t hi = std::min(lo + 1, v.size() - 1);
+  if (v[lo] == v[hi]) return v[lo];  // +∞ beside +∞ (an unbounded reach) is +∞, not NaN
+  return v[lo] + (h - static_cast<double>(lo)) * (v[hi] - v[lo]);
+}
+
+nlohmann::json quantilesJson(const std::vector<double>& v) {
+  double sum = 0.0;
+  for (double x : v) sum += x;
+  return {
+      {"min", quantile(v, 0.0)},  {"p05", quantile(v, 0.05)},
+      {"p25", quantile(v, 0.25)}, {"median", quantile(v, 0.5)},
+      {"p75", quantile(v, 0.75)}, {"p95", quantile(v, 0.95)},
+      {"max", quantile(v, 1.0)},  {"mean", v.empty() ? 0.0 : sum / static_cast<double>(v.size())}};
+}
+
+// %.10g: enough for every parameter a study file can hold, and the same text on every rank.
+std::string csvNumber(double x) { return formatNumber("%.10g", x); }
+
+// A reach as a number for the quantiles: an unbounded one (null) is +∞, never 0.
+double reachDistance(const nlohmann::json& entry) {
+  const nlohmann::json& d = entry.at("distance_m");
+  return d.is_null() ? std::numeric_limits<double>::infinity() : d.get<double>();
+}
+
+// The study's hazard reach: quantiles of the scenarios' distances, how many are closed, and the
+// farthest scenario.
+nlohmann::json studyReachJson(const std::map<std::size_t, nlohmann::json>& records, bool aided) {
+  std::vector<double> distance, aided_distance;
+  std::size_t closed = 0;
+  const nlohmann::json* farthest = nullptr;
+  std::size_t farthest_index = 0;
+  for (const auto& [index, rec] : records) {
+    const nlohmann::json& h = rec.at("hazard_reach");
+    distance.push_back(reachDistance(h));
+    closed += h.at("closed").get<bool>() ? 1 : 0;
+    if (farthest == nullptr || distance.back() > reachDistance(*farthest)) {
+      farthest = &h;
+      farthest_index = index;
+    }
+    if (aided) aided_distance.push_back(reachDistance(h.at("aided")));
+  }
+  nlohmann::json j = {{"distance_m", quantilesJson(distance)},
+                      {"scenarios_closed", closed},
+                      {"scenarios", records.size()}};
+  if (farthest != nullptr) {
+    j["farthest"] = {{"scenario", farthest_index},
+                     {"distance_m", farthest->at("distance_m")},
+                     {"direction", farthest->at("direction")},
+                     {"closed", farthest->at("closed")}};
+  }
+  if (aided) j["aided_distance_m"] = quantilesJson(aided_distance);
+  return j;
+}
+
+// What the region's coverage map says with its confidence: each point's interval, and the
+// region hazardous with the study's probability, bounded at that confidence over the whole map.
+nlohmann::json coverageConfidenceJson(const Study& study, const StudyLattice& r, std::size_t n) {
+  const SimultaneousCoverage s =
+      simultaneousCoverage(r, n, study.coverage_confidence, study.coverage_probability);
+  const char* unit = r.plane ? "_m2" : "_m3";
+  nlohmann::json j = {
+      {"confidence", study.coverage_confidence},
+      {"probability", study.coverage_probability},
+      {"pointwise",
+       "coverage_lower and coverage_upper: each point's Clopper-Pearson interval, which "
+       "holds with probability at least the confidence"},
+      {"simultaneous",
+       "Clopper-Pearson at 1 - (1 - confidence) / (2 points) a side (Bonferroni over the "
+       "map's points): with probability at least the confidence, every point counted in "
+       "the first extent is hazardous with at least the probability, and every such point "
+       "is counted in the second"},
+      {"points", s.points},
+      {std::string("hazardous_with_probability_certainly") + unit,
+       static_cast<double>(s.certain) * r.cell()},
+      {std::string("hazardous_with_probability_possibly") + unit,
+       static_cast<double>(s.possible) * r.cell()},
+      {"scenarios_needed_at_a_point", s.certain_from_count}};
+  if (r.combinations > 1) {
+    // The scenarios of one jitter sample share its pointing error: each combination's are
+    // trials apart from the others'.
+    j["combinations"] = r.combinations;
+    j["pointwise"] =
+        "coverage_lower and coverage_upper: the mean over the combinations of the swept "
+        "parameters of each one's Clopper-Pearson interval at (1 - confidence) / combinations "
+        "(Bonferroni: the scenarios of one jitter sample share it and are not independent), "
+        "which holds with probability at least the confidence";
+    j["simultaneous"] =
+        "the same at 1 - (1 - confidence) / (2 points) a side: with probability at least the "
+        "confidence, every point counted in the first extent is hazardous with at least the "
+        "probability, and every such point is counted in the second";
+  }
+  return j;
+}
+
+}  // namespace
+
+std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
+                         const std::map<std::size_t, nlohmann::json>& records, bool far_field,
+                         bool reach, bool aided) {
+  std::string csv =
+      "scenario,time_s,offset_x_m,offset_y_m,offset_z_m,pose_yaw_deg,pose_pitch_deg,"
+      "pose_roll_deg,yaw_deg,pitch_deg,roll_deg,sigma,specular_reflectance,jitter_sample,"
+      "jitter_u_rad,jitter_v_rad";
+  for (const StudyLattice& r : lattices) {
+    const std::string extent = r.plane ? "_hazardous_area_m2" : "_hazard_volume_m3";
+    csv += "," + r.name + "_peak_hazard_ratio," + r.name + extent;
+    if (aided) csv += "," + r.name + "_aided_peak_hazard_ratio," + r.name + "_aided" + extent;
+  }
+  if (far_field) csv += ",far_max_nohd_m,far_peak_intensity_w_sr";
+  if (far_field && aided) csv += ",far_aided_max_nohd_m";
+  if (reach) csv += ",reach_m,reach_closed";
+  if (reach && aided) csv += ",aided_reach_m";
+  csv += ",unconverged_points,evaluations,seconds\n";
+  for (const auto& [index, rec] : records) {
+    const nlohmann::json& p = rec.at("parameters");
+    std::string row = std::to_string(index);
+    auto cell = [&row](const std::string& value) {
+      row += ',';
+      row += value;
+    };
+    auto number = [&](const nlohmann::json& x) { cell(csvNumber(x.get<double>())); };
+    number(p.at("time_s"));
+    for (const nlohmann::json& x : p.at("offset_m")) number(x);
+    for (const char* key :
+         {"pose_yaw_deg", "pose_pitch_deg", "pose_roll_deg", "yaw_deg", "pitch_deg", "roll_deg"})
+      number(p.at(key));
+    // Empty: as in the scene.
+    for (const char* key : {"sigma", "specular_reflectance"})
+      p.contains(key) ? number(p.at(key)) : cell("");
+    const int sample = p.at("jitter_sample").get<int>();
+    cell(sample >= 0 ? std::to_string(sample) : std::string());
+    number(p.at("jitter_u_rad"));
+    number(p.at("jitter_v_rad"));
+    for (const nlohmann::json& r : rec.at("regions")) {
+      const bool plane = r.contains("hazardous_area_m2");
+      number(r.at("peak_hazard_ratio"));
+      number(plane ? r.at("hazardous_area_m2") : r.at("hazard_volume_m3"));
+      if (aided) {
+        number(r.at("aided_peak_hazard_ratio"));
+        number(plane ? r.at("aided_hazardous_area_m2") : r.at("aided_hazard_volume_m3"));
+      }
+    }
+    if (far_field) {
+      number(rec.at("far_field").at("max_nohd_m"));
+      number(rec.at("far_field").at("peak_intensity_w_sr"));
+      if (aided) number(rec.at("far_field").at("aided_max_nohd_m"));
+    }
+    if (reach) {
+      const nlohmann::json& h = rec.at("hazard_reach");
+      // An unbounded reach (null) is written as inf: never an empty cell that reads as 0.
+      cell(h.at("distance_m").is_null() ? "inf" : csvNumber(h.at("distance_m").get<double>()));
+      cell(h.at("closed").get<bool>() ? "1" : "0");
+      if (aided) {
+        const nlohmann::json& a = h.at("aided").at("distance_m");
+        cell(a.is_null() ? "inf" : csvNumber(a.get<double>()));
+      }
+    }
+    cell(std::to_string(rec.at("unconverged_points").get<std::int64_t>()));
+    cell(std::to_string(rec.at("evaluations").get<std::int64_t>()));
+    cell(formatNumber("%.3f", rec.at("seconds").get<double>()));
+    row += '\n';
+    csv += row;
+  }
+  return csv;
+}
+
+namespace {
+
+// A study's plane map on the site's map: its channels as a GeoTIFF, and where some scenario, and
+// where at least half of them, are hazardous as polygons (naked eye and aided).
+void writeStudyGeoMaps(OutputSet& outputs, const std::filesystem::path& dir, const PlaneGrid& g,
+                       const std::vector<ExrChannel>& channels, const StudyLattice& r,
+                       const Study& study, const std::vector<float>& cover,
+                       const std::vector<float>& aided_cover, const std::string& program,
+                       std::size_t scenarios) {
+  const HazardSpec& h = study.base.hazard;
+  const SiteFrame site(*study.base.site);
+  const GeoInfo info{program, r.name, hazardCitation(h), h.wavelength_nm, h.mpe_w_m2};
+  std::vector<std::string> units;
+  for (const ExrChannel& c : channels) {
+    units.emplace_back(c.name == "max_irradiance_w_m2" ? "W/m^2" : "1");
+  }
+  outputs.open(dir / output_names::planeGeoTiff(r.name)).write([&](std::ostream& out) {
+    writeGeoTiff(out, g, channels, units, site, info);
+  });
+  const auto zone = [&](const char* kind, const char* description, const std::vector<float>& p,
+                        float at_least) {
+    ZoneMask z{kind, description, std::vector<unsigned char>(p.size())};
+    for (std::size_t i = 0; i < p.size(); ++i) z.inside[i] = p[i] >= at_least ? 1 : 0;
+    return z;
+  };
+  // The smallest positive coverage is 1 / scenarios: anything above half of that is some.
+  const auto some =
+      static_cast<float>(0.5 / static_cast<double>(std::max<std::size_t>(1, scenarios)));
+  std::vector<ZoneMask> zones = {
+      zone("hazardous_in_some_scenario", "the MPE is reached in at least one scenario", cover,
+           some),
+      zone("hazardous_in_half_the_scenarios", "the MPE is reached in at least half the scenarios",
+           cover, 0.5f)};
+  if (h.aid) {
+    zones.push_back(zone("aided_hazardous_in_some_scenario",
+                         "through the optical aid, in at least one scenario", aided_cover, some));
+  }
+  for (const auto& [name, format] :
+       {std::pair{output_names::planeZonesGeoJson(r.name), VectorFormat::GeoJson},
+        std::pair{output_names::planeZonesKml(r.name), VectorFormat::Kml}}) {
+    // A named copy: Clang 14 does not let a lambda capture a structured binding.
+    const VectorFormat as = format;
+    outputs.open(dir / name).write([&](std::ostream& out) {
+      writeZones(out, as, g, zones, site, info);
+    });
+  }
+}
+
+}  // namespace
+
+bool studyMapOnTheEarth(const Study& study, const StudyLattice& r) {
+  if (!study.base.site || !r.plane) return false;
+  const PlaneSpec& p = study.base.planes[r.plane_index];
+  return mappable(p.u_axis, p.v_axis);
+}
+
+void writeStudyMap(OutputSet& outputs, const std::filesystem::path& path, const StudyLattice& r,
+                   const Study& study, std::size_t scenarios) {
+  const HazardSpec& h = study.base.hazard;
+  // A pose's ratio is its irradiance's, so the largest follows from the largest irradiance;
+  // an engagement's worst windows were kept apart (StudyLattice::max_ratio).
+  std::vector<float> max_ratio = r.max_ratio;
+  if (!r.engagement) {
+    max_ratio.resize(r.max_w_m2.size());
+    for (std::size_t i = 0; i < max_ratio.size(); ++i)
+      max_ratio[i] = static_cast<float>(h.ratio(static_cast<double>(r.max_w_m2[i])));
+  }
+  const std::vector<float> cover = coverage(r.hazardous, scenarios);
+  // Each point's exact interval at the study's confidence.
+  const double alpha_each_side = 0.5 * (1.0 - study.coverage_confidence);
+  const CoverageBounds bounds = r.coverageBounds(false, scenarios, alpha_each_side);
+  // With an optical aid, the same through it.
+  std::vector<float> aided_max_ratio, aided_cover;
+  CoverageBounds aided_bounds;
+  if (h.aid) {
+    aided_max_ratio = r.aided_max_ratio;
+    if (!r.engagement) {
+      aided_max_ratio.resize(r.max_w_m2.size());
+      for (std::size_t i = 0; i < aided_max_ratio.size(); ++i)
+        aided_max_ratio[i] = static_cast<float>(h.aidedRatio(static_cast<double>(r.max_w_m2[i])));
+    }
+    aided_cover = coverage(r.aided_hazardous, scenarios);
+    aided_bounds = r.coverageBounds(true, scenarios, alpha_each_side);
+  }
+  const std::string program = std::string("glint ") + GLINT_VERSION;
+  AtomicFile& file = outputs.open(path);
+  if (r.plane) {
+    const PlaneSpec& p = study.base.planes[r.plane_index];
+    PlaneGrid g;
+    const auto n = r.spec.nodes();
+    g.width = n[0];
+    g.height = n[1];
+    g.origin_m = r.spec.min_m;
+    g.u_axis = p.u_axis;
+    g.v_axis = p.v_axis;
+    g.pixel_m = r.spec.voxel_m;
+    std::vector<ExrChannel> channels = {{"max_irradiance_w_m2", &r.max_w_m2},
+                                        {"max_hazard_ratio", &max_ratio},
+                                        {"coverage_probability", &cover},
+                                        {"coverage_lower", &bounds.lower},
+                                        {"coverage_upper", &bounds.upper}};
+    if (h.aid) {
+      channels.push_back({"aided_max_hazard_ratio", &aided_max_ratio});
+      channels.push_back({"aided_coverage_probability", &aided_cover});
+      channels.push_back({"aided_coverage_lower", &aided_bounds.lower});
+      channels.push_back({"aided_coverage_upper", &aided_bounds.upper});
+    }
+    file.write([&](std::ostream& out) {
+      writeExr(out, g, channels,
+               {program, study.base.hazard.wavelength_nm, h.mpe_w_m2, hazardCitation(h)});
+    });
+    if (studyMapOnTheEarth(study, r)) {
+      writeStudyGeoMaps(outputs, path.parent_path(), g, channels, r, study, cover, aided_cover,
+                        program, scenarios);
+    }
+  } else {
+    LatticeMeta meta;
+    meta.strings = {{"program", program},
+                    {"study_file", study.source},
+                    {"study_fnv1a64", study.fnv1a64},
+                    {"length_unit", "m"},
+                    {"mpe_rule", hazardCitation(h)}};
+    meta.numbers = {{"scenarios", static_cast<double>(scenarios)},
+                    {"coverage_confidence", study.coverage_confidence},
+                    {"wavelength_nm", study.base.hazard.wavelength_nm},
+                    {"exposure_s", h.exposure_s},
+                    {"mpe_w_m2", h.mpe_w_m2},
+                    {"voxel_m", r.spec.voxel_m}};
+    std::vector<LatticeChannel> channels = {
+        {"max_irradiance_w_m2", "W/m^2", &r.max_w_m2},
+        {"max_hazard_ratio",
+         r.engagement ? "1 (worst window's exposure / its MPE)" : "1 (irradiance / MPE)",
+         &max_ratio},
+        {"coverage_probability", "1 (fraction of scenarios at or above the MPE)", &cover},
+        {"coverage_lower", "1 (Clopper-Pearson lower bound at coverage_confidence)", &bounds.lower},
+        {"coverage_upper", "1 (Clopper-Pearson upper bound at coverage_confidence)",
+         &bounds.upper}};
+    if (h.aid) {
+      meta.numbers["optical_aid_gain"] = h.aid->gain;
+      channels.push_back(
+          {"aided_max_hazard_ratio", "1 (irradiance x optical aid gain / MPE)", &aided_max_ratio});
+      channels.push_back({"aided_coverage_probability",
+                          "1 (fraction of scenarios at or above the MPE through the aid)",
+                          &aided_cover});
+      channels.push_back(
+          {"aided_coverage_lower", "1 (Clopper-Pearson lower bound, aided)", &aided_bounds.lower});
+      channels.push_back(
+          {"aided_coverage_upper", "1 (Clopper-Pearson upper bound, aided)", &aided_bounds.upper});
+    }
+    file.write([&](std::ostream& out) { writeLatticeVdb(out, r.spec, channels, meta); });
+  }
+}
+
+nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLattice>& lattices,
+                                const std::map<std::size_t, nlohmann::json>& records,
+                                std::size_t resumed, int ranks, double wall_s) {
+  const HazardSpec& h = study.base.hazard;
+  const std::size_t n = records.size();
+  nlohmann::json j = {
+      {"program", std::string("glint ") + GLINT_VERSION},
+      {"study_file", study.source},
+      {"study_fnv1a64", study.fnv1a64},
+      {"scene_file", study.scene_path.string()},
+      {"description", study.description},
+      {"scenarios", {{"count", n}, {"computed", n - resumed}, {"resumed", resumed}}},
+      {"ranks", ranks},
+      {"wall_seconds", wall_s},
+      {"hazard", hazardLimitsJson(h)}};
+  if (study.precision_half_width) {
+    const double widest = widestCoverageHalfWidth(lattices, n, study.coverage_confidence);
+    j["precision"] = {{"half_width", *study.precision_half_width},
+                      {"widest_half_width", widest},
+                      {"reached", widest <= *study.precision_half_width},
+                      {"confidence", study.coverage_confidence},
+                      {"jitter_samples", n / study.scenarios_per_sample},
+                      {"max_samples", study.max_samples}};
+  }
+  // Each scenario integrated over the engagement: its regions' ratios are their worst windows'.
+  if (study.base.engagement) j["engagement"] = engagementJson(*study.base.engagement);
+  std::vector<double> evaluations, seconds;
+  for (const auto& [index, rec] : records) {
+    evaluations.push_back(static_cast<double>(rec.at("evaluations").get<std::int64_t>()));
+    seconds.push_back(rec.at("seconds").get<double>());
+  }
+  j["evaluations"] = quantilesJson(evaluations);
+  j["scenario_seconds"] = quantilesJson(seconds);
+  // Scenarios whose target the beam does not light (their result.json's warnings say why):
+  // their empty maps are no evidence of safety, and the study's quantiles count them as 0.
+  std::vector<std::size_t> unlit;
+  for (const auto& [index, rec] : records) {
+    if (rec.contains("warnings") && !rec.at("warnings").empty()) unlit.push_back(index);
+  }
+  j["scenarios"]["unlit"] = unlit.size();
+  j["warnings"] = nlohmann::json::array();
+  if (!unlit.empty()) {
+    std::string list;
+    for (std::size_t k = 0; k < unlit.size() && k < 10; ++k)
+      list += (k == 0 ? "" : ", ") + std::to_string(unlit[k]);
+    if (unlit.size() > 10) list += ", …";
+    j["warnings"].push_back(
+        "no facet of the target is lit in " + std::to_string(unlit.size()) + " of " +
+        std::to_string(n) + " scenarios (" + list +
+        "): nothing reflects there, so their empty maps say nothing of the hazard and are not "
+        "safe ones; each one's result.json says why");
+  }
+  nlohmann::json rs = nlohmann::json::array();
+  for (std::size_t k = 0; k < lattices.size(); ++k) {
+    const StudyLattice& r = lattices[k];
+    std::vector<double> peak, extent, aided_peak, aided_extent;
+    std::size_t with_hazard = 0, with_aided_hazard = 0;
+    for (const auto& [index, rec] : records) {
+      const nlohmann::json& x = rec.at("regions")[k];
+      peak.push_back(x.at("peak_hazard_ratio").get<double>());
+      const std::int64_t points = x.at("hazardous_points").get<std::int64_t>();
+      extent.push_back(static_cast<double>(points) * r.cell());
+      with_hazard += points > 0 ? 1 : 0;
+      if (h.aid) {
+        aided_peak.push_back(x.at("aided_peak_hazard_ratio").get<double>());
+        const std::int64_t aided = x.at("aided_hazardous_points").get<std::int64_t>();
+        aided_extent.push_back(static_cast<double>(aided) * r.cell());
+        with_aided_hazard += aided > 0 ? 1 : 0;
+      }
+    }
+    std::int64_t ever = 0, half = 0;
+    float max_e = 0.0f;
+    for (std::size_t i = 0; i < r.hazardous.size(); ++i) {
+      ever += r.hazardous[i] > 0 ? 1 : 0;
+      half += r.hazardous[i] > 0 && 2 * static_cast<std::size_t>(r.hazardous[i]) >= n ? 1 : 0;
+      max_e = std::max(max_e, r.max_w_m2[i]);
+    }
+    const char* unit = r.plane ? "_m2" : "_m3";
+    rs.push_back(
+        {{"name", r.name},
+         {"kind", r.plane ? "plane" : "box"},
+         {"file", r.studyFile()},
+         {"geo_files", studyMapOnTheEarth(study, r)
+                           ? nlohmann::json{output_names::planeGeoTiff(r.name),
+                                            output_names::planeZonesGeoJson(r.name),
+                                            output_names::planeZonesKml(r.name)}
+                           : nlohmann::json::array()},
+         {"peak_hazard_ratio", quantilesJson(peak)},
+         {std::string(r.plane ? "hazardous_area" : "hazard_volume") + unit, quantilesJson(extent)},
+         {"scenarios_with_hazard", with_hazard},
+         {"fraction_of_scenarios_with_hazard",
+          n > 0 ? static_cast<double>(with_hazard) / static_cast<double>(n) : 0.0},
+         {"max_irradiance_w_m2", max_e},
+         {std::string("hazardous_in_any_scenario") + unit, static_cast<double>(ever) * r.cell()},
+         {std::string("hazardous_in_half_or_more") + unit, static_cast<double>(half) * r.cell()},
+         {"coverage_confidence", coverageConfidenceJson(study, r, n)}});
+    if (h.aid) {
+      std::int64_t aided_ever = 0;
+      for (std::uint32_t c : r.aided_hazardous) aided_ever += c > 0 ? 1 : 0;
+      nlohmann::json& a = rs.back();
+      a[std::string("aided_hazardous_in_any_scenario") + unit] =
+          static_cast<double>(aided_ever) * r.cell();
+      a["aided_peak_hazard_ratio"] = quantilesJson(aided_peak);
+      a[std::string(r.plane ? "aided_hazardous_area" : "aided_hazard_volume") + unit] =
+          quantilesJson(aided_extent);
+      a["scenarios_with_aided_hazard"] = with_aided_hazard;
+    }
+  }
+  j["regions"] = rs;
+  if (study.base.far_field.enabled) {
+    std::vector<double> nohd;
+    std::size_t beyond = 0;
+    const nlohmann::json* farthest = nullptr;
+    std::size_t farthest_index = 0;
+    for (const auto& [index, rec] : records) {
+      const nlohmann::json& f = rec.at("far_field");
+      const double d = f.at("max_nohd_m").get<double>();
+      nohd.push_back(d);
+      beyond += d > 0.0 ? 1 : 0;
+      if (farthest == nullptr || d > farthest->at("max_nohd_m").get<double>()) {
+        farthest = &f;
+        farthest_index = index;
+      }
+    }
+    nlohmann::json far = {{"max_nohd_m", quantilesJson(nohd)},
+                          {"scenarios_hazardous_beyond_far_radius", beyond}};
+    if (farthest != nullptr) {
+      far["farthest"] = {{"scenario", farthest_index},
+                         {"max_nohd_m", farthest->at("max_nohd_m")},
+                         {"direction", farthest->at("max_nohd_direction")},
+                         {"far_radius_m", farthest->at("far_radius_m")}};
+    }
+    if (h.aid) {
+      std::vector<double> aided;
+      for (const auto& [index, rec] : records) {
+        aided.push_back(rec.at("far_field").at("aided_max_nohd_m").get<double>());
+      }
+      far["aided_max_nohd_m"] = quantilesJson(aided);
+    }
+    j["far_field"] = far;
+  }
+  if (study.base.wantsReach()) j["hazard_reach"] = studyReachJson(records, h.aid.has_value());
+  return j;
+}
+
+nlohmann::json scenarioParametersJson(const Scenario& s) {
+  nlohmann::json p = {{"time_s", s.pose.time_s},
+                      {"offset_m", {s.pose.offset_m.x, s.pose.offset_m.y, s.pose.offset_m.z}},
+                      {"pose_yaw_deg", s.pose.yaw_deg},
+                      {"pose_pitch_deg", s.pose.pitch_deg},
+                      {"pose_roll_deg", s.pose.roll_deg},
+                      {"yaw_deg", s.yaw_deg},
+                      {"pitch_deg", s.pitch_deg},
+                      {"roll_deg", s.roll_deg},
+                      {"jitter_sample", s.jitter_sample},
+                      {"jitter_u_rad", s.jitter_u_rad},
+                      {"jitter_v_rad", s.jitter_v_rad}};
+  if (s.sigma) p["sigma"] = *s.sigma;
+  if (s.specular_reflectance) p["specular_reflectance"] = *s.specular_reflectance;
+  return p;
+}
+
+nlohmann::json scenarioRegionJson(const StudyLattice& r, const FieldStats& st, const HazardSpec& h,
+                                  const HazardousPoints& hazardous) {
+  const char* extent = r.plane ? "hazardous_area_m2" : "hazard_volume_m3";
+  nlohmann::json region = {{"name", r.name},
+                           {"peak_hazard_ratio", h.ratio(st.peak_w_m2)},
+                           {"hazardous_points", hazardous.unaided},
+                           {extent, static_cast<double>(hazardous.unaided) * r.cell()},
+                           {"evaluations", st.evaluations},
+                           {"unconverged_points", st.unconverged_points},
+                           // Below 1, no unconverged point of the scenario can be hazardous
+                           // (aided, where there is an aid).
+                           {"unconverged_max_hazard_ratio_plus_error",
+                            std::max(h.ratio(st.unconverged_max_upper_w_m2),
+                                     h.aidedRatio(st.unconverged_max_upper_w_m2))}};
+  if (h.pulse) {
+    region["peak_radiant_exposure_j_m2_per_pulse"] = h.pulseRadiantExposureJ_m2(st.peak_w_m2);
+  }
+  if (h.aid) {
+    region["aided_peak_hazard_ratio"] = h.aidedRatio(st.peak_w_m2);
+    region["aided_hazardous_points"] = hazardous.aided;
+    region[std::string("aided_") + extent] = static_cast<double>(hazardous.aided) * r.cell();
+  }
+  return region;
+}
+
+nlohmann::json scenarioEngagementRegionJson(const StudyLattice& r, const EngagementRegion& region,
+                                            const HazardSpec& h, const HazardousPoints& hazardous) {
+  nlohmann::json j = engagementRegionJson(r.name, r.scenarioFile(), r.spec, region, h);
+  // The scenario's record has its own time and names its files apart.
+  j.erase("seconds");
+  j.erase("file");
+  double peak = 0.0, aided_peak = 0.0;
+  for (const ExposureVerdict& v : region.results.verdicts) {
+    peak = std::max(peak, v.ratio);
+    aided_peak = std::max(aided_peak, v.aided_ratio);
+  }
+  const std::string extent = r.plane ? "hazardous_area_m2" : "hazard_volume_m3";
+  j["peak_hazard_ratio"] = peak;
+  j["hazardous_points"] = hazardous.unaided;
+  j[extent] = static_cast<double>(hazardous.unaided) * r.cell();
+  if (h.aid) {
+    j["aided_peak_hazard_ratio"] = aided_peak;
+    j["aided_hazardous_points"] = hazardous.aided;
+    j["aided_" + extent] = static_cast<double>(hazardous.aided) * r.cell();
+  }
+  return j;
+}
+
+RegionValues engagementValues(const EngagementRegion& region, const HazardSpec& h) {
+  return {region.maps.peak_irradiance_w_m2, region.maps.hazard_ratio,
+          h.aid ? region.maps.aided_hazard_ratio : std::vector<float>{}};
+}
+
+nlohmann::json scenarioFarFieldJson(const FarField& far, const HazardSpec& h) {
+  const Vec3& peak = far.peak().direction;
+  nlohmann::json j = {{"far_radius_m", far.spec().far_radius_m},
+                      {"peak_intensity_w_sr", far.peak().intensity_w_sr},
+                      {"peak_intensity_basis", FarField::basisName(far.peak().basis)},
+                      {"peak_direction", {peak.x, peak.y, peak.z}},
+                      {"evaluations", far.stats().evaluations},
+                      {"unconverged_directions", far.stats().unconverged_points}};
+  j.update(farHazardJson(farHazard(far, h)));
+  if (far.stats().unconverged_points > 0) {
+    j["unconverged_max_intensity_plus_error_w_sr"] = far.stats().unconverged_max_upper_w_m2;
+  }
+  return j;
+}
+
+void printBatchSummary(std::ostream& err, const nlohmann::json& summary,
+                       const std::vector<StudyLattice>& lattices,
+                       const std::filesystem::path& out_dir, double wall_s) {
+  const std::size_t n = summary.at("scenarios").at("count").get<std::size_t>();
+  for (const nlohmann::json& w : summary.at("warnings"))
+    err << "  warning: " << w.get<std::string>() << "\n";
+  if (summary.contains("precision")) {
+    const nlohmann::json& p = summary.at("precision");
+    const bool reached = p.at("reached").get<bool>();
+    err << "  " << (reached ? "precision" : "warning: precision not reached") << ": after "
+        << p.at("jitter_samples").get<std::size_t>()
+        << " jitter samples every point's interval is within ±"
+        << formatNumber("%.3g", p.at("widest_half_width").get<double>()) << " (asked ±"
+        << formatNumber("%g", p.at("half_width").get<double>()) << ")"
+        << (reached ? "" : "; max_samples stopped the study: raise it for the precision asked")
+        << "\n";
+  }
+  for (const nlohmann::json& r : summary.at("regions")) {
+    const bool plane = r.at("kind") == "plane";
+    const std::string unit = plane ? "_m2" : "_m3";
+    const char* symbol = plane ? "m²" : "m³";
+    const nlohmann::json& q = r.at("peak_hazard_ratio");
+    err << "  " << r.at("name").get<std::string>() << ": peak hazard ratio median "
+        << formatNumber("%.3g", q.at("median").get<double>()) << ", p95 "
+        << formatNumber("%.3g", q.at("p95").get<double>()) << ", max "
+        << formatNumber("%.3g", q.at("max").get<double>()) << "; hazard in "
+        << r.at("scenarios_with_hazard").get<std::size_t>() << " of " << n
+        << " scenarios; hazardous in any scenario "
+        << formatNumber("%.4g", r.at("hazardous_in_any_scenario" + unit).get<double>()) << " "
+        << symbol << "\n";
+    const nlohmann::json& c = r.at("coverage_confidence");
+    err << "    hazardous with probability ≥ "
+        << formatNumber("%g", c.at("probability").get<double>()) << " at "
+        << formatNumber("%g", 100.0 * c.at("confidence").get<double>())
+        << " % confidence over the whole map: at least "
+        << formatNumber("%.4g", c.at("hazardous_with_probability_certainly" + unit).get<double>())
+        << ", at most "
+        << formatNumber("%.4g", c.at("hazardous_with_probability_possibly" + unit).get<double>())
+        << " " << symbol;
+    if (c.at("scenarios_needed_at_a_point").get<std::size_t>() > n)
+      err << " (" << n << " scenarios cannot prove it anywhere: more are needed)";
+    err << "\n";
+    if (r.contains("scenarios_with_aided_hazard")) {
+      err << "    through the optical aid: peak ratio max "
+          << formatNumber("%.3g", r.at("aided_peak_hazard_ratio").at("max").get<double>())
+          << "; hazard in " << r.at("scenarios_with_aided_hazard").get<std::size_t>() << " of " << n
+          << " scenarios; hazardous in any scenario "
+          << formatNumber("%.4g", r.at("aided_hazardous_in_any_scenario" + unit).get<double>())
+          << " " << symbol << "\n";
+    }
+  }
+  if (summary.contains("hazard_reach")) {
+    const nlohmann::json& h = summary.at("hazard_reach");
+    const nlohmann::json& q = h.at("distance_m");
+    const auto metres = [](const nlohmann::json& x) {
+      return x.is_null() ? std::string("unbounded") : formatNumber("%.4g", x.get<double>()) + " m";
+    };
+    err << "  hazard reach: median " << metres(q.at("median")) << ", p95 " << metres(q.at("p95"))
+        << ", max " << metres(q.at("max")) << "; closed in "
+        << h.at("scenarios_closed").get<std::size_t>() << " of " << n << " scenarios\n";
+  }
+  err << "  wrote " << out_dir.string() << "/{" << output_names::kScenariosCsv << ", "
+      << output_names::kSummary;
+  for (const StudyLattice& r : lattices) err << ", " << r.studyFile();
+  err << "} in " << formatDuration(wall_s) << "\n";
+}
+
+}  // namespace glint

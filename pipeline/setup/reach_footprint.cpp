@@ -1,0 +1,83 @@
+#include "pipeline/setup/reach_footprint.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace glint {
+
+ReachFootprint reachFootprint(const NearReach& near, const FarField& far, double extinction_per_m,
+                              const SiteFrame& site, const Terrain* terrain,
+                              const FootprintSpec& spec) {
+  const Vec3 c = near.spec.centre_m;
+  const double pixel = spec.pixel_m > 0.0 ? spec.pixel_m : 2.0 * spec.radius_m / 512.0;
+  const int n = 2 * static_cast<int>(std::ceil(spec.radius_m / pixel)) + 1;
+  ReachFootprint f;
+  PlaneGrid& g = f.grid;
+  g.width = g.height = n;
+  g.pixel_m = pixel;
+  g.u_axis = {1.0, 0.0, 0.0};
+  g.v_axis = {0.0, 1.0, 0.0};
+  g.origin_m = {c.x - (n / 2) * pixel, c.y - (n / 2) * pixel, 0.0};
+  const std::size_t thresholds = near.spec.thresholds_w_m2.size();
+  const auto count = static_cast<std::size_t>(n) * static_cast<std::size_t>(n);
+  f.inside.assign(thresholds, std::vector<unsigned char>(count, 0));
+  f.ground_z_m.resize(count);
+  f.area_m2.assign(thresholds, 0.0);
+  const double site_height = site.spec().height_m;
+  // The reach's lattice starts on the faces of a small cube about the lit centre (reachStartM()):
+  // nothing inside it is classified, so every point within its circumscribed ball counts.
+  const double unclassified_m = std::sqrt(3.0) * reachStartM(near.spec);
+  // The ground under local (x, y): the terrain's, or the ellipsoid's surface at the site's height.
+  const auto ground = [&](double x, double y) -> double {
+    if (terrain != nullptr) {
+      const std::optional<double> z = terrain->surfaceZ(x, y);
+      if (!z) {
+        throw std::invalid_argument("the terrain does not reach the footprint's point (" +
+                                    std::to_string(x) + ", " + std::to_string(y) + ") m");
+      }
+      return *z;
+    }
+    const Geodetic here = site.toGeodetic({x, y, 0.0});
+    return site.fromGeodetic({here.latitude_deg, here.longitude_deg, site_height}).z;
+  };
+  std::vector<char> reached(thresholds, 0);  // per threshold, for the pixel at hand
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const double x = g.origin_m.x + i * pixel, y = g.origin_m.y + j * pixel;
+      const double z = ground(x, y) + spec.above_ground_m;
+      const std::size_t k =
+          static_cast<std::size_t>(j) * static_cast<std::size_t>(n) + static_cast<std::size_t>(i);
+      f.ground_z_m[k] = static_cast<float>(z);
+      // The reach at the pixel's centre and corners: any of them inside puts the pixel in.
+      std::fill(reached.begin(), reached.end(), 0);
+      for (const auto& [dx, dy] :
+           {std::pair{0.0, 0.0}, {-0.5, -0.5}, {0.5, -0.5}, {-0.5, 0.5}, {0.5, 0.5}}) {
+        const Vec3 d = Vec3(x + dx * pixel, y + dy * pixel, z) - c;
+        const double r = glm::length(d);
+        if (!(r > unclassified_m)) {
+          std::fill(reached.begin(), reached.end(), 1);
+          break;
+        }
+        for (std::size_t t = 0; t < thresholds; ++t) {
+          if (reached[t] == 0 && r <= reachToward(near, far, t, d / r, extinction_per_m))
+            reached[t] = 1;
+        }
+      }
+      if (std::none_of(reached.begin(), reached.end(), [](char v) { return v != 0; })) continue;
+      if (terrain != nullptr && !terrain->segmentClear(c, {x, y, z})) {
+        if (reached[0] != 0) ++f.hidden_pixels;
+        continue;
+      }
+      for (std::size_t t = 0; t < thresholds; ++t) {
+        if (reached[t] == 0) continue;
+        f.inside[t][k] = 1;
+        f.area_m2[t] += pixel * pixel;
+      }
+    }
+  }
+  return f;
+}
+
+}  // namespace glint
