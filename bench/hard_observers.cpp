@@ -47,18 +47,32 @@ struct Row {
 test::brute::Parametrisation parametrisation(const ObjectSpec& o, const Beam& beam,
                                              const Vec3& observer_m) {
   const AnalyticShape* shape = o.analytic();
-  if (!shape) throw std::runtime_error("the reference needs a cylinder, sphere or disk");
-  if (const auto* c = std::get_if<CylinderShape>(shape)) return test::brute::cylinder(*c);
-  if (const auto* d = std::get_if<DiskShape>(shape)) return test::brute::disk(*d);
-  // The glint lies in the plane of the beam, the centre and the observer: its normal as the
-  // pole keeps the glint on the equator, far from the parametrisation's poles.
-  const auto& sphere = std::get<SphereShape>(*shape);
-  const Vec3 to = observer_m - sphere.centre_m;
-  Vec3 pole = glm::cross(beam.direction, to);
-  if (glm::length(pole) < 1e-6 * glm::length(to)) {
-    pole = glm::cross(beam.direction, Vec3(0.3, 0.5, 0.7));
-  }
-  return test::brute::sphere(sphere, pole);
+  if (!shape) throw std::runtime_error("the reference needs an analytic shape, not a mesh");
+  // One case a shape: a shape without its parametrisation here does not compile.
+  struct Exact {
+    const Beam& beam;
+    const Vec3& observer_m;
+    test::brute::Parametrisation operator()(const CylinderShape& c) const {
+      return test::brute::cylinder(c);
+    }
+    test::brute::Parametrisation operator()(const DiskShape& d) const {
+      return test::brute::disk(d);
+    }
+    test::brute::Parametrisation operator()(const ConeShape& c) const {
+      return test::brute::cone(c);
+    }
+    // The glint lies in the plane of the beam, the centre and the observer: its normal as the
+    // pole keeps the glint on the equator, far from the parametrisation's poles.
+    test::brute::Parametrisation operator()(const SphereShape& sphere) const {
+      const Vec3 to = observer_m - sphere.centre_m;
+      Vec3 pole = glm::cross(beam.direction, to);
+      if (glm::length(pole) < 1e-6 * glm::length(to)) {
+        pole = glm::cross(beam.direction, Vec3(0.3, 0.5, 0.7));
+      }
+      return test::brute::sphere(sphere, pole);
+    }
+  };
+  return std::visit(Exact{beam, observer_m}, *shape);
 }
 
 std::int64_t quantile(std::vector<std::int64_t> v, double q) {

@@ -34,6 +34,15 @@ Quadric Quadric::cylinder(const Vec3& centre_m, const Vec3& unit_axis, double ra
   return Quadric(a, -ac, glm::dot(centre_m, ac) - radius_m * radius_m);
 }
 
+Quadric Quadric::cone(const Vec3& apex_m, const Vec3& unit_axis, double slope) {
+  // |x − p|² − (1 + k²)((x − p)·a)² with A = I − (1 + k²) a aᵀ: 2A(x − p) has the radial part
+  // of x − p, outward on either side of the apex.
+  const glm::dmat3 a =
+      glm::dmat3(1.0) - (1.0 + slope * slope) * glm::outerProduct(unit_axis, unit_axis);
+  const Vec3 ap = a * apex_m;
+  return Quadric(a, -ap, glm::dot(apex_m, ap));
+}
+
 Quadric Quadric::sphere(const Vec3& centre_m, double radius_m) {
   return Quadric(glm::dmat3(1.0), -centre_m, glm::dot(centre_m, centre_m) - radius_m * radius_m);
 }

@@ -24,6 +24,9 @@ class Quadric {
 
   /// @brief The open side of a cylinder, gradient pointing away from the axis.
   static Quadric cylinder(const Vec3& centre_m, const Vec3& unit_axis, double radius_m);
+  /// @brief The double cone with apex @p apex_m, axis @p unit_axis and radius growing by
+  /// @p slope per metre along it (> 0), gradient pointing away from the axis on both nappes.
+  static Quadric cone(const Vec3& apex_m, const Vec3& unit_axis, double slope);
   /// @brief A sphere, gradient pointing outward.
   static Quadric sphere(const Vec3& centre_m, double radius_m);
   /// @brief A plane through @p point_m, gradient along @p unit_normal.

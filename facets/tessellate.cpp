@@ -76,20 +76,66 @@ bool DiskShape::nearOrInside(const Vec3& x_m, double margin_m) const {
   return std::abs(along) < margin_m && across < radius_m + margin_m;
 }
 
+double ConeShape::slantLengthM() const {
+  const double dr = top_radius_m - radius_m;
+  return std::sqrt(length_m * length_m + dr * dr);
+}
+
+double ConeShape::rings(int segments) const {
+  return std::max(
+      1.0, std::round(slantLengthM() / (std::max(radius_m, top_radius_m) * twoPiOver(segments))));
+}
+
+bool ConeShape::nearOrInside(const Vec3& x_m, double margin_m) const {
+  const Vec3 v = x_m - centre_m;
+  const double along = glm::dot(v, axis);
+  const double across = glm::length(v - along * axis);
+  return std::abs(along) < 0.5 * length_m + margin_m &&
+         across < std::max(radius_m, top_radius_m) + margin_m;
+}
+
+namespace {
+
+// A unit direction turned by a unit quaternion is a unit vector to rounding, never zero; it is
+// normalised again, as a scene file's is read.
+Vec3 turned(const glm::dquat& turn, const Vec3& unit) { return *tryNormalize(turn * unit); }
+
+}  // namespace
+
+CylinderShape CylinderShape::placed(const Vec3& centre, const glm::dquat& turn) const {
+  return {centre, turned(turn, axis), radius_m, length_m};
+}
+SphereShape SphereShape::placed(const Vec3& centre, const glm::dquat&) const {
+  return {centre, radius_m};
+}
+DiskShape DiskShape::placed(const Vec3& centre, const glm::dquat& turn) const {
+  return {centre, turned(turn, normal), radius_m};
+}
+ConeShape ConeShape::placed(const Vec3& centre, const glm::dquat& turn) const {
+  return {centre, turned(turn, axis), radius_m, top_radius_m, length_m};
+}
+
+std::uint32_t CylinderShape::addTo(Target& target, std::uint32_t material, int segments,
+                                   const Vec3& reference) const {
+  return addCylinder(target, *this, material, segments, reference);
+}
+std::uint32_t SphereShape::addTo(Target& target, std::uint32_t material, int segments,
+                                 const Vec3& reference) const {
+  return addSphere(target, *this, material, segments, reference);
+}
+std::uint32_t DiskShape::addTo(Target& target, std::uint32_t material, int segments,
+                               const Vec3& reference) const {
+  return addDisk(target, *this, material, segments, reference);
+}
+std::uint32_t ConeShape::addTo(Target& target, std::uint32_t material, int segments,
+                               const Vec3& reference) const {
+  return addCone(target, *this, material, segments, reference);
+}
+
 std::uint32_t addShape(Target& target, const AnalyticShape& shape, std::uint32_t material,
                        int segments, const Vec3& reference) {
-  return std::visit(
-      [&](const auto& s) -> std::uint32_t {
-        using S = std::decay_t<decltype(s)>;
-        if constexpr (std::is_same_v<S, CylinderShape>) {
-          return addCylinder(target, s, material, segments, reference);
-        } else if constexpr (std::is_same_v<S, SphereShape>) {
-          return addSphere(target, s, material, segments, reference);
-        } else {
-          return addDisk(target, s, material, segments, reference);
-        }
-      },
-      shape);
+  return std::visit([&](const auto& s) { return s.addTo(target, material, segments, reference); },
+                    shape);
 }
 
 double coarseFacets(const AnalyticShape& shape, int segments) {
@@ -109,18 +155,20 @@ Vec3 centreOf(const AnalyticShape& shape) {
 }
 
 std::optional<Vec3> axisOf(const AnalyticShape& shape) {
-  if (const auto* c = std::get_if<CylinderShape>(&shape)) return c->axis;
-  if (const auto* d = std::get_if<DiskShape>(&shape)) return d->normal;
-  return std::nullopt;
+  return std::visit([](const auto& s) { return s.orientation(); }, shape);
+}
+
+const char* axisNameOf(const AnalyticShape& shape) {
+  return std::visit([](const auto& s) -> const char* { return s.kOrientationName; }, shape);
+}
+
+const char* nameOf(const AnalyticShape& shape) {
+  return std::visit([](const auto& s) -> const char* { return s.kName; }, shape);
 }
 
 AnalyticShape placed(const AnalyticShape& shape, const Vec3& centre_m, const glm::dquat& turn) {
-  AnalyticShape out = shape;
-  std::visit([&](auto& s) { s.centre_m = centre_m; }, out);
-  // A unit axis turned by a unit quaternion is a unit vector to rounding, never zero.
-  if (auto* c = std::get_if<CylinderShape>(&out)) c->axis = *tryNormalize(turn * c->axis);
-  if (auto* d = std::get_if<DiskShape>(&out)) d->normal = *tryNormalize(turn * d->normal);
-  return out;
+  return std::visit([&](const auto& s) -> AnalyticShape { return s.placed(centre_m, turn); },
+                    shape);
 }
 
 std::uint32_t addCylinder(Target& target, const CylinderShape& s, std::uint32_t material,
@@ -135,6 +183,37 @@ std::uint32_t addCylinder(Target& target, const CylinderShape& s, std::uint32_t 
     const double phi = k * twoPiOver(segments);
     const double z = -0.5 * s.length_m + s.length_m * j / rings;
     return s.radius_m * (std::cos(phi) * u + std::sin(phi) * v) + z * s.axis;
+  };
+  for (int j = 0; j < rings; ++j) {
+    for (int k = 0; k < segments; ++k) {
+      // Around (+φ) then along (+axis) is counter-clockwise seen from outside.
+      const Vec3 a = point(k, j), b = point(k + 1, j), c = point(k + 1, j + 1), d = point(k, j + 1);
+      target.addFacet(obj, {a, b, c}, SurfaceModel::Quadric, q);
+      target.addFacet(obj, {a, c, d}, SurfaceModel::Quadric, q);
+    }
+  }
+  return obj;
+}
+
+std::uint32_t addCone(Target& target, const ConeShape& s, std::uint32_t material, int segments,
+                      const Vec3& reference) {
+  const std::uint32_t obj =
+      target.addObject({s.centre_m, material, std::nullopt, ConeShape::kConvex});
+  // The apex, where the radius along the axis r(z) = r₀ + (r₁ − r₀)(z + L/2)/L meets 0; the
+  // quadric is |x − p|² − (1 + k²)((x − p)·a)², k = |r₁ − r₀|/L, whose gradient points away
+  // from the axis on both nappes.
+  const double slope = (s.top_radius_m - s.radius_m) / s.length_m;
+  const Vec3 apex = (-0.5 * s.length_m - s.radius_m / slope) * s.axis;
+  const std::uint32_t q = target.addQuadric(Quadric::cone(apex, s.axis, std::abs(slope)));
+  const Vec3 u = perpendicularToward(s.axis, reference);
+  const Vec3 v = glm::cross(s.axis, u);
+  const int rings = static_cast<int>(s.rings(segments));
+  auto point = [&](int k, int j) {
+    const double phi = k * twoPiOver(segments);
+    const double t = static_cast<double>(j) / rings;
+    const double z = -0.5 * s.length_m + s.length_m * t;
+    const double r = s.radius_m + (s.top_radius_m - s.radius_m) * t;
+    return r * (std::cos(phi) * u + std::sin(phi) * v) + z * s.axis;
   };
   for (int j = 0; j < rings; ++j) {
     for (int k = 0; k < segments; ++k) {

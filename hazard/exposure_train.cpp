@@ -185,7 +185,7 @@ TrainHazard judgeTrain(std::span<const double> time_s, std::span<const double> i
                        const HazardSpec& hazard, double longest_s, double floor_w_m2,
                        double window_ratio) {
   TrainHazard best;
-  if (hazard.standard == SafetyStandard::Iec60825_1_2014) best.reduction_name = "C5";
+  best.reduction_name = clauses(hazard.standard).rule_three_factor;
   if (time_s.size() < 2) return best;
   const double peak = *std::max_element(irradiance_w_m2.begin(), irradiance_w_m2.end());
   // A floor of 0 (which the scene never gives) would never end the doublings: a millionth of

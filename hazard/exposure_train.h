@@ -67,7 +67,7 @@ struct TrainHazard {
   /// by (its ratio / the strongest's)⁴ (pulses for identical pulses).
   double effective_pulses = 0.0;
   double reduction = 1.0;              ///< C_P or C5 of the pulse that sets the ratio
-  const char* reduction_name = "C_P";  ///< "C_P" (ANSI) or "C5" (IEC)
+  const char* reduction_name = "C_P";  ///< StandardClauses::rule_three_factor
   double threshold_w_m2 = 0.0;         ///< the irradiance the pulses were counted above
   bool grouped = false;                ///< some pulses closer than t_min were counted as one
   /// The pulse that sets the ratio (its own worst window and its duration, at or above half

@@ -36,19 +36,18 @@ bool ruleThreeApplies(double wavelength_nm, Tissue tissue, MpeLimit limit) {
 double ruleThreeCountingS(SafetyStandard standard, double exposure_s) {
   // IEC 60825-1:2014 A.3 (4.3 f) 3)) for α ≤ α_min: N counts the pulses within T2 (10 s for a
   // point source) or the exposure if shorter; ANSI Z136.1-2014 8.2.3.3 the n of the exposure.
-  return standard == SafetyStandard::AnsiZ136_1_2014 ? exposure_s : std::min(exposure_s, 10.0);
+  return std::min(exposure_s, clauses(standard).rule_three_window_s);
 }
 
 double ruleThreeReduction(SafetyStandard standard, double wavelength_nm, double duration_s,
                           double counted) {
-  if (standard == SafetyStandard::AnsiZ136_1_2014) {
-    return std::pow(counted, -0.25);  // ANSI Z136.1-2014 8.2.3.3: C_P = n^-0.25
-  }
-  // IEC: pulses no longer than T_i reduce the limit only beyond 600 of them, to 5 N^-0.25 and
-  // never below 0.4; longer pulses, for sources smaller than 5 mrad, not at all.
-  if (duration_s > pulseGroupingS(wavelength_nm) * (1.0 + 1e-12)) return 1.0;
-  if (counted <= 600.0) return 1.0;
-  return std::max(5.0 * std::pow(counted, -0.25), 0.4);
+  const StandardClauses& c = clauses(standard);
+  if (c.rule_three_only_within_t_i && duration_s > pulseGroupingS(wavelength_nm) * (1.0 + 1e-12))
+    return 1.0;
+  if (counted <= c.rule_three_from_pulses) return 1.0;
+  // Never above 1: IEC's 5 N^-0.25 is above 1 from 601 to 624 pulses, where taken literally it
+  // would relax the single-pulse limit; rule 3 only ever lowers it.
+  return std::min(1.0, std::max(c.rule_three_scale * std::pow(counted, -0.25), c.rule_three_floor));
 }
 
 PulseTrainMpe pulseTrainMpe(double wavelength_nm, const PulseSpec& pulse, double exposure_s,
@@ -147,10 +146,11 @@ std::string hazardCitation(const HazardSpec& h) {
     s += std::string("; repetitive pulses, ") + c.name + " " + c.repeated_pulses + " rule " +
          std::to_string(h.train->rule);
     if (h.train->rule == 3) {
-      s += h.standard == SafetyStandard::Iec60825_1_2014
-               ? " (C5 = 5 N^-0.25, N = " + formatCount(h.train->reduction_pulses) +
-                     " pulses within T2)"
-               : std::string(" (C_P = n^-0.25)");
+      s += std::string(" (") + c.rule_three_formula +
+           (c.rule_three_cites_count
+                ? ", N = " + formatCount(h.train->reduction_pulses) + " pulses within T2"
+                : std::string()) +
+           ")";
     }
     if (h.train->grouped) s += ", pulses within t_min counted as one";
   } else if (h.pulse) {

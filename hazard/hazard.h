@@ -71,7 +71,8 @@ double ruleThreeCountingS(SafetyStandard standard, double exposure_s);
 /// @brief Rule 3's reduction of the single-pulse limit of pulses of @p duration_s when
 /// @p counted pulses (ruleThreeCountingS()) are counted: ANSI's C_P = n^-0.25; IEC's C5, for
 /// pulses no longer than T_i 1 up to 600 pulses and 5 N^-0.25 (at least 0.4) beyond, and 1 for
-/// longer pulses. The caller checks ruleThreeApplies().
+/// longer pulses; never above 1 (IEC's formula is from 601 to 624 pulses). The caller checks
+/// ruleThreeApplies().
 double ruleThreeReduction(SafetyStandard standard, double wavelength_nm, double duration_s,
                           double counted);
 

@@ -39,8 +39,7 @@ double cB(double nm) { return nm <= 450.0 ? 1.0 : std::pow(10.0, 0.02 * (nm - 45
 double cC(double nm, SafetyStandard standard) {
   if (nm <= 1150.0) return 1.0;
   if (nm < 1200.0) return std::pow(10.0, 0.018 * (nm - 1150.0));
-  if (standard == SafetyStandard::Iec60825_1_2014)
-    return 8.0 + std::pow(10.0, 0.04 * (nm - 1250.0));
+  if (clauses(standard).near_ir_factor_climbs) return 8.0 + std::pow(10.0, 0.04 * (nm - 1250.0));
   return 8.0;
 }
 
@@ -83,7 +82,7 @@ Mpe retinalPhotochemical(double nm, double t) {
 // Retinal thermal, 1050–1400 nm.
 Mpe retinalNearIr(double nm, double t, SafetyStandard standard) {
   const double cc = cC(nm, standard);
-  const std::string factor = standard == SafetyStandard::Iec60825_1_2014 ? "C7" : "C_C";
+  const std::string factor = clauses(standard).near_ir_factor;
   if (t < 13e-6) {  // 1e-11 to 13e-6 s: 2.0 C_C × 10⁻⁶ J/cm²
     return fromExposure(2.0e-2 * cc, t, MpeLimit::Thermal,
                         "1050-1400 nm, 1e-11 to 1.3e-5 s: 2.0e-2 " + factor + " J/m^2");
@@ -217,7 +216,7 @@ Mpe tableMpe(double wavelength_nm, double exposure_s, SafetyStandard standard, T
     consider(kSkinVisibleNearIrBand);
   } else {
     for (const Band& band : kRetinalBands) consider(band);
-    if (standard == SafetyStandard::Iec60825_1_2014) consider(kIecAnteriorEyeBand);
+    if (clauses(standard).anterior_eye_limit) consider(kIecAnteriorEyeBand);
   }
   for (const Band& band : kInfraredBands) consider(band);
   lowest.standard = standard;

@@ -6,10 +6,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <mutex>
+#include <numeric>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -526,42 +527,65 @@ class FieldBuilder {
     };
     tbb::enumerable_thread_specific<Scratch> scratch;
     const std::span<const Candidate> lit = integrator_.candidates();
-    // Shared: this process integrates every size-th point from its rank on.
-    const std::size_t share =
-        exchange_ != nullptr ? static_cast<std::size_t>(exchange_->size()) : 1;
-    const std::size_t first =
-        exchange_ != nullptr ? static_cast<std::size_t>(exchange_->rank()) : 0;
-    const std::size_t mine =
-        wanted.size() > first ? (wanted.size() - first + share - 1) / share : 0;
-    if (counter_ != nullptr) counter_->items_scheduled.fetch_add(mine);
-    tbb::parallel_for(std::size_t{0}, mine, [&](std::size_t m) {
-      if (stopRequested()) return;
-      const std::size_t w = first + m * share;
-      const std::uint64_t key = wanted[w].first;
-      const auto nk = static_cast<std::uint64_t>(lattice_.n[2]);
-      const auto nj = static_cast<std::uint64_t>(lattice_.n[1]);
-      const int k = static_cast<int>(key % nk);
-      const int j = static_cast<int>((key / nk) % nj);
-      const int i = static_cast<int>(key / nk / nj);
-      const Vec3 x = spec_.position(i, j, k);
-      if (excluded_ && excluded_(x)) {
-        results[w].excluded = true;
-        return;
-      }
-      Scratch& s = scratch.local();
-      s.candidates.clear();
-      for (const std::uint32_t c : point_lists[wanted[w].second]) s.candidates.push_back(lit[c]);
-      const ObserverResult r = integrator_.adaptive(x, s.candidates, s.workspace);
-      results[w].irradiance_w_m2 = r.irradiance_w_m2;
-      results[w].error_w_m2 = r.error_estimate_w_m2;
-      results[w].converged = r.converged;
-      evaluations[w] = r.evaluations;
-      if (counter_ != nullptr) {
-        counter_->items_done.fetch_add(1, std::memory_order_relaxed);
-        counter_->evaluations.fetch_add(r.evaluations, std::memory_order_relaxed);
-      }
-    });
-    if (exchange_ != nullptr) exchangeResults(results, evaluations);
+    // The points of @p indices (into wanted), integrated in parallel.
+    const auto integrate = [&](std::span<const std::size_t> indices) {
+      if (counter_ != nullptr) counter_->items_scheduled.fetch_add(indices.size());
+      tbb::parallel_for(std::size_t{0}, indices.size(), [&](std::size_t m) {
+        if (stopRequested()) return;
+        const std::size_t w = indices[m];
+        const std::uint64_t key = wanted[w].first;
+        const auto nk = static_cast<std::uint64_t>(lattice_.n[2]);
+        const auto nj = static_cast<std::uint64_t>(lattice_.n[1]);
+        const int k = static_cast<int>(key % nk);
+        const int j = static_cast<int>((key / nk) % nj);
+        const int i = static_cast<int>(key / nk / nj);
+        const Vec3 x = spec_.position(i, j, k);
+        if (excluded_ && excluded_(x)) {
+          results[w].excluded = true;
+          return;
+        }
+        Scratch& s = scratch.local();
+        s.candidates.clear();
+        for (const std::uint32_t c : point_lists[wanted[w].second]) s.candidates.push_back(lit[c]);
+        const ObserverResult r = integrator_.adaptive(x, s.candidates, s.workspace);
+        results[w].irradiance_w_m2 = r.irradiance_w_m2;
+        results[w].error_w_m2 = r.error_estimate_w_m2;
+        results[w].converged = r.converged;
+        evaluations[w] = r.evaluations;
+        if (counter_ != nullptr) {
+          counter_->items_done.fetch_add(1, std::memory_order_relaxed);
+          counter_->evaluations.fetch_add(r.evaluations, std::memory_order_relaxed);
+        }
+      });
+    };
+    if (exchange_ == nullptr) {
+      std::vector<std::size_t> all(wanted.size());
+      std::iota(all.begin(), all.end(), std::size_t{0});
+      integrate(all);
+    } else {
+      // Shared with the other processes, as glint points shares its observers: each integrates
+      // its share and all receive every point; a stop on any process stops all of them here.
+      shareObservers(
+          *exchange_, wanted.size(),
+          [&](std::span<const std::size_t> mine, WireWriter& out) {
+            integrate(mine);
+            if (stopRequested()) throw WorkStopped();
+            for (const std::size_t w : mine) {
+              out.put(results[w].irradiance_w_m2);
+              out.put(results[w].error_w_m2);
+              out.put(evaluations[w]);
+              out.put<std::uint8_t>(results[w].excluded ? 1 : 0);
+              out.put<std::uint8_t>(results[w].converged ? 1 : 0);
+            }
+          },
+          [&](std::size_t w, WireReader& in) {
+            results[w].irradiance_w_m2 = in.get<double>();
+            results[w].error_w_m2 = in.get<double>();
+            evaluations[w] = in.get<std::int64_t>();
+            results[w].excluded = in.get<std::uint8_t>() != 0;
+            results[w].converged = in.get<std::uint8_t>() != 0;
+          });
+    }
     for (std::size_t w = 0; w < wanted.size(); ++w) {
       values_.emplace(wanted[w].first, results[w]);
       if (results[w].excluded) {
@@ -570,58 +594,6 @@ class FieldBuilder {
       }
       ++stats_.evaluated_points;
       stats_.evaluations += evaluations[w];
-    }
-  }
-
-  // Sends this process's share of a level's results (every size-th from its rank on) to the
-  // others and fills in theirs; a stop raised on any process stops all of them here.
-  void exchangeResults(std::vector<PointValue>& results, std::vector<std::int64_t>& evaluations) {
-    struct Record {
-      double irradiance_w_m2, error_w_m2;
-      std::int64_t evaluations;
-      std::uint8_t excluded, converged;
-    };
-    const std::size_t share = static_cast<std::size_t>(exchange_->size());
-    const std::size_t rank = static_cast<std::size_t>(exchange_->rank());
-    std::vector<std::byte> mine(1);
-    mine[0] = std::byte{stopRequested() ? std::uint8_t{1} : std::uint8_t{0}};
-    const auto records = [&](std::size_t p) {  // how many points process p integrated
-      return results.size() > p ? (results.size() - p + share - 1) / share : 0;
-    };
-    mine.reserve(1 + records(rank) * sizeof(Record));
-    for (std::size_t w = rank; w < results.size(); w += share) {
-      Record r;
-      std::memset(&r, 0, sizeof r);  // no indeterminate padding on the wire
-      r.irradiance_w_m2 = results[w].irradiance_w_m2;
-      r.error_w_m2 = results[w].error_w_m2;
-      r.evaluations = evaluations[w];
-      r.excluded = results[w].excluded ? 1 : 0;
-      r.converged = results[w].converged ? 1 : 0;
-      const auto* bytes = reinterpret_cast<const std::byte*>(&r);
-      mine.insert(mine.end(), bytes, bytes + sizeof r);
-    }
-    const std::vector<std::vector<std::byte>> all = exchange_->allGather(mine);
-    bool stopped = false;
-    for (std::size_t p = 0; p < all.size(); ++p) {
-      stopped = stopped || all[p].empty() || all[p][0] != std::byte{0};
-    }
-    if (stopped) throw WorkStopped();
-    for (std::size_t p = 0; p < all.size(); ++p) {
-      if (p == rank) continue;
-      const std::vector<std::byte>& from = all[p];
-      // A short message would leave points at 0 W/m², read as "no hazard": refuse it.
-      if (all.size() != share || from.size() != 1 + records(p) * sizeof(Record)) {
-        throw std::runtime_error("point exchange: process " + std::to_string(p) + " sent " +
-                                 std::to_string(from.size()) + " bytes, expected " +
-                                 std::to_string(1 + records(p) * sizeof(Record)));
-      }
-      std::size_t offset = 1;
-      for (std::size_t w = p; w < results.size(); w += share, offset += sizeof(Record)) {
-        Record r;
-        std::memcpy(&r, from.data() + offset, sizeof r);
-        results[w] = {r.irradiance_w_m2, r.error_w_m2, r.excluded != 0, r.converged != 0};
-        evaluations[w] = r.evaluations;
-      }
     }
   }
 

@@ -10,6 +10,8 @@
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <type_traits>
+#include <utility>
 
 #include "export/fnv1a.h"
 #include "pipeline/base/input_error.h"
@@ -165,9 +167,17 @@ void readHazardLimits(ObjectReader r, HazardSpec& h) {
     const std::string name = r.string("standard");
     const std::optional<SafetyStandard> standard = standardNamed(name);
     if (!standard) {
-      r.fail("standard", "must be \"" + std::string(clauses(SafetyStandard::AnsiZ136_1_2014).name) +
-                             "\" (the default) or \"" +
-                             clauses(SafetyStandard::Iec60825_1_2014).name + "\"");
+      // "A" (the default), "B" or "C".
+      std::string names;
+      const std::size_t n = std::size(kStandards);
+      for (std::size_t k = 0; k < n; ++k) {
+        names += (k == 0       ? ""
+                  : k + 1 == n ? " or "
+                               : ", ") +
+                 std::string("\"") + clauses(kStandards[k]).name + "\"" +
+                 (k == 0 ? " (the default)" : "");
+      }
+      r.fail("standard", "must be " + names);
     }
     h.standard = *standard;
   }
@@ -371,30 +381,68 @@ MeshSpec readMesh(ObjectReader& r, const std::filesystem::path& folder, const Gl
   return m;
 }
 
-// The analytic shape of `objects/<i>`, by its `shape` key (0: cylinder, 1: sphere, 2: disk).
-AnalyticShape readAnalytic(ObjectReader& r, std::size_t shape) {
-  const Vec3 centre_m = position(r, "center");
-  const double radius_m =
-      inRange(r, "radius", r.number("radius"), limits::kMinLengthM, limits::kMaxLengthM, "m");
-  if (shape == 0) {
-    const Vec3 axis = r.direction("axis");
-    const double length_m =
-        inRange(r, "length", r.number("length"), limits::kMinLengthM, limits::kMaxLengthM, "m");
-    return CylinderShape{centre_m, axis, radius_m, length_m};
-  }
-  if (shape == 1) return SphereShape{centre_m, radius_m};
-  return DiskShape{centre_m, r.direction("normal"), radius_m};
+// Each analytic shape's own keys, beside `center` and `radius` (docs/scene.md). An alternative
+// of AnalyticShape without its reader here does not compile (shapeTable()).
+CylinderShape readShape(ObjectReader& r, const Vec3& centre_m, double radius_m,
+                        std::type_identity<CylinderShape>) {
+  const Vec3 axis = r.direction("axis");
+  const double length_m =
+      inRange(r, "length", r.number("length"), limits::kMinLengthM, limits::kMaxLengthM, "m");
+  return {centre_m, axis, radius_m, length_m};
 }
+SphereShape readShape(ObjectReader&, const Vec3& centre_m, double radius_m,
+                      std::type_identity<SphereShape>) {
+  return {centre_m, radius_m};
+}
+DiskShape readShape(ObjectReader& r, const Vec3& centre_m, double radius_m,
+                    std::type_identity<DiskShape>) {
+  return {centre_m, r.direction("normal"), radius_m};
+}
+ConeShape readShape(ObjectReader& r, const Vec3& centre_m, double radius_m,
+                    std::type_identity<ConeShape>) {
+  const Vec3 axis = r.direction("axis");
+  const double top_radius_m = inRange(r, "top_radius", r.number("top_radius"), limits::kMinLengthM,
+                                      limits::kMaxLengthM, "m");
+  const double length_m =
+      inRange(r, "length", r.number("length"), limits::kMinLengthM, limits::kMaxLengthM, "m");
+  // Equal radii make the cone's quadric a cylinder's with its apex at infinity.
+  if (std::abs(top_radius_m - radius_m) <= 1e-6 * std::max(top_radius_m, radius_m)) {
+    r.fail("top_radius", "must differ from radius (equal radii: use shape \"cylinder\")");
+  }
+  return {centre_m, axis, radius_m, top_radius_m, length_m};
+}
+
+// The analytic shapes by their names in scene files, in AnalyticShape's order.
+struct ShapeEntry {
+  const char* name;
+  AnalyticShape (*read)(ObjectReader& r, const Vec3& centre_m, double radius_m);
+};
+template <std::size_t... I>
+constexpr std::array<ShapeEntry, sizeof...(I)> shapeTable(std::index_sequence<I...>) {
+  return {ShapeEntry{std::variant_alternative_t<I, AnalyticShape>::kName,
+                     [](ObjectReader& r, const Vec3& centre_m, double radius_m) -> AnalyticShape {
+                       return readShape(
+                           r, centre_m, radius_m,
+                           std::type_identity<std::variant_alternative_t<I, AnalyticShape>>{});
+                     }}...};
+}
+constexpr auto kShapes = shapeTable(std::make_index_sequence<std::variant_size_v<AnalyticShape>>{});
 
 ObjectSpec readObject(ObjectReader r, const std::vector<std::string>& material_names,
                       const std::filesystem::path& folder, const GltfLimits& mesh_limits,
                       const MeshBudget& mesh_budget) {
   ObjectSpec o;
-  const std::size_t shape = r.choice("shape", {"cylinder", "sphere", "disk", "mesh"});
-  if (shape == 3) {
-    o.shape = readMesh(r, folder, mesh_limits, mesh_budget);
+  std::vector<std::string> shapes;
+  for (const ShapeEntry& e : kShapes) shapes.emplace_back(e.name);
+  shapes.emplace_back("mesh");
+  const std::size_t shape = r.choice("shape", shapes);
+  if (shape < kShapes.size()) {
+    const Vec3 centre_m = position(r, "center");
+    const double radius_m =
+        inRange(r, "radius", r.number("radius"), limits::kMinLengthM, limits::kMaxLengthM, "m");
+    o.shape = kShapes[shape].read(r, centre_m, radius_m);
   } else {
-    o.shape = readAnalytic(r, shape);
+    o.shape = readMesh(r, folder, mesh_limits, mesh_budget);
   }
   const std::string material = r.string("material");
   const auto it = std::find(material_names.begin(), material_names.end(), material);

@@ -409,9 +409,7 @@ std::string scenarioSceneJson(const Study& study, const Scenario& s) {
     }
     o["center"] = vecJson(c);
     if (const std::optional<Vec3> axis = axisOf(*base.analytic())) {
-      for (const char* key : {"axis", "normal"}) {
-        if (o.contains(key)) o[key] = vecJson(turn * *axis);
-      }
+      o[axisNameOf(*base.analytic())] = vecJson(turn * *axis);
     }
   }
   // The terrain's file too is named absolutely.

@@ -56,8 +56,7 @@ nlohmann::json hazardLimitsJson(const HazardSpec& h) {
         pulse["rule_3_reduced_j_m2"] = t.reduced_j_m2;
         pulse["rule_3_reduction"] = t.c_p;
         pulse["rule_3_pulses"] = t.reduction_pulses;
-        if (h.standard == SafetyStandard::AnsiZ136_1_2014) pulse["c_p"] = t.c_p;
-        if (h.standard == SafetyStandard::Iec60825_1_2014) pulse["c5"] = t.c_p;
+        pulse[clauses(h.standard).rule_three_key] = t.c_p;
       }
     }
     j["pulse"] = pulse;

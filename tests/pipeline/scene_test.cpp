@@ -67,6 +67,27 @@ TEST(Scene, DirectionsAreNormalised) {
   EXPECT_NEAR(axisOf(*s.objects[0].analytic())->z, 1.0, 1e-15);
 }
 
+// A cone is read by its name with its own keys, and one whose radii are equal (a cylinder, whose
+// apex lies at infinity) is refused naming the key.
+TEST(Scene, AConeIsReadByItsNameAndEqualRadiiAreRefused) {
+  json j = minimal();
+  j["objects"][0] = {{"shape", "cone"},     {"material", j["objects"][0]["material"]},
+                     {"center", {0, 0, 1}}, {"axis", {0, 0, 2}},
+                     {"radius", 0.4},       {"top_radius", 0.1},
+                     {"length", 1.2}};
+  const Scene s = parseScene(j.dump(), "scene.json");
+  const auto* cone = std::get_if<ConeShape>(s.objects[0].analytic());
+  ASSERT_NE(cone, nullptr) << "shape \"cone\" reads as a ConeShape";
+  EXPECT_EQ(cone->centre_m, Vec3(0, 0, 1));
+  EXPECT_NEAR(cone->axis.z, 1.0, 1e-15);
+  EXPECT_EQ(cone->radius_m, 0.4);
+  EXPECT_EQ(cone->top_radius_m, 0.1);
+  EXPECT_EQ(cone->length_m, 1.2);
+  j["objects"][0]["top_radius"] = 0.4;
+  const std::string refusal = test::refusalOf([&] { parseScene(j.dump(), "scene.json"); });
+  EXPECT_NE(refusal.find("/objects/0/top_radius"), std::string::npos) << refusal;
+}
+
 TEST(Scene, DirectionsOfAnyRepresentableLengthAreNormalised) {
   // |v|² of the first overflows a double and of the second underflows to 0; both are still
   // directions, and the laser's must not be refused as zero-length.
@@ -183,8 +204,8 @@ TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
        "scene.json: /objects/0/axis: must not be zero-length (all three components are 0)"},
       {[](json& j) { j["objects"][0]["material"] = "chrome"; },
        "scene.json: /objects/0/material: no material named \"chrome\" (defined: \"polished\")"},
-      {[](json& j) { j["objects"][0]["shape"] = "cone"; },
-       "scene.json: /objects/0/shape: must be one of: cylinder, sphere, disk, mesh"},
+      {[](json& j) { j["objects"][0]["shape"] = "torus"; },
+       "scene.json: /objects/0/shape: must be one of: cylinder, sphere, disk, cone, mesh"},
       {[](json& j) { j["objects"][0]["shape"] = "mesh"; },
        "scene.json: /objects/0/file: missing (required)"},
       {[](json& j) { j["objects"][0]["segments"] = 2; },

@@ -191,6 +191,34 @@ json sceneWithHazard(const json& hazard) {
   return j;
 }
 
+// Every standard of kStandards is read by its name, refused names list them all, and its
+// clauses are whole: each rule reads them, none asks which standard it is.
+TEST(SceneStandard, EveryKnownStandardIsReadByItsNameAndHasEveryClause) {
+  const std::string refusal = test::refusalOf([] {
+    parseScene(sceneWithHazard({{"standard", "no such standard"}}).dump(), "s.json");
+  });
+  for (SafetyStandard s : kStandards) {
+    const StandardClauses& c = clauses(s);
+    EXPECT_EQ(standardNamed(c.name), s) << c.name;
+    EXPECT_NE(refusal.find(std::string("\"") + c.name + "\""), std::string::npos)
+        << refusal << " does not name " << c.name;
+    for (const char* text :
+         {c.point_source_mpe, c.skin_mpe, c.repeated_pulses, c.optical_aids, c.near_ir_factor,
+          c.rule_three_factor, c.rule_three_formula, c.rule_three_key}) {
+      ASSERT_NE(text, nullptr) << c.name;
+      EXPECT_GT(std::string(text).size(), 0u) << c.name;
+    }
+    // Rule 3 never raises a limit and never reduces it to nothing.
+    EXPECT_GE(c.rule_three_window_s, 10.0) << c.name;
+    for (double n : {2.0, 601.0, 1e6}) {
+      const double reduction = ruleThreeReduction(s, 1064.0, 1e-8, n);
+      EXPECT_GT(reduction, 0.0) << c.name << ", " << n << " pulses";
+      EXPECT_LE(reduction, 1.0) << c.name << ", " << n << " pulses";
+    }
+  }
+  EXPECT_EQ(kStandards[0], kAnsi) << "ANSI Z136.1-2014 is the default";
+}
+
 TEST(SceneStandard, HazardKeysChooseTheTableAndTheSkinsDefaultExposure) {
   const Scene ansi = parseScene(sceneWithHazard(nullptr).dump(), "scene.json");
   EXPECT_EQ(ansi.hazard.standard, kAnsi) << "the default";

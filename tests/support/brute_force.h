@@ -243,6 +243,26 @@ inline Parametrisation sphere(const SphereShape& s, const Vec3& pole) {
   return p;
 }
 
+inline Parametrisation cone(const ConeShape& s) {
+  const Vec3 a = glm::normalize(s.axis);
+  const Vec3 e1 = anyPerpendicular(a), e2 = glm::cross(a, e1);
+  const double slope = (s.top_radius_m - s.radius_m) / s.length_m;  // dr/dt
+  const double stretch = std::sqrt(1.0 + slope * slope);
+  Parametrisation p;
+  p.u0 = -0.5 * s.length_m;
+  p.u1 = 0.5 * s.length_m;
+  p.v_range = [](double) { return std::pair{0.0, 2.0 * kPi}; };
+  p.v_periodic = true;
+  p.at = [=](double t, double phi) {
+    const Vec3 radial = std::cos(phi) * e1 + std::sin(phi) * e2;
+    const double r = s.radius_m + slope * (t + 0.5 * s.length_m);
+    // ∂x/∂t = a + slope·radial, ∂x/∂φ = r·tangent: the outward normal leans against the slope.
+    return SurfacePoint{s.centre_m + t * a + r * radial, (radial - slope * a) / stretch,
+                        r * stretch};
+  };
+  return p;
+}
+
 /// A torus about the z axis through the origin: ring radius `major_m`, tube radius `minor_m`,
 /// u the angle around the axis, v around the tube (periodic), v = 0 on the outer equator.
 inline Parametrisation torus(double major_m, double minor_m) {
