@@ -50,6 +50,34 @@ std::vector<std::uint32_t> weldByPosition(const std::vector<Vec3>& positions) {
   return weld;
 }
 
+// The side surface about @p axis from −length/2 to +length/2, radius r0 there growing linearly
+// to r1 at the far end (a cylinder: r1 = r0), as @p rings rings of @p segments quadrilaterals,
+// two facets each on quadric @p q; @p reference fixes the azimuth.
+void addSideSurface(Target& target, std::uint32_t obj, std::uint32_t q, const Vec3& axis,
+                    const Vec3& reference, int segments, int rings, double length_m, double r0_m,
+                    double r1_m) {
+  const Vec3 u = perpendicularToward(axis, reference);
+  const Vec3 v = glm::cross(axis, u);
+  auto point = [&](int k, int j) {
+    const double phi = k * twoPiOver(segments);
+    const double z = -0.5 * length_m + length_m * j / rings;
+    const double r = r0_m + (r1_m - r0_m) * j / rings;
+    return r * (std::cos(phi) * u + std::sin(phi) * v) + z * axis;
+  };
+  for (int j = 0; j < rings; ++j) {
+    for (int k = 0; k < segments; ++k) {
+      // Around (+φ) then along (+axis) is counter-clockwise seen from outside.
+      const Vec3 a = point(k, j), b = point(k + 1, j), c = point(k + 1, j + 1), d = point(k, j + 1);
+      target.addFacet(obj, {a, b, c}, SurfaceModel::Quadric, q);
+      target.addFacet(obj, {a, c, d}, SurfaceModel::Quadric, q);
+    }
+  }
+}
+
+// A unit direction turned by a unit quaternion is a unit vector to rounding, never zero; it is
+// normalised again, as a scene file's is read.
+Vec3 turned(const glm::dquat& turn, const Vec3& unit) { return *tryNormalize(turn * unit); }
+
 }  // namespace
 
 double CylinderShape::rings(int segments) const {
@@ -93,14 +121,6 @@ bool ConeShape::nearOrInside(const Vec3& x_m, double margin_m) const {
   return std::abs(along) < 0.5 * length_m + margin_m &&
          across < std::max(radius_m, top_radius_m) + margin_m;
 }
-
-namespace {
-
-// A unit direction turned by a unit quaternion is a unit vector to rounding, never zero; it is
-// normalised again, as a scene file's is read.
-Vec3 turned(const glm::dquat& turn, const Vec3& unit) { return *tryNormalize(turn * unit); }
-
-}  // namespace
 
 CylinderShape CylinderShape::placed(const Vec3& centre, const glm::dquat& turn) const {
   return {centre, turned(turn, axis), radius_m, length_m};
@@ -176,22 +196,8 @@ std::uint32_t addCylinder(Target& target, const CylinderShape& s, std::uint32_t 
   const std::uint32_t obj =
       target.addObject({s.centre_m, material, std::nullopt, CylinderShape::kConvex});
   const std::uint32_t q = target.addQuadric(Quadric::cylinder(Vec3(0.0), s.axis, s.radius_m));
-  const Vec3 u = perpendicularToward(s.axis, reference);
-  const Vec3 v = glm::cross(s.axis, u);
-  const int rings = static_cast<int>(s.rings(segments));
-  auto point = [&](int k, int j) {
-    const double phi = k * twoPiOver(segments);
-    const double z = -0.5 * s.length_m + s.length_m * j / rings;
-    return s.radius_m * (std::cos(phi) * u + std::sin(phi) * v) + z * s.axis;
-  };
-  for (int j = 0; j < rings; ++j) {
-    for (int k = 0; k < segments; ++k) {
-      // Around (+φ) then along (+axis) is counter-clockwise seen from outside.
-      const Vec3 a = point(k, j), b = point(k + 1, j), c = point(k + 1, j + 1), d = point(k, j + 1);
-      target.addFacet(obj, {a, b, c}, SurfaceModel::Quadric, q);
-      target.addFacet(obj, {a, c, d}, SurfaceModel::Quadric, q);
-    }
-  }
+  addSideSurface(target, obj, q, s.axis, reference, segments, static_cast<int>(s.rings(segments)),
+                 s.length_m, s.radius_m, s.radius_m);
   return obj;
 }
 
@@ -205,24 +211,8 @@ std::uint32_t addCone(Target& target, const ConeShape& s, std::uint32_t material
   const double slope = (s.top_radius_m - s.radius_m) / s.length_m;
   const Vec3 apex = (-0.5 * s.length_m - s.radius_m / slope) * s.axis;
   const std::uint32_t q = target.addQuadric(Quadric::cone(apex, s.axis, std::abs(slope)));
-  const Vec3 u = perpendicularToward(s.axis, reference);
-  const Vec3 v = glm::cross(s.axis, u);
-  const int rings = static_cast<int>(s.rings(segments));
-  auto point = [&](int k, int j) {
-    const double phi = k * twoPiOver(segments);
-    const double t = static_cast<double>(j) / rings;
-    const double z = -0.5 * s.length_m + s.length_m * t;
-    const double r = s.radius_m + (s.top_radius_m - s.radius_m) * t;
-    return r * (std::cos(phi) * u + std::sin(phi) * v) + z * s.axis;
-  };
-  for (int j = 0; j < rings; ++j) {
-    for (int k = 0; k < segments; ++k) {
-      // Around (+φ) then along (+axis) is counter-clockwise seen from outside.
-      const Vec3 a = point(k, j), b = point(k + 1, j), c = point(k + 1, j + 1), d = point(k, j + 1);
-      target.addFacet(obj, {a, b, c}, SurfaceModel::Quadric, q);
-      target.addFacet(obj, {a, c, d}, SurfaceModel::Quadric, q);
-    }
-  }
+  addSideSurface(target, obj, q, s.axis, reference, segments, static_cast<int>(s.rings(segments)),
+                 s.length_m, s.radius_m, s.top_radius_m);
   return obj;
 }
 

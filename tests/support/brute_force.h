@@ -212,19 +212,10 @@ inline Estimate irradiance(const Parametrisation& p, const Beam& beam, const Mat
 
 /// The shapes of tessellate.h in their own coordinates. `pole` picks the sphere's polar axis
 /// (keep it away from the glint: the parametrisation is singular there).
+inline Parametrisation cone(const ConeShape& s);
 inline Parametrisation cylinder(const CylinderShape& s) {
-  const Vec3 a = glm::normalize(s.axis);
-  const Vec3 e1 = anyPerpendicular(a), e2 = glm::cross(a, e1);
-  Parametrisation p;
-  p.u0 = -0.5 * s.length_m;
-  p.u1 = 0.5 * s.length_m;
-  p.v_range = [](double) { return std::pair{0.0, 2.0 * kPi}; };
-  p.v_periodic = true;
-  p.at = [=](double t, double phi) {
-    const Vec3 n = std::cos(phi) * e1 + std::sin(phi) * e2;
-    return SurfacePoint{s.centre_m + t * a + s.radius_m * n, n, s.radius_m};
-  };
-  return p;
+  // A cone of slope 0: the same points, normals and area element, to the bit.
+  return cone({s.centre_m, s.axis, s.radius_m, s.radius_m, s.length_m});
 }
 
 inline Parametrisation sphere(const SphereShape& s, const Vec3& pole) {
