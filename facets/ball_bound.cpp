@@ -2,6 +2,7 @@
 // receive, with which the observer field (observers/) drops, keeps and splits candidates.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -14,6 +15,30 @@ namespace glint {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Marks in @p drop the weakest candidates (by @p bounds) while their bounds, added to
+// @p inherited_dropped_w_m2, stay within @p allowance_w_m2; returns that sum. Sorting an index
+// keeps the candidates' order, and so the integration's, independent of the bounds.
+double dropWeakest(const std::vector<double>& bounds, double inherited_dropped_w_m2,
+                   double allowance_w_m2, std::vector<char>& drop) {
+  thread_local std::vector<std::uint32_t> order;
+  order.resize(bounds.size());
+  for (std::uint32_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return bounds[a] != bounds[b] ? bounds[a] < bounds[b] : a < b;
+  });
+  CompensatedSum dropped;
+  dropped.add(inherited_dropped_w_m2);
+  drop.assign(bounds.size(), 0);
+  for (std::uint32_t k : order) {
+    // Only a finite bound proven within the allowance is dropped: an unbounded candidate never
+    // is, whatever the allowance (sorted last, it ends the loop).
+    if (!(bounds[k] < kInf) || !(dropped.value() + bounds[k] <= allowance_w_m2)) break;
+    dropped.add(bounds[k]);
+    drop[k] = 1;
+  }
+  return dropped.value();
+}
 
 }  // namespace
 
@@ -75,25 +100,10 @@ BallBound FacetIntegrator::boundBall(const Vec3& centre_m, double radius_m,
   }
   bounds.resize(kept.size());
 
-  // Drop the weakest candidates while the dropped bounds stay within the allowance. Sorting an
-  // index keeps the candidates' order, and so the integration's, independent of the bounds.
-  thread_local std::vector<std::uint32_t> order;
-  order.resize(kept.size());
-  for (std::uint32_t k = 0; k < order.size(); ++k) order[k] = k;
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-    return bounds[a] != bounds[b] ? bounds[a] < bounds[b] : a < b;
-  });
-  CompensatedSum dropped, total;
-  dropped.add(inherited_dropped_w_m2);
   thread_local std::vector<char> drop;
-  drop.assign(kept.size(), 0);
-  for (std::uint32_t k : order) {
-    // Only a finite bound proven within the allowance is dropped: an unbounded candidate never
-    // is, whatever the allowance (sorted last, it ends the loop).
-    if (!(bounds[k] < kInf) || !(dropped.value() + bounds[k] <= options.drop_allowance_w_m2)) break;
-    dropped.add(bounds[k]);
-    drop[k] = 1;
-  }
+  const double dropped_w_m2 =
+      dropWeakest(bounds, inherited_dropped_w_m2, options.drop_allowance_w_m2, drop);
+  CompensatedSum total;
   CompensatedSum narrow;
   std::size_t out = 0;
   for (std::size_t k = 0; k < kept.size(); ++k) {
@@ -116,7 +126,7 @@ BallBound FacetIntegrator::boundBall(const Vec3& centre_m, double radius_m,
     kept[out++] = c;
   }
   kept.resize(out);
-  result.dropped_w_m2 = dropped.value();
+  result.dropped_w_m2 = dropped_w_m2;
   result.upper_w_m2 = total.value() + result.dropped_w_m2;
   result.narrow_w_m2 = narrow.value();
   return result;

@@ -24,6 +24,53 @@ const char* toString(QuadricFitStatus status) {
   return "unknown";
 }
 
+namespace {
+
+// Orients @p quadric by the vertex normals @p n at @p p and checks it is a surface for the
+// facet: Ok, or why not.
+QuadricFitStatus orientAndCheck(Quadric& quadric, const std::array<Vec3, 3>& p,
+                                const std::array<Vec3, 3>& n, const QuadricFitOptions& options) {
+  // Orient by the vertex normals; a gradient that vanishes or disagrees in sign is no surface
+  // for this facet.
+  int agree = 0;
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 g = quadric.gradient(p[i]);
+    const double gn = glm::dot(g, n[i]);
+    if (!(std::abs(gn) > 1e-9 * glm::length(g)) || glm::length(g) == 0.0) {
+      return QuadricFitStatus::Inconsistent;
+    }
+    agree += gn > 0.0 ? 1 : -1;
+  }
+  if (std::abs(agree) != 3) {
+    return QuadricFitStatus::Inconsistent;
+  }
+  if (agree < 0) quadric = quadric.flipped();
+
+  // The surface must also carry subdivision: edge midpoints project nearby.
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 mid = 0.5 * (p[i] + p[(i + 1) % 3]);
+    const auto on = quadric.project(mid);
+    const double edge = glm::length(p[(i + 1) % 3] - p[i]);
+    if (!on || glm::length(*on - mid) > options.max_midpoint_shift * edge) {
+      return QuadricFitStatus::Unstable;
+    }
+  }
+  // The bounds that let observers skip a facet (patch_models.h) need its gradient clear of
+  // zero over its ball, 2 L r < |∇Q| at the centroid (L the gradient's Lipschitz constant, r the
+  // ball's radius): a fit that fails it leaves its pieces' normal cones open until they are
+  // small, and on a car body with computed normals (944 of 1 125 fits) every observer ran to the
+  // depth limit without an evaluation and read 0 W/m². PN bounds such a facet.
+  const Vec3 centroid = (p[0] + p[1] + p[2]) / 3.0;
+  double r0 = 0.0;
+  for (const Vec3& v : p) r0 = std::max(r0, glm::length(v - centroid));
+  if (!(2.0 * quadric.gradientLipschitz() * r0 < glm::length(quadric.gradient(centroid)))) {
+    return QuadricFitStatus::Unbounded;
+  }
+  return QuadricFitStatus::Ok;
+}
+
+}  // namespace
+
 QuadricFit fitQuadric(const std::array<Vec3, 3>& p, const std::array<Vec3, 3>& n,
                       const QuadricFitOptions& options) {
   QuadricFit fit;
@@ -89,47 +136,8 @@ QuadricFit fitQuadric(const std::array<Vec3, 3>& p, const std::array<Vec3, 3>& n
       glm::dot(origin, a * origin) - 2.0 * glm::dot(b_rot, origin) + scale * scale * q(8);
   Quadric quadric(a, b, c);
 
-  // Orient by the vertex normals; a gradient that vanishes or disagrees in sign is no surface
-  // for this facet.
-  int agree = 0;
-  for (int i = 0; i < 3; ++i) {
-    const Vec3 g = quadric.gradient(p[i]);
-    const double gn = glm::dot(g, n[i]);
-    if (!(std::abs(gn) > 1e-9 * glm::length(g)) || glm::length(g) == 0.0) {
-      fit.status = QuadricFitStatus::Inconsistent;
-      return fit;
-    }
-    agree += gn > 0.0 ? 1 : -1;
-  }
-  if (std::abs(agree) != 3) {
-    fit.status = QuadricFitStatus::Inconsistent;
-    return fit;
-  }
-  if (agree < 0) quadric = quadric.flipped();
-
-  // The surface must also carry subdivision: edge midpoints project nearby.
-  for (int i = 0; i < 3; ++i) {
-    const Vec3 mid = 0.5 * (p[i] + p[(i + 1) % 3]);
-    const auto on = quadric.project(mid);
-    const double edge = glm::length(p[(i + 1) % 3] - p[i]);
-    if (!on || glm::length(*on - mid) > options.max_midpoint_shift * edge) {
-      fit.status = QuadricFitStatus::Unstable;
-      return fit;
-    }
-  }
-  // The bounds that let observers skip a facet (patch_models.h) need its gradient clear of
-  // zero over its ball, 2 L r < |∇Q| at the centroid (L the gradient's Lipschitz constant, r the
-  // ball's radius): a fit that fails it leaves its pieces' normal cones open until they are
-  // small, and on a car body with computed normals (944 of 1 125 fits) every observer ran to the
-  // depth limit without an evaluation and read 0 W/m². PN bounds such a facet.
-  const Vec3 centroid = (p[0] + p[1] + p[2]) / 3.0;
-  double r0 = 0.0;
-  for (const Vec3& v : p) r0 = std::max(r0, glm::length(v - centroid));
-  if (!(2.0 * quadric.gradientLipschitz() * r0 < glm::length(quadric.gradient(centroid)))) {
-    fit.status = QuadricFitStatus::Unbounded;
-    return fit;
-  }
-  fit.status = QuadricFitStatus::Ok;
+  fit.status = orientAndCheck(quadric, p, n, options);
+  if (fit.status != QuadricFitStatus::Ok) return fit;
   fit.quadric = quadric;
   return fit;
 }

@@ -78,20 +78,7 @@ ObserverField computeDenseField(const FacetIntegrator& integrator, const FieldSp
   std::unique_ptr<FieldGrids> grids = makeGrids(spec);
   for (Local& local : per_thread) {
     mergeInto(*grids, *local.grids.grids);
-    stats.evaluated_points += local.stats.evaluated_points;
-    stats.excluded_points += local.stats.excluded_points;
-    stats.evaluations += local.stats.evaluations;
-    stats.unconverged_points += local.stats.unconverged_points;
-    if (stats.non_finite_points == 0) stats.non_finite_at_m = local.stats.non_finite_at_m;
-    stats.non_finite_points += local.stats.non_finite_points;
-    stats.unconverged_min_m = glm::min(stats.unconverged_min_m, local.stats.unconverged_min_m);
-    stats.unconverged_max_m = glm::max(stats.unconverged_max_m, local.stats.unconverged_max_m);
-    stats.unconverged_max_upper_w_m2 =
-        std::max(stats.unconverged_max_upper_w_m2, local.stats.unconverged_max_upper_w_m2);
-    if (local.stats.peak_w_m2 > stats.peak_w_m2) {
-      stats.peak_w_m2 = local.stats.peak_w_m2;
-      stats.peak_at_m = local.stats.peak_at_m;
-    }
+    stats += local.stats;
   }
   finishStats(*grids, stats);
   std::vector<FieldBlock> blocks;

@@ -558,20 +558,18 @@ Step parabolaStep(double lo, double mid, double hi, double h) {
   return {std::clamp(0.5 * h * (lo - hi) / bend, -h, h), rise};
 }
 
-}  // namespace
+// A lattice direction where a lobe's top may be near.
+struct LobeStart {
+  double intensity_w_sr;
+  int face, i, j;
+};
 
-std::vector<FarField::Peak> locateLobeTops(const FarField& map, const FacetIntegrator& integrator,
-                                           std::int64_t* evaluations) {
+// The lattice directions at least as bright as their neighbours on the face and half the
+// @p brightest, brightest first, at most kMaxLobes and none within kLobesApart lattice angles
+// of a brighter one.
+std::vector<LobeStart> lobeStarts(const FarField& map, double brightest) {
   const int n = map.spec().face_pixels;
-  const double brightest = map.latticePeak().intensity_w_sr;
-  if (!(brightest > 0.0) || !std::isfinite(brightest)) return {};
-  // Lattice directions at least as bright as their neighbours on the face and half the
-  // brightest: where a lobe's top may be near.
-  struct Start {
-    double intensity_w_sr;
-    int face, i, j;
-  };
-  std::vector<Start> starts;
+  std::vector<LobeStart> starts;
   for (int f = 0; f < FarField::kFaces; ++f) {
     for (int j = 0; j <= n; ++j)
       for (int i = 0; i <= n; ++i) {
@@ -587,19 +585,30 @@ std::vector<FarField::Peak> locateLobeTops(const FarField& map, const FacetInteg
         if (top) starts.push_back({v, f, i, j});
       }
   }
-  std::stable_sort(starts.begin(), starts.end(), [](const Start& a, const Start& b) {
+  std::stable_sort(starts.begin(), starts.end(), [](const LobeStart& a, const LobeStart& b) {
     return a.intensity_w_sr > b.intensity_w_sr;
   });
-  std::vector<Start> chosen;
-  for (const Start& s : starts) {
+  std::vector<LobeStart> chosen;
+  for (const LobeStart& s : starts) {
     if (chosen.size() == kMaxLobes) break;
     const Vec3 d = map.latticeDirection(s.face, s.i, s.j);
     const double apart_rad = kLobesApart * latticeAngle(s.i, s.j, n);
-    const bool near = std::any_of(chosen.begin(), chosen.end(), [&](const Start& c) {
+    const bool near = std::any_of(chosen.begin(), chosen.end(), [&](const LobeStart& c) {
       return glm::dot(d, map.latticeDirection(c.face, c.i, c.j)) > std::cos(apart_rad);
     });
     if (!near) chosen.push_back(s);
   }
+  return chosen;
+}
+
+}  // namespace
+
+std::vector<FarField::Peak> locateLobeTops(const FarField& map, const FacetIntegrator& integrator,
+                                           std::int64_t* evaluations) {
+  const int n = map.spec().face_pixels;
+  const double brightest = map.latticePeak().intensity_w_sr;
+  if (!(brightest > 0.0) || !std::isfinite(brightest)) return {};
+  const std::vector<LobeStart> chosen = lobeStarts(map, brightest);
 
   const double distance_m = map.mapDistance();
   const Vec3 centre = map.ball().centre_m;
@@ -621,7 +630,7 @@ std::vector<FarField::Peak> locateLobeTops(const FarField& map, const FacetInteg
       spent[k] += r.evaluations;
       return Probe{d, r.irradiance_w_m2 * d2, r.error_estimate_w_m2 * d2};
     };
-    const Start& s = chosen[k];
+    const LobeStart& s = chosen[k];
     Probe best = probe(map.latticeDirection(s.face, s.i, s.j));
     const Vec3 e1 = glm::normalize(glm::cross(
         best.direction, std::abs(best.direction.z) < 0.9 ? Vec3(0, 0, 1) : Vec3(1, 0, 0)));
@@ -662,17 +671,19 @@ std::vector<FarField::Peak> locateLobeTops(const FarField& map, const FacetInteg
   return tops;
 }
 
-std::uint64_t farFieldMemoryFloorBytes(const FarFieldSpec& spec, int lat_long_height) {
+std::uint64_t farFieldMemoryFloorBytes(const FarFieldSpec& spec, std::uint64_t after_faces_bytes) {
   const double directions = (spec.face_pixels + 1.0) * (spec.face_pixels + 1.0);
   // The faces are computed one at a time; their planes differ only in where they lie.
   const double face =
       static_cast<double>(fieldMemoryFloorBytes(cubeFaceSpec(0, Vec3(0.0), 1.0, spec), false));
-  // Upper intensities along both edges of every cell and the cells' own (latLongMap()), made
-  // once the last face's field is gone.
-  const double map = 3.0 * sizeof(double) * 2.0 * lat_long_height * lat_long_height;
-  const double bytes = FarField::kFaces * directions * sizeof(float) + std::max(face, map);
+  const double bytes = FarField::kFaces * directions * sizeof(float) +
+                       std::max(face, static_cast<double>(after_faces_bytes));
   return bytes >= 1.8e19 ? std::numeric_limits<std::uint64_t>::max()
                          : static_cast<std::uint64_t>(bytes);
+}
+
+std::uint64_t latLongMapBytes(int height) {
+  return static_cast<std::uint64_t>(3.0 * sizeof(double) * 2.0 * height * height);
 }
 
 FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& spec,
@@ -786,10 +797,13 @@ LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2, double
   return m;
 }
 
-HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mpe_w_m2,
-                            double extinction_per_m) {
+namespace {
+
+// The largest upper intensity in each vertex's cell of a cube-sphere of m² cells a face: from
+// the cells' edges, then the lattice directions and located tops inside them (those beyond a
+// face's edges too). Per face, [b × (m + 1) + a].
+std::vector<std::vector<double>> vertexUpperIntensities(const FarField& field, int m) {
   const int n = field.spec().face_pixels;
-  const int m = std::clamp(cells_per_face, 1, n);
   const int step = n / m;  // both powers of two
   const double half_cell = 0.5 * step;
   const auto row = static_cast<std::size_t>(m + 1);
@@ -811,8 +825,6 @@ HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mp
       for (int a = a0; a <= a1; ++a)
         fn(static_cast<std::size_t>(b) * row + static_cast<std::size_t>(a));
   };
-  // Each face's vertex cells, from their edges, then the lattice directions and located tops
-  // inside them (those beyond a face's edges too).
   std::vector<std::vector<double>> vertex_max(FarField::kFaces);
   tbb::parallel_for(0, FarField::kFaces, [&](int f) {
     std::vector<double>& v = vertex_max[static_cast<std::size_t>(f)];
@@ -859,6 +871,18 @@ HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mp
     }
   });
 
+  return vertex_max;
+}
+
+}  // namespace
+
+HazardSurface hazardSurface(const FarField& field, int cells_per_face, double mpe_w_m2,
+                            double extinction_per_m) {
+  const int n = field.spec().face_pixels;
+  const int m = std::clamp(cells_per_face, 1, n);
+  const int step = n / m;
+  const auto row = static_cast<std::size_t>(m + 1);
+  const std::vector<std::vector<double>> vertex_max = vertexUpperIntensities(field, m);
   HazardSurface s;
   const Vec3 centre = field.ball().centre_m;
   for (int f = 0; f < FarField::kFaces; ++f) {

@@ -331,12 +331,18 @@ FieldSpec cubeFaceSpec(int face, const Vec3& centre_m, double distance_m, const 
 /// @brief A floor under the memory computeFarField() takes for @p spec (bytes), known before
 /// anything is allocated: the six faces' lattices of intensity, 4 bytes a direction, all kept,
 /// and the field of the face being computed (fieldMemoryFloorBytes() of its plane: the grids'
-/// leaves, 64 bytes a direction), or with @p lat_long_height > 0 the latLongMap() of that
-/// height made after the last face, three doubles a pixel, where that is more. Measured (glint
-/// run, a dark far field, peak resident memory less the run without it; MB = 2²⁰ bytes):
-/// 1 549 MB at face_pixels 4096 (this: 1 412 MB), 487 MB at 2048 (354 MB); one face's grids
-/// at 4096, 1 174 MB (1 028 MB); the lat-long map at height 2048, 192 to 224 MB (192 MB).
-std::uint64_t farFieldMemoryFloorBytes(const FarFieldSpec& spec, int lat_long_height = 0);
+/// leaves, 64 bytes a direction), or @p after_faces_bytes made once the last face's field is
+/// gone (the writers' scratch: latLongMapBytes() and its channels), where that is more.
+/// Measured (glint run, a dark far field, peak resident memory less the run without it; MB =
+/// 2²⁰ bytes): 1 549 MB at face_pixels 4096 (this: 1 412 MB), 487 MB at 2048 (354 MB); one
+/// face's grids at 4096, 1 174 MB (1 028 MB); the lat-long map at height 2048, 192 to 224 MB
+/// (latLongMapBytes(): 192 MB).
+std::uint64_t farFieldMemoryFloorBytes(const FarFieldSpec& spec,
+                                       std::uint64_t after_faces_bytes = 0);
+
+/// @brief What latLongMap() of @p height holds while it is made (bytes): the upper intensities
+/// along both edges of every cell and the cells' own, three doubles a pixel.
+std::uint64_t latLongMapBytes(int height);
 
 /// @brief Checks the far radius of @p map with @p integrator (see FarRadiusCheck).
 FarRadiusCheck verifyFarRadius(const FarField& map, const FacetIntegrator& integrator,

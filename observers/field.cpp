@@ -78,6 +78,51 @@ std::array<int, 3> FieldSpec::nodes() const {
   return n;
 }
 
+FieldStats& FieldStats::operator+=(const FieldStats& o) {
+  lattice_points += o.lattice_points;
+  evaluated_points += o.evaluated_points;
+  interpolated_points += o.interpolated_points;
+  below_floor_points += o.below_floor_points;
+  excluded_points += o.excluded_points;
+  unconverged_points += o.unconverged_points;
+  unconverged_min_m = glm::min(unconverged_min_m, o.unconverged_min_m);
+  unconverged_max_m = glm::max(unconverged_max_m, o.unconverged_max_m);
+  unconverged_max_upper_w_m2 = std::max(unconverged_max_upper_w_m2, o.unconverged_max_upper_w_m2);
+  if (non_finite_points == 0) non_finite_at_m = o.non_finite_at_m;
+  non_finite_points += o.non_finite_points;
+  blocks_skipped += o.blocks_skipped;
+  blocks_accepted += o.blocks_accepted;
+  blocks_accepted_spread += o.blocks_accepted_spread;
+  blocks_refined += o.blocks_refined;
+  blocks_finest += o.blocks_finest;
+  unresolved_blocks += o.unresolved_blocks;
+  unresolved_points += o.unresolved_points;
+  if (o.unresolved_max_bound_w_m2 > unresolved_max_bound_w_m2) {
+    unresolved_max_bound_w_m2 = o.unresolved_max_bound_w_m2;
+    unresolved_bound_at_m = o.unresolved_bound_at_m;
+  }
+  unresolved_unbounded_blocks += o.unresolved_unbounded_blocks;
+  unresolved_min_m = glm::min(unresolved_min_m, o.unresolved_min_m);
+  unresolved_max_m = glm::max(unresolved_max_m, o.unresolved_max_m);
+  // 0 means "none computed", not a voxel of zero size.
+  if (o.unresolved_resolving_voxel_m > 0.0 &&
+      (unresolved_resolving_voxel_m == 0.0 ||
+       o.unresolved_resolving_voxel_m < unresolved_resolving_voxel_m)) {
+    unresolved_resolving_voxel_m = o.unresolved_resolving_voxel_m;
+  }
+  evaluations += o.evaluations;
+  bound_evaluations += o.bound_evaluations;
+  levels = std::max(levels, o.levels);
+  if (o.peak_w_m2 > peak_w_m2) {
+    peak_w_m2 = o.peak_w_m2;
+    peak_at_m = o.peak_at_m;
+  }
+  seconds += o.seconds;
+  active_voxels += o.active_voxels;
+  grid_bytes += o.grid_bytes;
+  return *this;
+}
+
 ObserverField::ObserverField(FieldSpec spec, FieldStats stats, std::unique_ptr<FieldGrids> grids,
                              std::vector<FieldBlock> blocks)
     : spec_(spec), stats_(stats), grids_(std::move(grids)), blocks_(std::move(blocks)) {}

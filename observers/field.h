@@ -212,6 +212,12 @@ struct FieldStats {
   double seconds = 0.0;
   std::int64_t active_voxels = 0;  ///< of the irradiance grid
   std::size_t grid_bytes = 0;      ///< memory of all grids
+
+  /// @brief Adds the statistics of other points of the same run (another thread's share, a
+  /// far-field face): counts, times and memory add, boxes join, maxima keep the larger with
+  /// its place. On a tie the first kept wins, and the first non-finite point stays the one
+  /// named, so a merge in a fixed order gives the same statistics every run. `nodes` stays.
+  FieldStats& operator+=(const FieldStats& other);
 };
 
 /// @brief A block of the tree as it ended: lattice points origin .. origin + size[a] along

@@ -17,6 +17,7 @@
 
 #include "facets/lit_ball.h"
 #include "observers/block_check.h"
+#include "observers/detail/block_geometry.h"
 #include "observers/detail/field_common.h"
 #include "observers/detail/piece_pool.h"
 #include "observers/field.h"
@@ -78,6 +79,7 @@ class FieldBuilder {
         counter_(counter),
         exchange_(exchange != nullptr && exchange->size() > 1 ? exchange : nullptr),
         lattice_{spec.nodes()},
+        geometry_(spec_),
         coarse_candidate_(integrator.target().facetCount(), 0),
         lit_centre_m_(litBall(integrator).centre_m) {
     const std::span<const Candidate> lit = integrator.candidates();
@@ -310,106 +312,8 @@ class FieldBuilder {
     return lattice_.key(p[0], p[1], p[2]);
   }
 
-  // The widest gap between samples (m): a glint narrower than that may pass between them.
-  // Three samples span each edge (the octant centres lie between them).
-  [[nodiscard]] double sampleSpacing(const Block& b) const {
-    const int widest = std::max({b.size[0], b.size[1], flat() ? 0 : b.size[2]});
-    if (spec_.surface) return surfaceSampleSpacing(b);
-    if (!spec_.radial) return spec_.voxel_m * std::max(1, widest / 2);
-    // A radial block's edges are straight (rays and lines on a layer's plane): the longest.
-    const std::array<Vec3, 8> c = corners(b);
-    double longest_m = 0.0;
-    for (int q = 0; q < 8; ++q)
-      for (const int axis : {4, 2, 1}) {
-        if ((q & axis) == 0) {
-          longest_m = std::max(longest_m, glm::length(c[static_cast<std::size_t>(q | axis)] -
-                                                      c[static_cast<std::size_t>(q)]));
-        }
-      }
-    return 0.5 * longest_m;
-  }
-
-  // The block's corners: the convex hull of a radial lattice's block (a frustum of a pyramid
-  // with its apex at the centre) and so every point of it lies in a ball about them.
-  [[nodiscard]] std::array<Vec3, 8> corners(const Block& b) const {
-    std::array<Vec3, 8> c{};
-    for (int q = 0; q < 8; ++q) {
-      c[static_cast<std::size_t>(q)] =
-          spec_.position(b.o[0] + ((q >> 2) & 1) * b.size[0], b.o[1] + ((q >> 1) & 1) * b.size[1],
-                         b.o[2] + (q & 1) * b.size[2]);
-    }
-    return c;
-  }
-
-  // The middle of the bounding box of @p corners: a radial block's centre.
-  [[nodiscard]] static Vec3 middle(const std::array<Vec3, 8>& corners) {
-    Vec3 lo = corners[0], hi = corners[0];
-    for (const Vec3& p : corners) lo = glm::min(lo, p), hi = glm::max(hi, p);
-    return 0.5 * (lo + hi);
-  }
-
-  // A plane over a surface: the block's points lie in the box of its square and the range of
-  // their offsets, so the ball about that box holds them.
-  [[nodiscard]] std::array<double, 2> offsetRange(const Block& b) const {
-    return spec_.surface->range(b.o[0], b.o[1], b.o[0] + b.size[0], b.o[1] + b.size[1]);
-  }
-  [[nodiscard]] Vec3 surfaceCentre(const Block& b) const {
-    const std::array<double, 2> r = offsetRange(b);
-    const std::array<Vec3, 3>& e = spec_.axes;
-    return spec_.min_m +
-           spec_.voxel_m * ((b.o[0] + 0.5 * b.size[0]) * e[0] + (b.o[1] + 0.5 * b.size[1]) * e[1]) +
-           0.5 * (r[0] + r[1]) * e[2];
-  }
-  [[nodiscard]] double surfaceRadius(const Block& b) const {
-    const std::array<double, 2> r = offsetRange(b);
-    const double u = spec_.voxel_m * b.size[0], v = spec_.voxel_m * b.size[1], w = r[1] - r[0];
-    return 0.5 * std::sqrt(u * u + v * v + w * w) * (1.0 + 1e-12);
-  }
-  // The widest gap between neighbouring samples of the block's 3 × 3 (in space: a slope
-  // stretches them).
-  [[nodiscard]] double surfaceSampleSpacing(const Block& b) const {
-    const int hu = std::max(1, b.size[0] / 2), hv = std::max(1, b.size[1] / 2);
-    double widest_m = 0.0;
-    for (int a = 0; a <= b.size[0]; a += hu)
-      for (int c = 0; c <= b.size[1]; c += hv) {
-        const Vec3 p = spec_.position(b.o[0] + a, b.o[1] + c, 0);
-        if (a + hu <= b.size[0])
-          widest_m =
-              std::max(widest_m, glm::length(spec_.position(b.o[0] + a + hu, b.o[1] + c, 0) - p));
-        if (c + hv <= b.size[1])
-          widest_m =
-              std::max(widest_m, glm::length(spec_.position(b.o[0] + a, b.o[1] + c + hv, 0) - p));
-      }
-    return widest_m;
-  }
-
-  [[nodiscard]] Vec3 centre(const Block& b) const {
-    if (spec_.surface) return surfaceCentre(b);
-    if (spec_.radial) return middle(corners(b));
-    const std::array<Vec3, 3>& e = spec_.axes;
-    return spec_.position(b.o[0], b.o[1], b.o[2]) +
-           spec_.voxel_m * (0.5 * b.size[0] * e[0] + 0.5 * b.size[1] * e[1] +
-                            (flat() ? 0.0 : 0.5 * b.size[2]) * e[2]);
-  }
-  // Half the block's diagonal (a plane's block has no depth). The edges are powers of two, so
-  // their ratios to the longest are exact.
-  [[nodiscard]] double radius(const Block& b) const {
-    if (spec_.surface) return surfaceRadius(b);
-    if (spec_.radial) {
-      const std::array<Vec3, 8> c = corners(b);
-      const Vec3 m = middle(c);
-      double r = 0.0;
-      for (const Vec3& p : c) r = std::max(r, glm::length(p - m));
-      return r * (1.0 + 1e-12);  // the corners themselves inside, whatever the rounding
-    }
-    const int longest = std::max({b.size[0], b.size[1], flat() ? 0 : b.size[2]});
-    double squares = 0.0;
-    for (std::size_t a = 0; a < (flat() ? 2u : 3u); ++a) {
-      const double ratio = static_cast<double>(b.size[a]) / longest;
-      squares += ratio * ratio;
-    }
-    return 0.5 * std::sqrt(squares) * spec_.voxel_m * longest;
-  }
+  [[nodiscard]] Vec3 centre(const Block& b) const { return geometry_.centre(b.o, b.size); }
+  [[nodiscard]] double radius(const Block& b) const { return geometry_.radius(b.o, b.size); }
 
   // Bounds every block of a level from its parent's pieces (@p parent_pool, @p parent_lists),
   // interning the pieces each keeps into @p pool and their indices into @p lists.
@@ -435,7 +339,7 @@ class FieldBuilder {
           root ? integrator_.candidates() : std::span<const Candidate>(s.inherited);
       BallBoundOptions options;
       options.drop_allowance_w_m2 = kDropShareOfFloor * spec_.floor_w_m2;
-      options.sample_spacing_m = sampleSpacing(b);
+      options.sample_spacing_m = geometry_.sampleSpacing(b.o, b.size);
       options.max_split_depth = spec_.bound_split_depth;
       bounds[i] = integrator_.boundBall(centre(b), radius(b), inherited,
                                         root ? 0.0 : parent_dropped[b.parent], options, s.kept);
@@ -800,6 +704,7 @@ class FieldBuilder {
   WorkCounter* counter_;
   PointExchange* exchange_;  // null when this process computes the field alone
   Lattice lattice_;
+  BlockGeometry geometry_;  // where a block lies in space: box, radial or surface lattice
   std::vector<std::uint32_t> coarse_candidate_;  // coarse facet → index of its lit candidate
   Vec3 lit_centre_m_;  // centre of the lit facets' box: where the light spreads from
   FieldStats stats_;

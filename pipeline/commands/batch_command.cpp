@@ -185,8 +185,8 @@ struct ScenarioTally {
 // An engagement's scenario over a region: its maps over time, as glint run writes them of the
 // scenario's scene, added to the rank's aggregates by each point's worst window.
 void runEngagementRegion(const ScenarioWork& w, StudyLattice& r, ScenarioTally& tally) {
-  const EngagementRegion e = engagementRegion(w.target.integrator, w.scene, r.spec, w.watch,
-                                              nullptr, false, w.what + ", region " + r.name);
+  const EngagementRegion e = engagementRegion(w.target.integrator, w.scene, r.spec,
+                                              WorkWatch{w.watch, w.what + ", region " + r.name});
   std::vector<std::string> written;
   if (r.plane) {
     const std::vector<ExrChannel> channels = e.maps.channels();
@@ -454,11 +454,16 @@ std::optional<nlohmann::json> resumeScenario(const Study& study, const Scenario&
 // them is allocated.
 void checkStudyMemory(const Study& study, const std::vector<StudyLattice>& lattices,
                       std::uint64_t budget) {
-  // Each region keeps its dense maps over the scenarios besides one scenario's field at a time.
+  // Each region keeps its dense maps over the scenarios besides one scenario's field at a time,
+  // and the writer of one of its maps.
   std::uint64_t floor_bytes = 0;
   for (const StudyLattice& r : lattices) {
+    const OutputRegion region =
+        r.plane ? (r.engagement ? OutputRegion::EngagementPlane : OutputRegion::Plane)
+                : (r.engagement ? OutputRegion::EngagementBox : OutputRegion::Box);
     // An engagement's maps are arrays over the whole lattice, as the dense twin's grids are.
-    floor_bytes += r.mapBytes() + fieldMemoryFloorBytes(r.spec, r.engagement);
+    floor_bytes += r.mapBytes() + fieldMemoryFloorBytes(r.spec, r.engagement) +
+                   writerScratch(study.base, region, &r.spec, r.name, true).bytes;
   }
   requireWithinBudget("the study's regions (" + std::to_string(lattices.size()) + ")", floor_bytes,
                       budget,

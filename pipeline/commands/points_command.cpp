@@ -26,6 +26,7 @@
 #include "pipeline/report/engagement_report.h"
 #include "pipeline/report/run_report.h"
 #include "pipeline/report/unlit_warning.h"
+#include "pipeline/setup/engagement.h"
 #include "pipeline/setup/target_builder.h"
 
 namespace glint {
@@ -349,9 +350,9 @@ void runPoints(const PointsArgs& requested, std::ostream& out, std::ostream& err
                            (scene.terrain ? " and " + terrainMemoryWhat(scene) : "")});
   watch.check("building the target", kAdvice);
   if (scene.engagement) {
-    const EngagementResults results =
-        sampleEngagement(integrator, scene, points, watch, args.quiet ? nullptr : &err,
-                         args.terminal, "the observers", exchange);
+    const EngagementResults results = sampleEngagement(
+        integrator, scene, points,
+        WorkWatch{watch, "the observers", args.quiet ? nullptr : &err, args.terminal, exchange});
     if (!writer) return;
     const std::vector<CsvColumn> columns = engagementColumns(results, scene.hazard);
     if (series != nullptr) series->write([&](std::ostream& s) { writeTimeSeriesCsv(s, results); });

@@ -37,19 +37,28 @@
 namespace glint {
 namespace {
 
-// Refuses a region whose memory floor exceeds the budget before any of it is allocated, and
-// tells the user at once what the run is about to do. Returns the floor.
+// Refuses a region whose memory floor (its field, and the scratch of the writer of its
+// largest file, @p files) exceeds the budget before any of it is allocated, and tells the user
+// at once what the run is about to do. Returns the floor.
 std::uint64_t checkRegionMemory(const FieldSpec& spec, const std::string& what, const RunArgs& args,
-                                bool dense, std::uint64_t budget_bytes, std::ostream& err) {
+                                bool dense, const WriterScratch& files, std::uint64_t budget_bytes,
+                                std::ostream& err) {
   const std::array<int, 3> n = spec.nodes();
   const std::string lattice = std::to_string(n[0]) + "×" + std::to_string(n[1]) +
                               (spec.plane ? "" : "×" + std::to_string(n[2]));
-  const std::uint64_t floor_bytes = fieldMemoryFloorBytes(spec, dense);
-  requireWithinBudget(what + " (" + lattice + " lattice points at " +
-                          formatNumber("%g", spec.voxel_m) + " m" + (dense ? ", dense" : "") + ")",
-                      floor_bytes, budget_bytes,
-                      "coarsen voxel_m or pixel_m, enlarge block_m, shrink the region, or raise "
-                      "--memory");
+  const std::uint64_t floor_bytes = fieldMemoryFloorBytes(spec, dense) + files.bytes;
+  // The writer named where its share is one a user may not expect: a tenth or more.
+  const bool named = files.bytes > 0 && 10 * files.bytes >= floor_bytes;
+  const std::string writing =
+      named ? ", " + formatBytes(static_cast<double>(files.bytes)) + " of it to write " + files.file
+            : "";
+  requireWithinBudget(
+      what + " (" + lattice + " lattice points at " + formatNumber("%g", spec.voxel_m) + " m" +
+          (dense ? ", dense" : "") + writing + ")",
+      floor_bytes, budget_bytes,
+      named && !files.advice.empty()
+          ? files.advice + ", or raise --memory"
+          : "coarsen voxel_m or pixel_m, enlarge block_m, shrink the region, or raise --memory");
   if (!args.quiet) {
     err << "glint run: " << what << ", " << lattice << " lattice points at "
         << formatNumber("%g", spec.voxel_m) << " m; memory: at least "
@@ -74,19 +83,31 @@ TargetBudget checkRunMemory(const Scene& scene, const RunArgs& args, std::uint64
                             bool writer, std::ostream& err) {
   // An engagement's maps are arrays over the whole lattice, as the dense twin's grids are.
   const bool dense = args.uniform || scene.engagement.has_value();
+  // Only the writing rank allocates what its writers make.
+  const auto writing = [&](OutputRegion region, const FieldSpec* lattice = nullptr,
+                           const std::string& plane = "") {
+    return writer ? writerScratch(scene, region, lattice, plane) : WriterScratch{};
+  };
   std::uint64_t region_bytes = 0;
   if (scene.observers) {
-    region_bytes = checkRegionMemory(fieldSpec(scene), "observer box", args, dense, budget, err);
+    const FieldSpec box = fieldSpec(scene);
+    const WriterScratch files =
+        writing(scene.engagement ? OutputRegion::EngagementBox : OutputRegion::Box, &box);
+    region_bytes = checkRegionMemory(box, "observer box", args, dense, files, budget, err);
   }
   for (const PlaneSpec& plane : scene.planes) {
-    region_bytes =
-        std::max(region_bytes, checkRegionMemory(planeFieldSpec(scene, plane),
-                                                 "plane " + plane.name, args, dense, budget, err));
+    const FieldSpec spec = planeFieldSpec(scene, plane);
+    const WriterScratch files = writing(
+        scene.engagement ? OutputRegion::EngagementPlane : OutputRegion::Plane, &spec, plane.name);
+    region_bytes = std::max(region_bytes, checkRegionMemory(spec, "plane " + plane.name, args,
+                                                            dense, files, budget, err));
   }
   std::uint64_t far_bytes = 0;
   if (scene.far_field.enabled) {
     const FarFieldSpec lattice = farFieldLattice(scene);
-    far_bytes = farFieldMemoryFloorBytes(lattice, writer ? farMapHeight(lattice.face_pixels) : 0);
+    // The reach's files are written after the far field's, while it is held.
+    far_bytes = farFieldMemoryFloorBytes(
+        lattice, std::max(writing(OutputRegion::Far).bytes, writing(OutputRegion::Reach).bytes));
     requireWithinBudget(farFieldDescription(lattice), far_bytes, budget,
                         "lower far_field.face_pixels, or raise --memory");
     if (!args.quiet) {
@@ -278,8 +299,9 @@ void runEngagement(const RunContext& c, RunSummary& s) {
   std::ostream* progress = c.args.quiet ? nullptr : &c.err;
   if (c.scene.observers) {
     const FieldSpec spec = fieldSpec(c.scene);
-    const EngagementRegion box = engagementRegion(c.target.integrator, c.scene, spec, c.watch,
-                                                  progress, c.args.terminal, "the box", c.exchange);
+    const EngagementRegion box =
+        engagementRegion(c.target.integrator, c.scene, spec,
+                         WorkWatch{c.watch, "the box", progress, c.args.terminal, c.exchange});
     const std::vector<LatticeChannel> channels = box.maps.latticeChannels();
     c.outputs.writeEngagementBox({spec, channels, c.info});
     s.j["box"] =
@@ -291,8 +313,9 @@ void runEngagement(const RunContext& c, RunSummary& s) {
     const PlaneSpec& plane = c.scene.planes[p];
     const FieldSpec spec = planeFieldSpec(c.scene, plane);
     const std::string what = "plane " + plane.name;
-    const EngagementRegion m = engagementRegion(c.target.integrator, c.scene, spec, c.watch,
-                                                progress, c.args.terminal, what, c.exchange);
+    const EngagementRegion m =
+        engagementRegion(c.target.integrator, c.scene, spec,
+                         WorkWatch{c.watch, what, progress, c.args.terminal, c.exchange});
     const std::vector<ExrChannel> channels = m.maps.channels();
     c.outputs.writeEngagementPlane(p, {m.maps.grid, channels, c.info, nullptr, {}});
     planes.push_back(engagementRegionJson(plane.name, output_names::planeExr(plane.name), spec, m,

@@ -1,6 +1,7 @@
 #include "pipeline/report/run_outputs.h"
 
 #include <algorithm>
+#include <cmath>
 #include <iterator>
 #include <optional>
 #include <utility>
@@ -9,10 +10,13 @@
 #include "export/geo_files.h"
 #include "export/vtk_files.h"
 #include "facets/integrator.h"
+#include "pipeline/base/memory_model.h"
 #include "pipeline/base/output_names.h"
 #include "pipeline/input/input_files.h"
 #include "pipeline/input/scene.h"
+#include "pipeline/input/scene_memory.h"
 #include "pipeline/report/hazard_report.h"
+#include "pipeline/setup/target_builder.h"
 
 namespace glint {
 namespace {
@@ -200,6 +204,146 @@ void writePlaneZones(std::ostream& out, const PlaneResults& r, VectorFormat form
   writeZones(out, format, m, zones, *r.site, geoInfo(r));
 }
 
+// The writers' scratch, declared beside each writer in kOutputs: floors in bytes, the arrays a
+// writer makes by count. A map is written from its channels copied row by row, bottom up
+// (writeExr(), writeGeoTiff()), so a file of c float channels makes c more per pixel.
+constexpr double kFloat = sizeof(float);
+
+double latticePoints(const FieldSpec& spec) {
+  const std::array<int, 3> n = spec.nodes();
+  return static_cast<double>(n[0]) * n[1] * n[2];
+}
+
+// The channels planeMap() makes of a plane: irradiance, ratio, level and status, the aided
+// ratio with an aid, each observer's height over a surface.
+double planeMapChannels(const Scene& scene, const FieldSpec& plane) {
+  return 4.0 + (scene.hazard.aid ? 1.0 : 0.0) + (plane.surface ? 1.0 : 0.0);
+}
+
+// An engagement's maps are made before the writers run (EngagementMaps::channels(): ten, the
+// aided ratio among them).
+constexpr double kEngagementChannels = 10.0;
+
+// A cube-sphere surface of c² quads a face: points (3 doubles and two floats) and quads.
+double cubeSphereBytes(int cells) {
+  const double c = cells;
+  return 6.0 * ((c + 1.0) * (c + 1.0) * (3.0 * sizeof(double) + 2.0 * kFloat) +
+                c * c * 4.0 * sizeof(std::int64_t));
+}
+
+// The reach's lat-long map (writeReachExr()): its height as the writer chooses it.
+int reachMapHeight(const Scene& scene) {
+  return std::max(farMapHeight(farFieldLattice(scene).face_pixels), 2 * scene.reach.face_cells);
+}
+
+double footprintPixels(const Scene& scene) {
+  const FootprintSpec& f = scene.reach.footprint.value();
+  const double pixel = f.pixel_m > 0.0 ? f.pixel_m : 2.0 * f.radius_m / 512.0;
+  const double n = 2.0 * std::ceil(f.radius_m / pixel) + 1.0;
+  return n * n;
+}
+
+double hazardThresholds(const Scene& scene) { return scene.hazard.aid ? 2.0 : 1.0; }
+
+// target.vtp splits each coarse facet this deep (4^depth pieces): the target as integrated.
+constexpr int kTargetVtpDepth = 2;
+
+namespace scratch {
+
+// Written from what the results hold, without a copy of their size: summary.json; the box's
+// VDB, which takes the field's grids; blocks.vtu, whose cells fieldMemoryFloorBytes() counts
+// per coarse block (finer ones grow with the work, which the memory watch covers).
+std::uint64_t none(const Scene&, const FieldSpec*) { return 0; }
+
+// The box resampled at vtiStride(): irradiance, level, status and the hazard's scaled arrays.
+std::uint64_t vti(const Scene& scene, const FieldSpec* box) {
+  const std::array<int, 3> n = box->nodes();
+  const int stride = vtiStride(*box);
+  double points = 1.0;
+  for (int a = 0; a < 3; ++a) points *= (n[a] - 1) / stride + 1;
+  return memory_model::saturated(points * kFloat * (3.0 + hazardThresholds(scene)));
+}
+
+// The AMR levels copy the lattice at each level's spacing: the coarsest covers the whole box.
+std::uint64_t amr(const Scene& scene, const FieldSpec* box) {
+  const double coarse = latticePoints(*box) / std::pow(box->block_voxels, 3.0);
+  return memory_model::saturated(coarse * kFloat * (3.0 + hazardThresholds(scene)));
+}
+
+// target.vtp: every coarse facet (lit or not) split to kTargetVtpDepth, each piece 3 corners
+// of 3 doubles, their connectivity, an offset, its power and its facet.
+std::uint64_t targetVtp(const Scene& scene, const FieldSpec*) {
+  double facets = 0.0;
+  for (const ObjectSpec& object : scene.objects)
+    facets += static_cast<double>(coarseFacetCount(object));
+  const double pieces = facets * std::pow(4.0, kTargetVtpDepth);
+  return memory_model::saturated(
+      pieces * (9.0 * sizeof(double) + 4.0 * sizeof(std::int64_t) + sizeof(double) + sizeof(int)));
+}
+std::uint64_t planeExr(const Scene& scene, const FieldSpec* plane) {
+  return memory_model::saturated(2.0 * planeMapChannels(scene, *plane) * kFloat *
+                                 latticePoints(*plane));
+}
+
+// The map, and GDAL's bands copied from it (as many as the map's channels, at most).
+std::uint64_t planeGeoTiff(const Scene& scene, const FieldSpec* plane) {
+  return planeExr(scene, plane);
+}
+
+// The map, and a byte per pixel of each zone (hazardous, may be hazardous, aided).
+std::uint64_t planeZones(const Scene& scene, const FieldSpec* plane) {
+  return memory_model::saturated((planeMapChannels(scene, *plane) * kFloat + 3.0) *
+                                 latticePoints(*plane));
+}
+
+std::uint64_t engagementPlaneMap(const Scene&, const FieldSpec* plane) {
+  return memory_model::saturated(kEngagementChannels * kFloat * latticePoints(*plane));
+}
+
+std::uint64_t engagementPlaneZones(const Scene&, const FieldSpec* plane) {
+  return memory_model::saturated(2.0 * latticePoints(*plane));
+}
+
+// writeLatticeVdb() makes a float grid of each channel, a value per lattice point.
+std::uint64_t engagementVdb(const Scene&, const FieldSpec* box) {
+  return memory_model::saturated(kEngagementChannels * kFloat * latticePoints(*box));
+}
+
+// latLongMap() while it is made, then its two or three channels and their rows flipped.
+std::uint64_t farExr(const Scene& scene, const FieldSpec*) {
+  const int h = farMapHeight(farFieldLattice(scene).face_pixels);
+  const double channels = 1.0 + hazardThresholds(scene);
+  return std::max(latLongMapBytes(h),
+                  memory_model::saturated(2.0 * h * h * 2.0 * channels * kFloat));
+}
+
+std::uint64_t farVtp(const Scene& scene, const FieldSpec*) {
+  return memory_model::saturated(
+      cubeSphereBytes(std::min(farFieldLattice(scene).face_pixels, 128)));
+}
+
+// reachLatLong() of each threshold and the rows flipped.
+std::uint64_t reachExr(const Scene& scene, const FieldSpec*) {
+  const double h = reachMapHeight(scene);
+  return memory_model::saturated(2.0 * h * h * 2.0 * hazardThresholds(scene) * kFloat);
+}
+
+std::uint64_t reachVtp(const Scene& scene, const FieldSpec*) {
+  return memory_model::saturated(cubeSphereBytes(scene.reach.face_cells));
+}
+
+// The footprint's masks as float bands with the ground's height, and their rows flipped.
+std::uint64_t footprintTif(const Scene& scene, const FieldSpec*) {
+  return memory_model::saturated(2.0 * (hazardThresholds(scene) + 1.0) * kFloat *
+                                 footprintPixels(scene));
+}
+
+std::uint64_t footprintZones(const Scene& scene, const FieldSpec*) {
+  return memory_model::saturated(hazardThresholds(scene) * footprintPixels(scene));
+}
+
+}  // namespace scratch
+
 }  // namespace
 
 // Every output of glint run: its name, the region it is written from, its writer and whether a
@@ -207,7 +351,7 @@ void writePlaneZones(std::ostream& out, const PlaneResults& r, VectorFormat form
 // that takes the field's grids, written last; summary.json lists them in this order, a plane's
 // one a plane.
 struct RunOutputs::Declared {
-  enum class Region { Run, Box, Plane, Far, Reach, EngagementPlane, EngagementBox };
+  using Region = OutputRegion;
   const char* name = nullptr;
   std::string (*plane_name)(const std::string&) = nullptr;  // instead of name, a plane's
   Region region = Region::Run;
@@ -217,6 +361,11 @@ struct RunOutputs::Declared {
   void (*reach)(std::ostream&, const ReachResults&) = nullptr;
   void (*engagement_plane)(std::ostream&, const EngagementPlaneResults&) = nullptr;
   void (*engagement_box)(std::ostream&, const EngagementBoxResults&) = nullptr;
+  // What its writer allocates besides the results (writerScratch()); the lattice is the
+  // region's, null for the far field and the reach.
+  std::uint64_t (*scratch_bytes)(const Scene&, const FieldSpec* lattice) = nullptr;
+  // What lowers that scratch where it is not the region's size (the memory check's advice).
+  const char* scratch_advice = nullptr;
   bool takes_field = false;    // the box's VDB moves the grids out of the field
   bool staged_folder = false;  // the AMR data set: a folder staged beside its .vthb
   bool aided_only = false;     // written with an optical aid only
@@ -270,75 +419,99 @@ using Declared = RunOutputs::Declared;
 using Region = Declared::Region;
 
 constexpr Declared kOutputs[] = {
-    {.name = output_names::kSummary, .region = Region::Run},
+    {.name = output_names::kSummary, .region = Region::Run, .scratch_bytes = scratch::none},
     {.name = output_names::kIrradianceVdb,
      .region = Region::Box,
      .box = [](std::ostream& out, BoxResults& b) { writeVdb(out, std::move(b.field), b.info); },
+     .scratch_bytes = scratch::none,
      .takes_field = true,
      .scenario = true},
     {.name = output_names::kIrradianceVti,
      .region = Region::Box,
-     .box =
-         [](std::ostream& out, BoxResults& b) {
-           writeVti(out, b.field, vtiStride(b.field.spec()), b.info.scaled);
-         }},
+     .box = [](std::ostream& out,
+               BoxResults& b) { writeVti(out, b.field, vtiStride(b.field.spec()), b.info.scaled); },
+     .scratch_bytes = scratch::vti},
     {.name = output_names::kBlocksVtu,
      .region = Region::Box,
-     .box = [](std::ostream& out, BoxResults& b) { writeBlocksVtu(out, b.field, b.info.scaled); }},
+     .box = [](std::ostream& out, BoxResults& b) { writeBlocksVtu(out, b.field, b.info.scaled); },
+     .scratch_bytes = scratch::none},
     {.name = output_names::kTargetVtp,
      .region = Region::Box,
-     .box = [](std::ostream& out, BoxResults& b) { writeTargetVtp(out, b.integrator, 2); }},
-    {.name = output_names::kIrradianceAmr, .region = Region::Box, .staged_folder = true},
-    {.name = output_names::kFarFieldExr, .region = Region::Far, .far = writeFarExr},
+     .box = [](std::ostream& out,
+               BoxResults& b) { writeTargetVtp(out, b.integrator, kTargetVtpDepth); },
+     .scratch_bytes = scratch::targetVtp,
+     .scratch_advice = "lower the objects' segments or decimate the meshes (target.vtp holds 16 "
+                       "pieces of every facet)"},
+    {.name = output_names::kIrradianceAmr,
+     .region = Region::Box,
+     .scratch_bytes = scratch::amr,
+     .staged_folder = true},
+    {.name = output_names::kFarFieldExr,
+     .region = Region::Far,
+     .far = writeFarExr,
+     .scratch_bytes = scratch::farExr},
     {.name = output_names::kFarFieldVtp,
      .region = Region::Far,
-     .far = [](std::ostream& out, const FarResults& f) { writeFarVtp(out, f, f.info.mpe_w_m2); }},
+     .far = [](std::ostream& out, const FarResults& f) { writeFarVtp(out, f, f.info.mpe_w_m2); },
+     .scratch_bytes = scratch::farVtp},
     {.name = output_names::kFarFieldAidedVtp,
      .region = Region::Far,
      .far = [](std::ostream& out,
                const FarResults& f) { writeFarVtp(out, f, f.hazard.aidedMpeW_m2()); },
+     .scratch_bytes = scratch::farVtp,
      .aided_only = true},
-    {.name = output_names::kReachExr, .region = Region::Reach, .reach = writeReachExr},
+    {.name = output_names::kReachExr,
+     .region = Region::Reach,
+     .reach = writeReachExr,
+     .scratch_bytes = scratch::reachExr},
     {.name = output_names::kReachVtp,
      .region = Region::Reach,
      .reach =
          [](std::ostream& out, const ReachResults& r) {
            writeReachVtp(out, reachSurface(r.near, r.far, r.hazard.atmosphere.extinction_per_m));
-         }},
+         },
+     .scratch_bytes = scratch::reachVtp},
     {.name = output_names::kReachFootprintTif,
      .region = Region::Reach,
      .reach = writeFootprintTif,
+     .scratch_bytes = scratch::footprintTif,
      .geo = true,
      .footprint = true},
     {.name = output_names::kReachFootprintGeoJson,
      .region = Region::Reach,
      .reach = [](std::ostream& out,
                  const ReachResults& r) { writeFootprintZones(out, r, VectorFormat::GeoJson); },
+     .scratch_bytes = scratch::footprintZones,
      .geo = true,
      .footprint = true},
     {.name = output_names::kReachFootprintKml,
      .region = Region::Reach,
      .reach = [](std::ostream& out,
                  const ReachResults& r) { writeFootprintZones(out, r, VectorFormat::Kml); },
+     .scratch_bytes = scratch::footprintZones,
      .geo = true,
      .footprint = true},
     {.plane_name = output_names::planeExr,
      .region = Region::Plane,
      .plane = writePlaneExr,
+     .scratch_bytes = scratch::planeExr,
      .scenario = true},
     {.plane_name = output_names::planeGeoTiff,
      .region = Region::Plane,
      .plane = writePlaneGeoTiff,
+     .scratch_bytes = scratch::planeGeoTiff,
      .geo = true},
     {.plane_name = output_names::planeZonesGeoJson,
      .region = Region::Plane,
      .plane = [](std::ostream& out,
                  const PlaneResults& r) { writePlaneZones(out, r, VectorFormat::GeoJson); },
+     .scratch_bytes = scratch::planeZones,
      .geo = true},
     {.plane_name = output_names::planeZonesKml,
      .region = Region::Plane,
      .plane = [](std::ostream& out,
                  const PlaneResults& r) { writePlaneZones(out, r, VectorFormat::Kml); },
+     .scratch_bytes = scratch::planeZones,
      .geo = true},
     {.plane_name = output_names::planeExr,
      .region = Region::EngagementPlane,
@@ -346,10 +519,12 @@ constexpr Declared kOutputs[] = {
          [](std::ostream& out, const EngagementPlaneResults& r) {
            writeExr(out, r.grid, r.channels, exrInfo(r.info));
          },
+     .scratch_bytes = scratch::engagementPlaneMap,
      .scenario = true},
     {.plane_name = output_names::planeGeoTiff,
      .region = Region::EngagementPlane,
      .engagement_plane = writeEngagementGeoTiff,
+     .scratch_bytes = scratch::engagementPlaneMap,
      .geo = true},
     {.plane_name = output_names::planeZonesGeoJson,
      .region = Region::EngagementPlane,
@@ -357,6 +532,7 @@ constexpr Declared kOutputs[] = {
          [](std::ostream& out, const EngagementPlaneResults& r) {
            writeEngagementZones(out, r, VectorFormat::GeoJson);
          },
+     .scratch_bytes = scratch::engagementPlaneZones,
      .geo = true},
     {.plane_name = output_names::planeZonesKml,
      .region = Region::EngagementPlane,
@@ -364,6 +540,7 @@ constexpr Declared kOutputs[] = {
          [](std::ostream& out, const EngagementPlaneResults& r) {
            writeEngagementZones(out, r, VectorFormat::Kml);
          },
+     .scratch_bytes = scratch::engagementPlaneZones,
      .geo = true},
     {.name = output_names::kEngagementVdb,
      .region = Region::EngagementBox,
@@ -384,6 +561,7 @@ constexpr Declared kOutputs[] = {
              meta.numbers["optical_aid_gain"] = r.info.optical_aid_gain;
            writeLatticeVdb(out, r.spec, r.channels, meta);
          },
+     .scratch_bytes = scratch::engagementVdb,
      .scenario = true},
 };
 
@@ -395,6 +573,10 @@ static_assert(std::all_of(std::begin(kOutputs), std::end(kOutputs), [](const Dec
            d.region == Region::EngagementPlane || d.region == Region::EngagementBox) &&
           !d.staged_folder);
 }));
+
+// Every output says what its writer allocates: a new one without it does not compile.
+static_assert(std::all_of(std::begin(kOutputs), std::end(kOutputs),
+                          [](const Declared& d) { return d.scratch_bytes != nullptr; }));
 
 // The outputs of @p region in the order they are written: the list's, but the one that takes
 // the field's grids last.
@@ -414,6 +596,20 @@ std::vector<const Declared*> writingOrder(Region region) {
 }
 
 }  // namespace
+
+WriterScratch writerScratch(const Scene& scene, OutputRegion region, const FieldSpec* lattice,
+                            const std::string& plane_name, bool scenario) {
+  WriterScratch largest;
+  for (const Declared& d : kOutputs) {
+    if (d.region != region || !d.wanted(scene) || (scenario && !d.scenario)) continue;
+    const std::uint64_t bytes = d.scratch_bytes(scene, lattice);
+    if (largest.file.empty() || bytes > largest.bytes) {
+      largest = {bytes, d.fileName(plane_name),
+                 d.scratch_advice != nullptr ? d.scratch_advice : std::string()};
+    }
+  }
+  return largest;
+}
 
 RunOutputs::RunOutputs(const Scene& scene, const std::filesystem::path& dir,
                        const InputFiles& inputs, bool writer)

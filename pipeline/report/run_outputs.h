@@ -7,6 +7,7 @@
 /// writes of the scenario's scene), its result.json vouches for it and --fresh may remove it.
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -84,6 +85,31 @@ struct ReachResults {
   const ReachFootprint* footprint = nullptr;
   const SiteFrame* site = nullptr;
 };
+
+/// @brief What an output is written from: the run as a whole (summary.json), the box, each
+/// plane, the far field, the reach, or an engagement's plane or box.
+enum class OutputRegion { Run, Box, Plane, Far, Reach, EngagementPlane, EngagementBox };
+
+/// @brief The largest memory one writer of a region's outputs takes besides the results it is
+/// written from, and its file.
+struct WriterScratch {
+  std::uint64_t bytes = 0;
+  std::string file;    ///< empty where the region writes nothing
+  std::string advice;  ///< what lowers it where the region's size does not; else empty
+};
+
+/// @brief A floor under the memory the writers of @p region's outputs take besides the results
+/// they are written from (the arrays each makes: a map's channels and their rows flipped for
+/// the file, a resampled volume, a surface), reckoned from @p scene before anything is
+/// computed: the largest of the outputs @p scene writes of @p region, since they are written
+/// one at a time. @p lattice is the region's (the box's or the plane's; null for the others),
+/// @p plane_name a plane's. Each output declares its own with its writer (run_outputs.cpp);
+/// the libraries' own buffers (VTK's encoder, GDAL's cache) are not counted, so the run's
+/// memory watch still guards. With @p scenario, of the outputs a study's scenario writes only
+/// (ScenarioMaps).
+WriterScratch writerScratch(const Scene& scene, OutputRegion region,
+                            const FieldSpec* lattice = nullptr, const std::string& plane_name = "",
+                            bool scenario = false);
 
 /// @brief The outputs of one `glint run` (rank 0 writes; on other ranks nothing is opened): each
 /// is opened before the work (so that an unwritable folder or a path that must not be replaced

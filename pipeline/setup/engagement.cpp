@@ -18,31 +18,29 @@ constexpr std::string_view kEngagementAdvice =
 }  // namespace
 
 EngagementResults sampleEngagement(const FacetIntegrator& reference, const Scene& scene,
-                                   std::span<const Vec3> points, const MemoryWatch& watch,
-                                   std::ostream* progress_to, bool terminal,
-                                   const std::string& what, PointExchange* exchange) {
+                                   std::span<const Vec3> points, const WorkWatch& w) {
   const Motion motion(scene.engagement->motion, scene.laser);
   WorkCounter counter;
-  counter.stop = &watch.stopFlag();
+  counter.stop = &w.watch.stopFlag();
   const auto start = std::chrono::steady_clock::now();
   std::vector<ExposureHistory> histories;
-  const std::string stage = what + "' time samples";
+  const std::string stage = w.what + "' time samples";
   {
     std::unique_ptr<ProgressReporter> progress;
-    if (progress_to != nullptr) {
-      progress =
-          std::make_unique<ProgressReporter>(*progress_to, terminal, "time samples", 0, counter);
+    if (w.progress_to != nullptr) {
+      progress = std::make_unique<ProgressReporter>(*w.progress_to, w.terminal, "time samples", 0,
+                                                    counter);
     }
     try {
-      histories =
-          integrateExposures(reference, motion, points, scene.engagement->time, &counter, exchange);
+      histories = integrateExposures(reference, motion, points, scene.engagement->time, &counter,
+                                     w.exchange);
     } catch (const WorkStopped&) {
       if (progress) progress->stop();
-      watch.check(stage, kEngagementAdvice);
+      w.watch.check(stage, kEngagementAdvice);
       throw;
     }
   }
-  watch.check(stage, kEngagementAdvice);
+  w.watch.check(stage, kEngagementAdvice);
   EngagementResults results = judgeEngagement(std::move(histories), scene);
   results.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return results;
@@ -132,9 +130,7 @@ EngagementMaps engagementMaps(const FieldSpec& spec, std::span<const std::uint8_
 }
 
 EngagementRegion engagementRegion(const FacetIntegrator& target, const Scene& scene,
-                                  const FieldSpec& spec, const MemoryWatch& watch,
-                                  std::ostream* progress_to, bool terminal, const std::string& what,
-                                  PointExchange* exchange) {
+                                  const FieldSpec& spec, const WorkWatch& w) {
   const auto start = std::chrono::steady_clock::now();
   const Motion motion(scene.engagement->motion, scene.laser);
   // Each sample is integrated to the scene's accuracy, as glint points integrates it: a plane's
@@ -150,15 +146,16 @@ EngagementRegion engagementRegion(const FacetIntegrator& target, const Scene& sc
     for (int j = 0; j < n[1]; ++j)
       for (int i = 0; i < n[0]; ++i, ++p)
         if (lit[p] != 0) region.points.push_back(spec.position(i, j, k));
-  region.results = sampleEngagement(integrator, scene, region.points, watch, progress_to, terminal,
-                                    what + "'s points", exchange);
+  region.results = sampleEngagement(
+      integrator, scene, region.points,
+      WorkWatch{w.watch, w.what + "'s points", w.progress_to, w.terminal, w.exchange});
   region.results.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   region.maps = engagementMaps(spec, lit, region.results, scene.hazard);
   for (const ExrChannel& channel : region.maps.channels()) {
     for (float v : *channel.values) {
       if (!std::isfinite(v)) {
-        throw std::runtime_error(what + ": " + channel.name +
+        throw std::runtime_error(w.what + ": " + channel.name +
                                  " is not a finite number somewhere; nothing was written");
       }
     }

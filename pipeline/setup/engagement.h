@@ -6,7 +6,6 @@
 /// (report/engagement_report.h reports them).
 
 #include <cstdint>
-#include <ostream>
 #include <span>
 #include <string>
 #include <vector>
@@ -16,6 +15,7 @@
 #include "hazard/exposure_train.h"
 #include "observers/exposure.h"
 #include "pipeline/input/scene.h"
+#include "pipeline/setup/work_watch.h"
 
 namespace glint {
 
@@ -26,17 +26,13 @@ struct EngagementResults {
   double seconds = 0.0;
 };
 
-class MemoryWatch;
-
 /// @brief The scene's engagement at @p points (their places at t = 0), sampled in time by
-/// integrateExposures() from @p reference and judged, with progress on @p progress_to (none:
-/// quiet); @p what names the points in a message. Under MPI (@p exchange) the ranks share the
-/// points, and every rank receives every history.
+/// integrateExposures() from @p reference and judged, watched and shown as @p w says (its
+/// `what` names the points in a message). Under MPI (`w.exchange`) the ranks share the points,
+/// and every rank receives every history.
 /// @throw std::runtime_error when the memory watch stops the work.
 EngagementResults sampleEngagement(const FacetIntegrator& reference, const Scene& scene,
-                                   std::span<const Vec3> points, const MemoryWatch& watch,
-                                   std::ostream* progress_to, bool terminal,
-                                   const std::string& what, PointExchange* exchange = nullptr);
+                                   std::span<const Vec3> points, const WorkWatch& w);
 
 /// @brief Judges every history of @p histories under the scene's hazard and engagement.
 EngagementResults judgeEngagement(std::vector<ExposureHistory> histories, const Scene& scene);
@@ -78,14 +74,12 @@ struct EngagementRegion {
 };
 
 /// @brief Maps the engagement of @p scene over the lattice @p spec (a plane's or the box's):
-/// culled by litByBound(), the rest sampled by sampleEngagement() (with the arguments it
-/// takes) from the integrator of @p target at the scene's accuracy; results.seconds counts the
-/// culling too.
+/// culled by litByBound(), the rest sampled by sampleEngagement() from the integrator of
+/// @p target at the scene's accuracy, watched as @p w says (its `what` names the region);
+/// results.seconds counts the culling too.
 /// @throw std::runtime_error when the memory watch stops the work or a map value is not finite
 /// (nothing may then be written).
 EngagementRegion engagementRegion(const FacetIntegrator& target, const Scene& scene,
-                                  const FieldSpec& spec, const MemoryWatch& watch,
-                                  std::ostream* progress_to, bool terminal, const std::string& what,
-                                  PointExchange* exchange = nullptr);
+                                  const FieldSpec& spec, const WorkWatch& w);
 
 }  // namespace glint

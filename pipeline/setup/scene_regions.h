@@ -14,19 +14,9 @@
 #include "observers/field.h"
 #include "observers/reach.h"
 #include "pipeline/setup/target_builder.h"
+#include "pipeline/setup/work_watch.h"
 
 namespace glint {
-
-class MemoryWatch;
-
-/// @brief How a command watches and shows one computation.
-struct WorkWatch {
-  const MemoryWatch& watch;  ///< stops the work when the run's memory passes its budget
-  std::string what;          ///< names the work in messages ("the observer box", "plane wall")
-  std::ostream* progress_to = nullptr;  ///< none: quiet
-  bool terminal = false;                ///< progress as one self-overwriting line
-  PointExchange* exchange = nullptr;    ///< MPI: the ranks share the points
-};
 
 /// @brief The centre of the target's bounding box: the nominal hazard zone's reach is measured
 /// from it.

@@ -305,26 +305,28 @@ TEST_F(CliTest, MemoryIsBudgetedFromTheFirstByte) {
   const std::string huge = write("huge.json", scene.dump());
   const Outcome refused = glint({"run", huge, "-o", path("huge"), "--memory", "16G"});
   EXPECT_EQ(refused.status, 2) << refused.err;
+  // 87.3 TB of blocks, and 0.9 TB to resample the box at every 16th point for irradiance.vti.
   EXPECT_NE(refused.err.find("observer box (64001×64001×64001 lattice points at 0.0625 m) needs "
-                             "at least 87.3 TB of memory, more than the budget of 16 GB"),
+                             "at least 88.2 TB of memory, more than the budget of 16 GB"),
             std::string::npos)
       << refused.err;
 
-  // 125 000 coarse blocks with nothing to evaluate: a floor of 179 MB starts; the run itself
-  // needs about 450 MB, so at 250 MB it is stopped by the watch, in the built program (this
-  // test process's own memory must not count). Without the far field, whose floor alone (its
-  // 2049² directions a face) is over 250 MB.
+  // 125 000 coarse blocks with nothing to evaluate: a floor of 179 MB, and 124 MB to write
+  // irradiance.vti (the box resampled at every 4th point), starts; the run itself needs about
+  // 450 MB, so at 350 MB it is stopped by the watch, in the built program (this test process's
+  // own memory must not count). Without the far field, whose floor alone (its 2049² directions
+  // a face) is over 250 MB.
   scene["observers"] = {
       {"min", {-50, -110, -50}}, {"max", {50, -10, 50}}, {"voxel_m", 0.125}, {"block_m", 2.0}};
   scene["far_field"] = {{"enabled", false}};
   const std::string big = write("big.json", scene.dump());
   const std::string cmd = std::string(GLINT_EXE) + " run " + big + " -o " + path("big") +
-                          " --memory 250M 2> " + path("err.txt");
+                          " --memory 350M 2> " + path("err.txt");
   const int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 2) << readFile(path("err.txt"));
   const std::string err = readFile(path("err.txt"));
-  EXPECT_NE(err.find("memory: at least 179 MB of the 250 MB budget"), std::string::npos) << err;
+  EXPECT_NE(err.find("memory: at least 303 MB of the 350 MB budget"), std::string::npos) << err;
   EXPECT_NE(err.find("stopped when the resident memory reached"), std::string::npos) << err;
   EXPECT_NE(err.find("nothing was written"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(path("big")))
@@ -356,8 +358,12 @@ TEST_F(CliTest, ATargetBeyondTheBudgetIsRefusedBeforeItIsBuilt) {
   const Outcome refused = glint(
       {"run", write("glint.json", run.dump()), "-o", path("run"), "--memory", "1G", "--quiet"});
   EXPECT_EQ(refused.status, 2) << refused.err;
-  EXPECT_NE(refused.err.find("the target (5337088 coarse facets, with the far field and the "
-                             "largest region) needs at least 2."),
+  // Before the target itself, its tessellation for target.vtp: 16 pieces of each facet.
+  EXPECT_NE(refused.err.find("observer box (33×65×33 lattice points at 0.0625 m, 9.23 GB of it "
+                             "to write target.vtp) needs at least 9.23 GB of memory, more than "
+                             "the budget of 1 GB (--memory); lower the objects' segments or "
+                             "decimate the meshes (target.vtp holds 16 pieces of every facet), "
+                             "or raise --memory"),
             std::string::npos)
       << refused.err;
   EXPECT_FALSE(fs::exists(path("run"))) << "the refused run left the folder it made";

@@ -7,6 +7,8 @@
 #include <malloc.h>
 
 #include <chrono>
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <memory>
 #include <string>
@@ -16,7 +18,10 @@
 #include "observers/field.h"
 #include "pipeline/base/input_error.h"
 #include "pipeline/input/scene.h"
+#include "pipeline/report/run_outputs.h"
 #include "pipeline/setup/target_builder.h"
+#include "support/cli.h"
+#include "support/files.h"
 #include "support/test_meshes.h"
 
 namespace glint {
@@ -127,6 +132,51 @@ TEST(MemoryBudget, AStopNamesWhatIsHeldThroughoutWhereItCounts) {
             std::string::npos)
       << message;
   EXPECT_EQ(message.find("observer points"), std::string::npos) << "an eighth: " << message;
+}
+
+// Issue 52: the memory model knows each output's scratch. A plane's map is written from its
+// channels copied row by row (writeExr()): a plane whose field fits the budget but whose map
+// does not is refused before anything is computed, with the field and the writer counted.
+TEST(WriterMemory, APlaneWhoseMapWouldNotFitIsRefusedBeforeTheRun) {
+  const std::filesystem::path dir = test::freshTestFolder("glint_writer_memory_");
+  const std::string scene_text = R"({"laser": {"position": [0, 0, 200], "direction": [0, 0, -1],
+      "power_w": 20.0, "wavelength_nm": 1064, "exposure_s": 10,
+      "beam": {"profile": "flat_top", "radius_m": 1.0}},
+      "materials": {"glass": {"specular_reflectance": 0.08, "sigma": 0.02}},
+      "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [0, 0, 1], "radius": 0.5,
+                   "material": "glass"}],
+      "far_field": {"enabled": false},
+      "planes": [{"name": "wide", "origin": [-10, -10, 50], "u_axis": [1, 0, 0],
+                  "v_axis": [0, 1, 0], "size_m": [20, 20], "pixel_m": 0.01, "block_m": 2.56}]})";
+  const Scene scene = parseScene(scene_text, (dir / "scene.json").string());
+  const FieldSpec plane = planeFieldSpec(scene, scene.planes.front());
+  const double points = static_cast<double>(plane.nodes()[0]) * plane.nodes()[1];
+  const std::uint64_t field_bytes = fieldMemoryFloorBytes(plane, false);
+  const WriterScratch writer = writerScratch(scene, OutputRegion::Plane, &plane, "wide");
+  const std::uint64_t writer_bytes = writer.bytes;
+  // planeMap()'s irradiance, ratio, level and status, and as many again flipped for the file.
+  EXPECT_GE(static_cast<double>(writer_bytes), 2.0 * 4.0 * sizeof(float) * points)
+      << "the map and its rows";
+  EXPECT_EQ(writer.file, "wide.exr") << "the map's EXR copies the most";
+  EXPECT_EQ(writerScratch(scene, OutputRegion::Box, &plane).bytes, 0u) << "no box, no box files";
+
+  std::ofstream(dir / "scene.json") << scene_text;
+  // Room for the field and half the map's writer.
+  const std::uint64_t budget = field_bytes + writer_bytes / 2;
+  const test::Outcome r =
+      test::glint({"run", (dir / "scene.json").string(), "-o", (dir / "out").string(), "--quiet",
+                   "--memory", std::to_string(budget)});
+  EXPECT_EQ(r.status, 2) << r.err;
+  const std::string lattice =
+      std::to_string(plane.nodes()[0]) + "×" + std::to_string(plane.nodes()[1]);
+  EXPECT_NE(r.err.find("plane wide (" + lattice + " lattice points at 0.01 m, " +
+                       formatBytes(static_cast<double>(writer_bytes)) +
+                       " of it to write wide.exr) needs at least " +
+                       formatBytes(static_cast<double>(field_bytes + writer_bytes))),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "wide.exr")) << "nothing is written";
+  std::filesystem::remove_all(dir);
 }
 
 // A scene of `objects` under a 1 m flat-top beam from 200 m along −z.
