@@ -95,6 +95,175 @@ std::string memoryHelp() {
          "); a region needing more is refused before it starts, a run passing it stops";
 }
 
+// The options of `glint points`. CLI11 keeps pointers to these members, so an instance must
+// stay where it was made until the command line is parsed and read.
+struct PointsOptions {
+  CLI::App* cmd = nullptr;
+  PointsArgs args;
+  // Options the scene already sets: taken only when given, which the CLI::Option* records.
+  double tolerance = 0.0;
+  CLI::Option* tolerance_opt = nullptr;
+  int level = 0;
+  CLI::Option* uniform_opt = nullptr;
+  std::string normals;
+  CLI::Option* normals_opt = nullptr;
+  std::string scheme;
+  CLI::Option* scheme_opt = nullptr;
+  std::string memory;
+  std::string time_series;
+  CLI::Option* time_series_opt = nullptr;
+};
+
+void addPointsCommand(CLI::App& app, PointsOptions& o) {
+  o.cmd = app.add_subcommand("points",
+                             "Irradiance at observer points listed in a CSV file (header x,y,z)");
+  o.cmd->add_option("scene", o.args.scene_path, "Scene file (JSON)")->required();
+  o.cmd->add_option("--points", o.args.points_path, "Observer points: CSV with header x,y,z")
+      ->required();
+  o.cmd->add_option("-o,--out", o.args.out_path,
+                    "Output CSV; '-' (the default) writes to standard output");
+  o.tolerance_opt =
+      o.cmd
+          ->add_option("--tolerance", o.tolerance,
+                       "Relative accuracy of each observer's total (overrides the scene)")
+          ->check(finiteIn(1e-12, 0.999999));
+  o.uniform_opt =
+      o.cmd
+          ->add_option("--uniform", o.level,
+                       "Uniform twin instead of adaptive: every facet split to LEVEL (0-12)")
+          ->check(CLI::Range(0, 12));
+  o.normals_opt =
+      o.cmd
+          ->add_option("--normals", o.normals,
+                       "Facet normals for the BRDF: surface (default) or flat (the paper's; "
+                       "implies --scheme paper)")
+          ->check(CLI::IsMember({"surface", "flat"}));
+  o.scheme_opt =
+      o.cmd
+          ->add_option("--scheme", o.scheme,
+                       "Integration scheme: lobe (the specular lobe in closed form about each "
+                       "piece's specular point, the default), cubature (a degree-7 rule on the "
+                       "exact surface) or paper (the paper's 1→4 one-point refinement); "
+                       "overrides the scene")
+          ->check(CLI::IsMember(integrationSchemeNames()));
+  o.cmd->add_option("--threads", o.args.threads, "Worker threads (default: all cores)")
+      ->check(CLI::Range(1, 4096));
+  o.cmd->add_flag("-q,--quiet", o.args.quiet, "No progress and no summary on standard error");
+  o.cmd->add_option("--memory", o.memory, memoryHelp())->check(byteSize());
+  o.time_series_opt = o.cmd->add_option(
+      "--time-series", o.time_series,
+      "With an engagement: every observer's irradiance samples to this CSV file "
+      "(observer,time_s,irradiance_w_m2,pulse: the pulse rule 3 counted it in, 0 between)");
+}
+
+// The options of `glint run`; as PointsOptions, it must not move once its options are added.
+struct RunOptions {
+  CLI::App* cmd = nullptr;
+  RunArgs args;
+  std::string memory;
+  std::string scheme;
+  CLI::Option* scheme_opt = nullptr;
+};
+
+void addRunCommand(CLI::App& app, RunOptions& o) {
+  o.cmd = app.add_subcommand(
+      "run", "The hazard volume over the scene's observer box: VDB, VTK files and a summary");
+  o.cmd->add_option("scene", o.args.scene_path, "Scene file (JSON) with an `observers` section")
+      ->required();
+  o.cmd->add_option("-o,--out", o.args.out_dir,
+                    "Output folder (default: out/<scene name>, out/<scene name>_uniform)");
+  o.cmd->add_flag("--uniform", o.args.uniform,
+                  "The dense twin: evaluate every lattice point (for comparison)");
+  o.cmd->add_option("--threads", o.args.threads, "Worker threads (default: all cores)")
+      ->check(CLI::Range(1, 4096));
+  o.cmd->add_flag("-q,--quiet", o.args.quiet, "No progress and no summary on standard error");
+  o.cmd->add_option("--memory", o.memory, memoryHelp())->check(byteSize());
+  o.scheme_opt = o.cmd
+                     ->add_option("--scheme", o.scheme,
+                                  "Integration scheme (as for points); overrides the scene")
+                     ->check(CLI::IsMember(integrationSchemeNames()));
+}
+
+// The options of `glint batch`; as PointsOptions, it must not move once its options are added.
+struct BatchOptions {
+  CLI::App* cmd = nullptr;
+  BatchArgs args;
+  std::string memory;
+};
+
+void addBatchCommand(CLI::App& app, BatchOptions& o) {
+  o.cmd = app.add_subcommand(
+      "batch",
+      "A study: many scenarios of a base scene (poses, jitter, materials), aggregated into "
+      "maximum-irradiance and coverage-probability maps; under mpirun, shared among the ranks");
+  o.cmd->add_option("study", o.args.study_path, "Study file (JSON)")->required();
+  o.cmd->add_option("-o,--out", o.args.out_dir, "Output folder (default: out/<study name>)");
+  o.cmd->add_option("--threads", o.args.threads, "Worker threads per process (default: all cores)")
+      ->check(CLI::Range(1, 4096));
+  o.cmd->add_flag("--fresh", o.args.fresh,
+                  "Discard the scenarios an earlier run left in the output folder");
+  o.cmd->add_flag("-q,--quiet", o.args.quiet, "No progress and no summary on standard error");
+  o.cmd->add_option("--memory", o.memory, memoryHelp())->check(byteSize());
+}
+
+// Progress redraws its line only on a terminal, and only on the real standard error (a stream
+// a caller passes in is never one).
+bool errorIsTerminal(const std::ostream& err) {
+  return &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
+}
+
+// The parsed options of `glint points` as its arguments: the scene's settings overridden only
+// by the options given.
+PointsArgs pointsArgs(const PointsOptions& o) {
+  PointsArgs points = o.args;
+  if (*o.tolerance_opt) points.tolerance = o.tolerance;
+  if (*o.uniform_opt) points.uniform_level = o.level;
+  if (*o.normals_opt)
+    points.normals = o.normals == "flat" ? NormalModel::Flat : NormalModel::Surface;
+  if (*o.scheme_opt) points.scheme = integrationSchemeByName(o.scheme);
+  if (!o.memory.empty()) points.memory_bytes = *parseByteSize(o.memory);
+  if (*o.time_series_opt) points.time_series_path = o.time_series;
+  return points;
+}
+
+RunArgs runArgs(const RunOptions& o, bool terminal) {
+  RunArgs run = o.args;
+  run.terminal = terminal;
+  if (!o.memory.empty()) run.memory_bytes = *parseByteSize(o.memory);
+  if (*o.scheme_opt) run.scheme = integrationSchemeByName(o.scheme);
+  return run;
+}
+
+BatchArgs batchArgs(const BatchOptions& o, bool terminal) {
+  BatchArgs batch = o.args;
+  batch.terminal = terminal;
+  if (!o.memory.empty()) batch.memory_bytes = *parseByteSize(o.memory);
+  return batch;
+}
+
+int runPointsCommand(const PointsArgs& points, std::ostream& out, std::ostream& err) {
+  Cluster cluster;
+  if (cluster.size() > 1 && cluster.rank() == 0 && !points.quiet) {
+    err << "glint points: " << cluster.size() << " MPI ranks share the observers\n";
+  }
+  return runOnCluster(
+      cluster, err, [&] { runPoints(points, out, err, cluster.size() > 1 ? &cluster : nullptr); });
+}
+
+int runRunCommand(const RunArgs& run, std::ostream& err) {
+  Cluster cluster;
+  if (cluster.size() > 1 && cluster.rank() == 0 && !run.quiet) {
+    err << "glint run: " << cluster.size() << " MPI ranks share the fields' points\n";
+  }
+  return runOnCluster(cluster, err,
+                      [&] { runScene(run, err, cluster.size() > 1 ? &cluster : nullptr); });
+}
+
+int runBatchCommand(const BatchArgs& batch, std::ostream& err) {
+  Cluster cluster;
+  return runOnCluster(cluster, err, [&] { runBatch(batch, cluster, err); });
+}
+
 }  // namespace
 
 int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
@@ -104,90 +273,12 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
       "glint"};
   app.set_version_flag("--version", std::string("glint ") + GLINT_VERSION);
   app.require_subcommand(1);
-
-  PointsArgs points;
-  CLI::App* points_cmd = app.add_subcommand(
-      "points", "Irradiance at observer points listed in a CSV file (header x,y,z)");
-  points_cmd->add_option("scene", points.scene_path, "Scene file (JSON)")->required();
-  points_cmd->add_option("--points", points.points_path, "Observer points: CSV with header x,y,z")
-      ->required();
-  points_cmd->add_option("-o,--out", points.out_path,
-                         "Output CSV; '-' (the default) writes to standard output");
-  double tolerance = 0.0;
-  CLI::Option* tolerance_opt =
-      points_cmd
-          ->add_option("--tolerance", tolerance,
-                       "Relative accuracy of each observer's total (overrides the scene)")
-          ->check(finiteIn(1e-12, 0.999999));
-  int level = 0;
-  CLI::Option* uniform_opt =
-      points_cmd
-          ->add_option("--uniform", level,
-                       "Uniform twin instead of adaptive: every facet split to LEVEL (0-12)")
-          ->check(CLI::Range(0, 12));
-  std::string normals;
-  CLI::Option* normals_opt =
-      points_cmd
-          ->add_option("--normals", normals,
-                       "Facet normals for the BRDF: surface (default) or flat (the paper's; "
-                       "implies --scheme paper)")
-          ->check(CLI::IsMember({"surface", "flat"}));
-  std::string scheme;
-  CLI::Option* scheme_opt =
-      points_cmd
-          ->add_option("--scheme", scheme,
-                       "Integration scheme: lobe (the specular lobe in closed form about each "
-                       "piece's specular point, the default), cubature (a degree-7 rule on the "
-                       "exact surface) or paper (the paper's 1→4 one-point refinement); "
-                       "overrides the scene")
-          ->check(CLI::IsMember(integrationSchemeNames()));
-  points_cmd->add_option("--threads", points.threads, "Worker threads (default: all cores)")
-      ->check(CLI::Range(1, 4096));
-  points_cmd->add_flag("-q,--quiet", points.quiet, "No progress and no summary on standard error");
-  std::string points_memory;
-  points_cmd->add_option("--memory", points_memory, memoryHelp())->check(byteSize());
-  std::string time_series;
-  CLI::Option* time_series_opt = points_cmd->add_option(
-      "--time-series", time_series,
-      "With an engagement: every observer's irradiance samples to this CSV file "
-      "(observer,time_s,irradiance_w_m2,pulse: the pulse rule 3 counted it in, 0 between)");
-
-  RunArgs run;
-  CLI::App* run_cmd = app.add_subcommand(
-      "run", "The hazard volume over the scene's observer box: VDB, VTK files and a summary");
-  run_cmd->add_option("scene", run.scene_path, "Scene file (JSON) with an `observers` section")
-      ->required();
-  run_cmd->add_option("-o,--out", run.out_dir,
-                      "Output folder (default: out/<scene name>, out/<scene name>_uniform)");
-  run_cmd->add_flag("--uniform", run.uniform,
-                    "The dense twin: evaluate every lattice point (for comparison)");
-  run_cmd->add_option("--threads", run.threads, "Worker threads (default: all cores)")
-      ->check(CLI::Range(1, 4096));
-  run_cmd->add_flag("-q,--quiet", run.quiet, "No progress and no summary on standard error");
-  std::string run_memory;
-  run_cmd->add_option("--memory", run_memory, memoryHelp())->check(byteSize());
-  std::string run_scheme;
-  CLI::Option* run_scheme_opt =
-      run_cmd
-          ->add_option("--scheme", run_scheme,
-                       "Integration scheme (as for points); overrides the scene")
-          ->check(CLI::IsMember(integrationSchemeNames()));
-
-  BatchArgs batch;
-  CLI::App* batch_cmd = app.add_subcommand(
-      "batch",
-      "A study: many scenarios of a base scene (poses, jitter, materials), aggregated into "
-      "maximum-irradiance and coverage-probability maps; under mpirun, shared among the ranks");
-  batch_cmd->add_option("study", batch.study_path, "Study file (JSON)")->required();
-  batch_cmd->add_option("-o,--out", batch.out_dir, "Output folder (default: out/<study name>)");
-  batch_cmd
-      ->add_option("--threads", batch.threads, "Worker threads per process (default: all cores)")
-      ->check(CLI::Range(1, 4096));
-  batch_cmd->add_flag("--fresh", batch.fresh,
-                      "Discard the scenarios an earlier run left in the output folder");
-  batch_cmd->add_flag("-q,--quiet", batch.quiet, "No progress and no summary on standard error");
-  std::string batch_memory;
-  batch_cmd->add_option("--memory", batch_memory, memoryHelp())->check(byteSize());
+  PointsOptions points;
+  addPointsCommand(app, points);
+  RunOptions run;
+  addRunCommand(app, run);
+  BatchOptions batch;
+  addBatchCommand(app, batch);
 
   try {
     app.parse(argc, argv);
@@ -197,39 +288,14 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
   }
 
   try {
-    if (app.got_subcommand(points_cmd)) {
-      if (*tolerance_opt) points.tolerance = tolerance;
-      if (*uniform_opt) points.uniform_level = level;
-      if (*normals_opt)
-        points.normals = normals == "flat" ? NormalModel::Flat : NormalModel::Surface;
-      if (*scheme_opt) points.scheme = integrationSchemeByName(scheme);
-      if (!points_memory.empty()) points.memory_bytes = *parseByteSize(points_memory);
-      if (*time_series_opt) points.time_series_path = time_series;
-      points.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
-      Cluster cluster;
-      if (cluster.size() > 1 && cluster.rank() == 0 && !points.quiet) {
-        err << "glint points: " << cluster.size() << " MPI ranks share the observers\n";
-      }
-      return runOnCluster(cluster, err, [&] {
-        runPoints(points, out, err, cluster.size() > 1 ? &cluster : nullptr);
-      });
+    if (app.got_subcommand(points.cmd)) {
+      PointsArgs args = pointsArgs(points);
+      args.terminal = errorIsTerminal(err);
+      return runPointsCommand(args, out, err);
     }
-    if (app.got_subcommand(run_cmd)) {
-      run.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
-      if (!run_memory.empty()) run.memory_bytes = *parseByteSize(run_memory);
-      if (*run_scheme_opt) run.scheme = integrationSchemeByName(run_scheme);
-      Cluster cluster;
-      if (cluster.size() > 1 && cluster.rank() == 0 && !run.quiet) {
-        err << "glint run: " << cluster.size() << " MPI ranks share the fields' points\n";
-      }
-      return runOnCluster(cluster, err,
-                          [&] { runScene(run, err, cluster.size() > 1 ? &cluster : nullptr); });
-    }
-    if (app.got_subcommand(batch_cmd)) {
-      batch.terminal = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
-      if (!batch_memory.empty()) batch.memory_bytes = *parseByteSize(batch_memory);
-      Cluster cluster;
-      return runOnCluster(cluster, err, [&] { runBatch(batch, cluster, err); });
+    if (app.got_subcommand(run.cmd)) return runRunCommand(runArgs(run, errorIsTerminal(err)), err);
+    if (app.got_subcommand(batch.cmd)) {
+      return runBatchCommand(batchArgs(batch, errorIsTerminal(err)), err);
     }
     return kExitSuccess;
   } catch (const std::exception& e) {

@@ -863,17 +863,9 @@ EngagementSpec readEngagement(ObjectReader r, const Scene& scene) {
   return e;
 }
 
-}  // namespace
-
-Scene parseScene(std::string_view text, const std::string& source,
-                 const std::optional<std::filesystem::path>& folder, const GltfLimits& mesh_limits,
-                 std::uint64_t memory_budget_bytes) {
-  const std::filesystem::path base = folder ? *folder : std::filesystem::path(source).parent_path();
-  const json root = parseJson(text, source);
-  Scene scene;
-  scene.source = source;
-  ObjectReader r(root, "", source);
-  scene.description = r.string("description", "");
+// The laser and what its light is judged by: the hazard's limits, the atmosphere and any
+// optical aid of the viewer.
+void readLaserAndHazard(ObjectReader& r, Scene& scene) {
   if (r.has("hazard")) readHazardLimits(r.object("hazard"), scene.hazard);
   scene.laser = readLaser(r.object("laser"), scene.hazard);
   const double wavelength_nm = scene.hazard.wavelength_nm;
@@ -891,16 +883,21 @@ Scene parseScene(std::string_view text, const std::string& source,
         readOpticalAid(r.object("optical_aid"), wavelength_nm, scene.hazard.standard);
   }
   completeHazard(scene.hazard);
+}
 
-  ObjectReader materials = r.object("materials");
+void readMaterials(ObjectReader materials, Scene& scene) {
   if (materials.raw().empty()) materials.failHere("must define at least one material");
   for (const auto& [name, value] : materials.raw().items()) {
     materials.has(name);
-    scene.materials.push_back(readMaterial(ObjectReader(value, materials.at(name), source)));
+    scene.materials.push_back(
+        readMaterial(ObjectReader(value, materials.at(name), materials.source())));
     scene.material_names.push_back(name);
   }
   materials.finish();
+}
 
+void readAccuracyAndObjects(ObjectReader& r, Scene& scene, const std::filesystem::path& base,
+                            const GltfLimits& mesh_limits, std::uint64_t memory_budget_bytes) {
   const json& objects = r.require("objects");
   if (!objects.is_array() || objects.empty()) {
     r.fail("objects", "must be a non-empty array of objects");
@@ -916,61 +913,65 @@ Scene parseScene(std::string_view text, const std::string& source,
   }
   for (std::size_t i = 0; i < objects.size(); ++i) {
     scene.objects.push_back(readObject(
-        ObjectReader(objects[i], "/objects/" + std::to_string(i), source), scene.material_names,
+        ObjectReader(objects[i], "/objects/" + std::to_string(i), r.source()), scene.material_names,
         base, mesh_limits, {memory_budget_bytes, scene.accuracy.occlusion}));
   }
+}
 
-  if (r.has("observers")) scene.observers = readObservers(r.object("observers"), scene.hazard);
-  if (r.has("planes")) {
-    const json& planes = r.require("planes");
-    if (!planes.is_array()) r.fail("planes", "must be an array of planes");
-    for (std::size_t i = 0; i < planes.size(); ++i) {
-      scene.planes.push_back(
-          readPlane(ObjectReader(planes[i], "/planes/" + std::to_string(i), source), scene.planes,
-                    scene.hazard));
-    }
+void readPlanes(ObjectReader& r, Scene& scene) {
+  const json& planes = r.require("planes");
+  if (!planes.is_array()) r.fail("planes", "must be an array of planes");
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    scene.planes.push_back(
+        readPlane(ObjectReader(planes[i], "/planes/" + std::to_string(i), r.source()), scene.planes,
+                  scene.hazard));
   }
-  if (r.has("far_field")) scene.far_field = readFarField(r.object("far_field"));
-  if (r.has("reach")) scene.reach = readReach(r.object("reach"));
-  if (r.has("engagement")) scene.engagement = readEngagement(r.object("engagement"), scene);
-  if (r.has("site")) scene.site = readSite(r.object("site"));
-  if (scene.reach.footprint && !scene.site)
-    r.fail("reach", "has a footprint, which needs a site: it is drawn on the Earth");
-  if (r.has("terrain")) {
-    ObjectReader t = r.object("terrain");
-    const std::string file = t.string("file");
-    if (const auto why = nonLocalVerdict(file)) t.fail("file", *why);
-    scene.terrain_file = base / file;
-    const std::int64_t max_posts = t.integer("max_posts", 4'000'000);
-    if (max_posts < 4 || max_posts > 100'000'000) t.fail("max_posts", "must be from 4 to 1e8");
-    t.finish();
-    if (!scene.site) r.fail("terrain", "needs a site: the elevation model lies on the Earth");
-    if (scene.engagement) {
-      r.fail("terrain", "cannot join an engagement yet: the target moves and the ground does not");
-    }
-    // The terrain's memory, with the target's that the run holds beside it, is held to the
-    // budget before a height is read.
-    const auto within_budget = [&](std::size_t posts) {
-      if (memory_budget_bytes == 0) return;
-      const std::uint64_t target_bytes = targetMemory(scene, scene.accuracy).floor_bytes;
-      requireWithinBudget(
-          "the terrain (" + std::to_string(posts) + " posts over the scene's region" +
-              (target_bytes > 0
-                   ? ", with the target's " + formatBytes(static_cast<double>(target_bytes))
-                   : std::string()) +
-              ")",
-          Terrain::memoryBytes(posts) + target_bytes, memory_budget_bytes,
-          "crop the elevation model or resample it to a coarser post spacing, shrink the "
-          "scene's region, or raise --memory");
-    };
-    try {
-      scene.terrain = Terrain::read(scene.terrain_file, SiteFrame(*scene.site), sceneRegion(scene),
-                                    static_cast<std::size_t>(max_posts), within_budget);
-    } catch (const std::runtime_error& e) {
-      throw InputError(source + ": /terrain/file: " + e.what());
-    }
-    scene.accuracy.terrain = scene.terrain->mesh();
+}
+
+// The terrain's memory, with the target's that the run holds beside it, is held to the budget
+// before a height is read.
+void requireTerrainWithinBudget(const Scene& scene, std::size_t posts,
+                                std::uint64_t memory_budget_bytes) {
+  if (memory_budget_bytes == 0) return;
+  const std::uint64_t target_bytes = targetMemory(scene, scene.accuracy).floor_bytes;
+  requireWithinBudget(
+      "the terrain (" + std::to_string(posts) + " posts over the scene's region" +
+          (target_bytes > 0
+               ? ", with the target's " + formatBytes(static_cast<double>(target_bytes))
+               : std::string()) +
+          ")",
+      Terrain::memoryBytes(posts) + target_bytes, memory_budget_bytes,
+      "crop the elevation model or resample it to a coarser post spacing, shrink the "
+      "scene's region, or raise --memory");
+}
+
+void readTerrain(ObjectReader& r, Scene& scene, const std::filesystem::path& base,
+                 std::uint64_t memory_budget_bytes) {
+  ObjectReader t = r.object("terrain");
+  const std::string file = t.string("file");
+  if (const auto why = nonLocalVerdict(file)) t.fail("file", *why);
+  scene.terrain_file = base / file;
+  const std::int64_t max_posts = t.integer("max_posts", 4'000'000);
+  if (max_posts < 4 || max_posts > 100'000'000) t.fail("max_posts", "must be from 4 to 1e8");
+  t.finish();
+  if (!scene.site) r.fail("terrain", "needs a site: the elevation model lies on the Earth");
+  if (scene.engagement) {
+    r.fail("terrain", "cannot join an engagement yet: the target moves and the ground does not");
   }
+  const auto within_budget = [&](std::size_t posts) {
+    requireTerrainWithinBudget(scene, posts, memory_budget_bytes);
+  };
+  try {
+    scene.terrain = Terrain::read(scene.terrain_file, SiteFrame(*scene.site), sceneRegion(scene),
+                                  static_cast<std::size_t>(max_posts), within_budget);
+  } catch (const std::runtime_error& e) {
+    throw InputError(r.source() + ": /terrain/file: " + e.what());
+  }
+  scene.accuracy.terrain = scene.terrain->mesh();
+}
+
+// The planes given a height above the terrain follow its ground.
+void placePlanesOnTerrain(Scene& scene, const std::string& source) {
   for (std::size_t i = 0; i < scene.planes.size(); ++i) {
     PlaneSpec& p = scene.planes[i];
     if (!p.above_terrain_m) continue;
@@ -978,6 +979,33 @@ Scene parseScene(std::string_view text, const std::string& source,
     if (!scene.terrain) throw InputError(at + ": there is no terrain");
     p.surface = surfaceOffsets(p, *scene.terrain, at);
   }
+}
+
+}  // namespace
+
+Scene parseScene(std::string_view text, const std::string& source,
+                 const std::optional<std::filesystem::path>& folder, const GltfLimits& mesh_limits,
+                 std::uint64_t memory_budget_bytes) {
+  const std::filesystem::path base = folder ? *folder : std::filesystem::path(source).parent_path();
+  const json root = parseJson(text, source);
+  Scene scene;
+  scene.source = source;
+  ObjectReader r(root, "", source);
+  scene.description = r.string("description", "");
+  readLaserAndHazard(r, scene);
+  readMaterials(r.object("materials"), scene);
+  readAccuracyAndObjects(r, scene, base, mesh_limits, memory_budget_bytes);
+
+  if (r.has("observers")) scene.observers = readObservers(r.object("observers"), scene.hazard);
+  if (r.has("planes")) readPlanes(r, scene);
+  if (r.has("far_field")) scene.far_field = readFarField(r.object("far_field"));
+  if (r.has("reach")) scene.reach = readReach(r.object("reach"));
+  if (r.has("engagement")) scene.engagement = readEngagement(r.object("engagement"), scene);
+  if (r.has("site")) scene.site = readSite(r.object("site"));
+  if (scene.reach.footprint && !scene.site)
+    r.fail("reach", "has a footprint, which needs a site: it is drawn on the Earth");
+  if (r.has("terrain")) readTerrain(r, scene, base, memory_budget_bytes);
+  placePlanesOnTerrain(scene, source);
   r.finish();
   return scene;
 }

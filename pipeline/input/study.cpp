@@ -187,19 +187,10 @@ Scene applyScenario(const Study& study, const Scenario& s, bool turn_meshes) {
   return scene;
 }
 
-}  // namespace
-
-Vec3 rotateYawPitchRoll(const Vec3& v, double yaw_deg, double pitch_deg, double roll_deg) {
-  return yawPitchRoll(yaw_deg, pitch_deg, roll_deg) * v;
-}
-
-Study parseStudy(std::string_view text, const std::string& source, const std::filesystem::path& dir,
-                 std::uint64_t memory_budget_bytes) {
-  const json root = parseJson(text, source);
-  Study study;
-  study.source = source;
-  ObjectReader r(root, "", source);
-  study.description = r.string("description", "");
+// The base scene named by `scene`, relative to the study file; its errors are the study's, at
+// its key.
+void readBaseScene(ObjectReader& r, Study& study, const std::filesystem::path& dir,
+                   std::uint64_t memory_budget_bytes) {
   const std::string scene_name = r.string("scene");
   study.scene_path = dir / scene_name;
   try {
@@ -213,8 +204,12 @@ Study parseStudy(std::string_view text, const std::string& source, const std::fi
       study.base.reach.enabled = false;
     }
   } catch (const InputError& e) {
-    throw InputError(source + ": /scene: " + e.what());
+    throw InputError(study.source + ": /scene: " + e.what());
   }
+}
+
+// A base scene a study cannot vary: nothing to map, or a study key its engagement overrules.
+void checkBaseSceneFitsStudy(ObjectReader& r, const Study& study) {
   if (!study.base.observers && study.base.planes.empty()) {
     r.fail("scene", "the scene has no observer box or planes: a study needs one");
   }
@@ -233,102 +228,120 @@ Study parseStudy(std::string_view text, const std::string& source, const std::fi
   if (study.base.wantsReach() && !study.base.far_field.enabled) {
     r.fail("scene", "the scene asks for the hazard reach without the far field it ends in");
   }
+}
 
+Vec3 readPivot(ObjectReader& r, const Scene& base) {
   Vec3 sum(0.0);
-  for (const ObjectSpec& o : study.base.objects) sum += o.centre_m();
-  study.pivot_m =
-      r.has("pivot") ? r.vec3("pivot") : sum / static_cast<double>(study.base.objects.size());
+  for (const ObjectSpec& o : base.objects) sum += o.centre_m();
+  return r.has("pivot") ? r.vec3("pivot") : sum / static_cast<double>(base.objects.size());
+}
 
+// The values each swept parameter takes; an unswept one has a single value (no σ or
+// reflectance: the scene's own).
+struct SweepAxes {
   std::vector<double> yaw{0.0}, pitch{0.0}, roll{0.0};
   std::vector<std::optional<double>> sigma{std::nullopt}, reflectance{std::nullopt};
-  if (r.has("sweep")) {
-    ObjectReader s = r.object("sweep");
-    yaw = readAngles(s, "yaw_deg");
-    pitch = readAngles(s, "pitch_deg");
-    roll = readAngles(s, "roll_deg");
-    if (s.has("sigma")) {
-      sigma.clear();
-      for (double x : readValues(s, "sigma")) {
-        if (!(x > 0.0)) s.fail("sigma", "values must be > 0");
-        sigma.emplace_back(x);
-      }
-    }
-    if (s.has("specular_reflectance")) {
-      reflectance.clear();
-      for (double x : readValues(s, "specular_reflectance")) {
-        if (!(x >= 0.0 && x <= 1.0)) s.fail("specular_reflectance", "values must be in [0, 1]");
-        reflectance.emplace_back(x);
-      }
-    }
-    study.material = s.string("material", "");
-    if (!study.material.empty()) {
-      const std::vector<std::string>& names = study.base.material_names;
-      if (std::find(names.begin(), names.end(), study.material) == names.end())
-        s.fail("material", "the scene has no material \"" + study.material + "\"");
-    }
-    s.finish();
-  }
+};
 
+std::vector<std::optional<double>> readSweptSigmas(ObjectReader& s) {
+  std::vector<std::optional<double>> out;
+  for (double x : readValues(s, "sigma")) {
+    if (!(x > 0.0)) s.fail("sigma", "values must be > 0");
+    out.emplace_back(x);
+  }
+  return out;
+}
+
+std::vector<std::optional<double>> readSweptReflectances(ObjectReader& s) {
+  std::vector<std::optional<double>> out;
+  for (double x : readValues(s, "specular_reflectance")) {
+    if (!(x >= 0.0 && x <= 1.0)) s.fail("specular_reflectance", "values must be in [0, 1]");
+    out.emplace_back(x);
+  }
+  return out;
+}
+
+// Sets study.material, the material the σ and reflectance sweeps change.
+SweepAxes readSweep(ObjectReader s, Study& study) {
+  SweepAxes axes;
+  axes.yaw = readAngles(s, "yaw_deg");
+  axes.pitch = readAngles(s, "pitch_deg");
+  axes.roll = readAngles(s, "roll_deg");
+  if (s.has("sigma")) axes.sigma = readSweptSigmas(s);
+  if (s.has("specular_reflectance")) axes.reflectance = readSweptReflectances(s);
+  study.material = s.string("material", "");
+  if (!study.material.empty()) {
+    const std::vector<std::string>& names = study.base.material_names;
+    if (std::find(names.begin(), names.end(), study.material) == names.end())
+      s.fail("material", "the scene has no material \"" + study.material + "\"");
+  }
+  s.finish();
+  return axes;
+}
+
+// Sets the study's jitter and its rounds; returns the jitter samples scenarios are made for.
+int readPointingJitter(ObjectReader j, Study& study) {
   int jitter_samples = 0;
-  if (r.has("pointing_jitter")) {
-    ObjectReader j = r.object("pointing_jitter");
-    study.jitter_sigma_rad = j.number("sigma_rad");
-    if (!(study.jitter_sigma_rad >= 0.0 && study.jitter_sigma_rad <= 0.1))
-      j.fail("sigma_rad", "must be in [0, 0.1] rad (a pointing error, not a new direction)");
-    if (j.has("precision") == j.has("samples"))
-      j.fail("samples", "give either `samples` or a `precision` to stop at");
-    if (j.has("samples")) {
-      const std::int64_t n = j.integer("samples", 0);
-      if (n < 1 || n > 100000) j.fail("samples", "must be an integer in [1, 100000]");
-      jitter_samples = static_cast<int>(n);
-    } else {
-      const double h = j.number("precision");
-      if (!(h >= 0.005 && h <= 0.5))
-        j.fail("precision", "must be in [0.005, 0.5]: the half-width of a point's interval");
-      study.precision_half_width = h;
-      const std::int64_t n = j.integer("max_samples", 4096);
-      if (n < 1 || n > 100000) j.fail("max_samples", "must be an integer in [1, 100000]");
-      jitter_samples = static_cast<int>(n);
-      study.first_round_samples = std::min(study.first_round_samples, jitter_samples);
-    }
-    study.max_samples = jitter_samples;
-    const std::int64_t seed = j.integer("seed", 1);
-    if (seed < 0) j.fail("seed", "must be an integer ≥ 0");
-    study.jitter_seed = static_cast<std::uint64_t>(seed);
-    j.finish();
+  study.jitter_sigma_rad = j.number("sigma_rad");
+  if (!(study.jitter_sigma_rad >= 0.0 && study.jitter_sigma_rad <= 0.1))
+    j.fail("sigma_rad", "must be in [0, 0.1] rad (a pointing error, not a new direction)");
+  if (j.has("precision") == j.has("samples"))
+    j.fail("samples", "give either `samples` or a `precision` to stop at");
+  if (j.has("samples")) {
+    const std::int64_t n = j.integer("samples", 0);
+    if (n < 1 || n > 100000) j.fail("samples", "must be an integer in [1, 100000]");
+    jitter_samples = static_cast<int>(n);
+  } else {
+    const double h = j.number("precision");
+    if (!(h >= 0.005 && h <= 0.5))
+      j.fail("precision", "must be in [0.005, 0.5]: the half-width of a point's interval");
+    study.precision_half_width = h;
+    const std::int64_t n = j.integer("max_samples", 4096);
+    if (n < 1 || n > 100000) j.fail("max_samples", "must be an integer in [1, 100000]");
+    jitter_samples = static_cast<int>(n);
+    study.first_round_samples = std::min(study.first_round_samples, jitter_samples);
   }
+  study.max_samples = jitter_samples;
+  const std::int64_t seed = j.integer("seed", 1);
+  if (seed < 0) j.fail("seed", "must be an integer ≥ 0");
+  study.jitter_seed = static_cast<std::uint64_t>(seed);
+  j.finish();
+  return jitter_samples;
+}
 
-  if (r.has("coverage")) {
-    ObjectReader c = r.object("coverage");
-    study.coverage_confidence = c.number("confidence", study.coverage_confidence);
-    if (!(study.coverage_confidence >= 0.5 && study.coverage_confidence < 1.0))
-      c.fail("confidence", "must be in [0.5, 1)");
-    study.coverage_probability = c.number("probability", study.coverage_probability);
-    if (!(study.coverage_probability > 0.0 && study.coverage_probability <= 1.0))
-      c.fail("probability", "must be in (0, 1]");
-    c.finish();
-  }
+void readCoverage(ObjectReader c, Study& study) {
+  study.coverage_confidence = c.number("confidence", study.coverage_confidence);
+  if (!(study.coverage_confidence >= 0.5 && study.coverage_confidence < 1.0))
+    c.fail("confidence", "must be in [0.5, 1)");
+  study.coverage_probability = c.number("probability", study.coverage_probability);
+  if (!(study.coverage_probability > 0.0 && study.coverage_probability <= 1.0))
+    c.fail("probability", "must be in (0, 1]");
+  c.finish();
+}
 
-  std::vector<Pose> poses{Pose{}};
-  if (r.has("trajectory")) poses = readTrajectory(r.object("trajectory"));
-  r.finish();
-
-  const double count = static_cast<double>(poses.size()) * static_cast<double>(yaw.size()) *
-                       static_cast<double>(pitch.size()) * static_cast<double>(roll.size()) *
-                       static_cast<double>(sigma.size()) * static_cast<double>(reflectance.size()) *
-                       std::max(1, jitter_samples);
+// Counted in doubles, before any scenario is made: a product of sizes can overflow.
+void checkScenarioCount(const std::string& source, std::size_t poses, const SweepAxes& axes,
+                        int jitter_samples) {
+  const double count = static_cast<double>(poses) * static_cast<double>(axes.yaw.size()) *
+                       static_cast<double>(axes.pitch.size()) *
+                       static_cast<double>(axes.roll.size()) *
+                       static_cast<double>(axes.sigma.size()) *
+                       static_cast<double>(axes.reflectance.size()) * std::max(1, jitter_samples);
   if (count > static_cast<double>(kMaxScenarios)) {
     throw InputError(source + ": " + formatNumber("%.4g", count) +
                      " scenarios: at most 1 000 000 (split the study)");
   }
-  // Nested in this order, the jitter innermost; without jitter one pass with sample −1.
+}
+
+// Nested in this order, the jitter (added by addScenarios()) innermost.
+std::vector<Scenario> sweepCombinations(const std::vector<Pose>& poses, const SweepAxes& axes) {
   std::vector<Scenario> combinations;
   for (const Pose& pose : poses)
-    for (double y : yaw)
-      for (double p : pitch)
-        for (double ro : roll)
-          for (const auto& sg : sigma)
-            for (const auto& re : reflectance) {
+    for (double y : axes.yaw)
+      for (double p : axes.pitch)
+        for (double ro : axes.roll)
+          for (const auto& sg : axes.sigma)
+            for (const auto& re : axes.reflectance) {
               Scenario& s = combinations.emplace_back();
               s.pose = pose;
               s.yaw_deg = y;
@@ -337,17 +350,25 @@ Study parseStudy(std::string_view text, const std::string& source, const std::fi
               s.sigma = sg;
               s.specular_reflectance = re;
             }
-  study.scenarios_per_sample = combinations.size();
-  // A round adds jitter samples after those already run: with the jitter innermost in the
-  // numbering, only a study whose sole variation is the jitter has them as its next scenarios.
-  if (study.precision_half_width && combinations.size() > 1) {
-    throw InputError(source +
+  return combinations;
+}
+
+// A round adds jitter samples after those already run: with the jitter innermost in the
+// numbering, only a study whose sole variation is the jitter has them as its next scenarios.
+void checkPrecisionVariesJitterAlone(const Study& study, std::size_t combinations) {
+  if (study.precision_half_width && combinations > 1) {
+    throw InputError(study.source +
                      ": /pointing_jitter/precision: a precision is for a study whose only "
                      "variation is the jitter; this one has " +
-                     std::to_string(combinations.size()) +
+                     std::to_string(combinations) +
                      " combinations of poses, orientations and materials beside it (give "
                      "`samples`, or a study per combination)");
   }
+}
+
+// Each combination once per jitter sample, the jitter innermost; without jitter one pass with
+// sample −1.
+void addScenarios(Study& study, const std::vector<Scenario>& combinations, int jitter_samples) {
   const int first_sample = jitter_samples > 0 ? 0 : -1;
   const int end_sample = jitter_samples > 0 ? jitter_samples : 0;
   auto add = [&](const Scenario& combination, int k) {
@@ -361,6 +382,40 @@ Study parseStudy(std::string_view text, const std::string& source, const std::fi
   };
   for (const Scenario& c : combinations)
     for (int k = first_sample; k < end_sample; ++k) add(c, k);
+}
+
+}  // namespace
+
+Vec3 rotateYawPitchRoll(const Vec3& v, double yaw_deg, double pitch_deg, double roll_deg) {
+  return yawPitchRoll(yaw_deg, pitch_deg, roll_deg) * v;
+}
+
+Study parseStudy(std::string_view text, const std::string& source, const std::filesystem::path& dir,
+                 std::uint64_t memory_budget_bytes) {
+  const json root = parseJson(text, source);
+  Study study;
+  study.source = source;
+  ObjectReader r(root, "", source);
+  study.description = r.string("description", "");
+  readBaseScene(r, study, dir, memory_budget_bytes);
+  checkBaseSceneFitsStudy(r, study);
+  study.pivot_m = readPivot(r, study.base);
+
+  SweepAxes axes;
+  if (r.has("sweep")) axes = readSweep(r.object("sweep"), study);
+  int jitter_samples = 0;
+  if (r.has("pointing_jitter"))
+    jitter_samples = readPointingJitter(r.object("pointing_jitter"), study);
+  if (r.has("coverage")) readCoverage(r.object("coverage"), study);
+  std::vector<Pose> poses{Pose{}};
+  if (r.has("trajectory")) poses = readTrajectory(r.object("trajectory"));
+  r.finish();
+
+  checkScenarioCount(source, poses.size(), axes, jitter_samples);
+  const std::vector<Scenario> combinations = sweepCombinations(poses, axes);
+  study.scenarios_per_sample = combinations.size();
+  checkPrecisionVariesJitterAlone(study, combinations.size());
+  addScenarios(study, combinations, jitter_samples);
   study.fnv1a64 = fnv1a64Hex(std::string(text) + '\0' + study.scene_text);
   for (const Scenario& s : study.scenarios) (void)applyScenario(study, s, false);
   return study;

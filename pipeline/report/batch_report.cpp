@@ -343,6 +343,156 @@ void writeStudyMap(OutputSet& outputs, const std::filesystem::path& path, const 
   }
 }
 
+namespace {
+
+nlohmann::json precisionJson(const Study& study, const std::vector<StudyLattice>& lattices,
+                             std::size_t n) {
+  const double widest = widestCoverageHalfWidth(lattices, n, study.coverage_confidence);
+  return {
+      {"half_width", *study.precision_half_width},        {"widest_half_width", widest},
+      {"reached", widest <= *study.precision_half_width}, {"confidence", study.coverage_confidence},
+      {"jitter_samples", n / study.scenarios_per_sample}, {"max_samples", study.max_samples}};
+}
+
+// Scenarios whose target the beam does not light (their result.json's warnings say why).
+std::vector<std::size_t> unlitScenarios(const std::map<std::size_t, nlohmann::json>& records) {
+  std::vector<std::size_t> unlit;
+  for (const auto& [index, rec] : records) {
+    if (rec.contains("warnings") && !rec.at("warnings").empty()) unlit.push_back(index);
+  }
+  return unlit;
+}
+
+// Their empty maps are no evidence of safety, and the study's quantiles count them as 0.
+std::string unlitWarning(const std::vector<std::size_t>& unlit, std::size_t n) {
+  std::string list;
+  for (std::size_t k = 0; k < unlit.size() && k < 10; ++k)
+    list += (k == 0 ? "" : ", ") + std::to_string(unlit[k]);
+  if (unlit.size() > 10) list += ", …";
+  return "no facet of the target is lit in " + std::to_string(unlit.size()) + " of " +
+         std::to_string(n) + " scenarios (" + list +
+         "): nothing reflects there, so their empty maps say nothing of the hazard and are not "
+         "safe ones; each one's result.json says why";
+}
+
+// One region's values over the scenarios, from their records: peak ratio and hazardous extent,
+// and through the optical aid.
+struct RegionSamples {
+  std::vector<double> peak, extent, aided_peak, aided_extent;
+  std::size_t with_hazard = 0, with_aided_hazard = 0;
+};
+
+RegionSamples regionSamples(const std::map<std::size_t, nlohmann::json>& records, std::size_t k,
+                            double cell, bool aided) {
+  RegionSamples s;
+  for (const auto& [index, rec] : records) {
+    const nlohmann::json& x = rec.at("regions")[k];
+    s.peak.push_back(x.at("peak_hazard_ratio").get<double>());
+    const std::int64_t points = x.at("hazardous_points").get<std::int64_t>();
+    s.extent.push_back(static_cast<double>(points) * cell);
+    s.with_hazard += points > 0 ? 1 : 0;
+    if (aided) {
+      s.aided_peak.push_back(x.at("aided_peak_hazard_ratio").get<double>());
+      const std::int64_t aided_points = x.at("aided_hazardous_points").get<std::int64_t>();
+      s.aided_extent.push_back(static_cast<double>(aided_points) * cell);
+      s.with_aided_hazard += aided_points > 0 ? 1 : 0;
+    }
+  }
+  return s;
+}
+
+// The lattice's points hazardous in any scenario and in half or more, and its largest
+// irradiance.
+struct LatticeTotals {
+  std::int64_t ever = 0, half = 0;
+  float max_e = 0.0f;
+};
+
+LatticeTotals latticeTotals(const StudyLattice& r, std::size_t n) {
+  LatticeTotals t;
+  for (std::size_t i = 0; i < r.hazardous.size(); ++i) {
+    t.ever += r.hazardous[i] > 0 ? 1 : 0;
+    t.half += r.hazardous[i] > 0 && 2 * static_cast<std::size_t>(r.hazardous[i]) >= n ? 1 : 0;
+    t.max_e = std::max(t.max_e, r.max_w_m2[i]);
+  }
+  return t;
+}
+
+// Region @p k of the study (its lattice @p r) over the scenarios' @p records.
+nlohmann::json regionSummaryJson(const Study& study, const StudyLattice& r, std::size_t k,
+                                 const std::map<std::size_t, nlohmann::json>& records,
+                                 std::size_t n) {
+  const bool aided = study.base.hazard.aid.has_value();
+  const RegionSamples s = regionSamples(records, k, r.cell(), aided);
+  const LatticeTotals t = latticeTotals(r, n);
+  const char* unit = r.plane ? "_m2" : "_m3";
+  nlohmann::json a = {
+      {"name", r.name},
+      {"kind", r.plane ? "plane" : "box"},
+      {"file", r.studyFile()},
+      {"geo_files", studyMapOnTheEarth(study, r)
+                        ? nlohmann::json{output_names::planeGeoTiff(r.name),
+                                         output_names::planeZonesGeoJson(r.name),
+                                         output_names::planeZonesKml(r.name)}
+                        : nlohmann::json::array()},
+      {"peak_hazard_ratio", quantilesJson(s.peak)},
+      {std::string(r.plane ? "hazardous_area" : "hazard_volume") + unit, quantilesJson(s.extent)},
+      {"scenarios_with_hazard", s.with_hazard},
+      {"fraction_of_scenarios_with_hazard",
+       n > 0 ? static_cast<double>(s.with_hazard) / static_cast<double>(n) : 0.0},
+      {"max_irradiance_w_m2", t.max_e},
+      {std::string("hazardous_in_any_scenario") + unit, static_cast<double>(t.ever) * r.cell()},
+      {std::string("hazardous_in_half_or_more") + unit, static_cast<double>(t.half) * r.cell()},
+      {"coverage_confidence", coverageConfidenceJson(study, r, n)}};
+  if (aided) {
+    std::int64_t aided_ever = 0;
+    for (std::uint32_t c : r.aided_hazardous) aided_ever += c > 0 ? 1 : 0;
+    a[std::string("aided_hazardous_in_any_scenario") + unit] =
+        static_cast<double>(aided_ever) * r.cell();
+    a["aided_peak_hazard_ratio"] = quantilesJson(s.aided_peak);
+    a[std::string(r.plane ? "aided_hazardous_area" : "aided_hazard_volume") + unit] =
+        quantilesJson(s.aided_extent);
+    a["scenarios_with_aided_hazard"] = s.with_aided_hazard;
+  }
+  return a;
+}
+
+nlohmann::json farFieldSummaryJson(const std::map<std::size_t, nlohmann::json>& records,
+                                   bool aided) {
+  std::vector<double> nohd;
+  std::size_t beyond = 0;
+  const nlohmann::json* farthest = nullptr;
+  std::size_t farthest_index = 0;
+  for (const auto& [index, rec] : records) {
+    const nlohmann::json& f = rec.at("far_field");
+    const double d = f.at("max_nohd_m").get<double>();
+    nohd.push_back(d);
+    beyond += d > 0.0 ? 1 : 0;
+    if (farthest == nullptr || d > farthest->at("max_nohd_m").get<double>()) {
+      farthest = &f;
+      farthest_index = index;
+    }
+  }
+  nlohmann::json far = {{"max_nohd_m", quantilesJson(nohd)},
+                        {"scenarios_hazardous_beyond_far_radius", beyond}};
+  if (farthest != nullptr) {
+    far["farthest"] = {{"scenario", farthest_index},
+                       {"max_nohd_m", farthest->at("max_nohd_m")},
+                       {"direction", farthest->at("max_nohd_direction")},
+                       {"far_radius_m", farthest->at("far_radius_m")}};
+  }
+  if (aided) {
+    std::vector<double> aided_nohd;
+    for (const auto& [index, rec] : records) {
+      aided_nohd.push_back(rec.at("far_field").at("aided_max_nohd_m").get<double>());
+    }
+    far["aided_max_nohd_m"] = quantilesJson(aided_nohd);
+  }
+  return far;
+}
+
+}  // namespace
+
 nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLattice>& lattices,
                                 const std::map<std::size_t, nlohmann::json>& records,
                                 std::size_t resumed, int ranks, double wall_s) {
@@ -358,15 +508,7 @@ nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLatti
       {"ranks", ranks},
       {"wall_seconds", wall_s},
       {"hazard", hazardLimitsJson(h)}};
-  if (study.precision_half_width) {
-    const double widest = widestCoverageHalfWidth(lattices, n, study.coverage_confidence);
-    j["precision"] = {{"half_width", *study.precision_half_width},
-                      {"widest_half_width", widest},
-                      {"reached", widest <= *study.precision_half_width},
-                      {"confidence", study.coverage_confidence},
-                      {"jitter_samples", n / study.scenarios_per_sample},
-                      {"max_samples", study.max_samples}};
-  }
+  if (study.precision_half_width) j["precision"] = precisionJson(study, lattices, n);
   // Each scenario integrated over the engagement: its regions' ratios are their worst windows'.
   if (study.base.engagement) j["engagement"] = engagementJson(*study.base.engagement);
   std::vector<double> evaluations, seconds;
@@ -376,114 +518,16 @@ nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLatti
   }
   j["evaluations"] = quantilesJson(evaluations);
   j["scenario_seconds"] = quantilesJson(seconds);
-  // Scenarios whose target the beam does not light (their result.json's warnings say why):
-  // their empty maps are no evidence of safety, and the study's quantiles count them as 0.
-  std::vector<std::size_t> unlit;
-  for (const auto& [index, rec] : records) {
-    if (rec.contains("warnings") && !rec.at("warnings").empty()) unlit.push_back(index);
-  }
+  const std::vector<std::size_t> unlit = unlitScenarios(records);
   j["scenarios"]["unlit"] = unlit.size();
   j["warnings"] = nlohmann::json::array();
-  if (!unlit.empty()) {
-    std::string list;
-    for (std::size_t k = 0; k < unlit.size() && k < 10; ++k)
-      list += (k == 0 ? "" : ", ") + std::to_string(unlit[k]);
-    if (unlit.size() > 10) list += ", …";
-    j["warnings"].push_back(
-        "no facet of the target is lit in " + std::to_string(unlit.size()) + " of " +
-        std::to_string(n) + " scenarios (" + list +
-        "): nothing reflects there, so their empty maps say nothing of the hazard and are not "
-        "safe ones; each one's result.json says why");
-  }
+  if (!unlit.empty()) j["warnings"].push_back(unlitWarning(unlit, n));
   nlohmann::json rs = nlohmann::json::array();
-  for (std::size_t k = 0; k < lattices.size(); ++k) {
-    const StudyLattice& r = lattices[k];
-    std::vector<double> peak, extent, aided_peak, aided_extent;
-    std::size_t with_hazard = 0, with_aided_hazard = 0;
-    for (const auto& [index, rec] : records) {
-      const nlohmann::json& x = rec.at("regions")[k];
-      peak.push_back(x.at("peak_hazard_ratio").get<double>());
-      const std::int64_t points = x.at("hazardous_points").get<std::int64_t>();
-      extent.push_back(static_cast<double>(points) * r.cell());
-      with_hazard += points > 0 ? 1 : 0;
-      if (h.aid) {
-        aided_peak.push_back(x.at("aided_peak_hazard_ratio").get<double>());
-        const std::int64_t aided = x.at("aided_hazardous_points").get<std::int64_t>();
-        aided_extent.push_back(static_cast<double>(aided) * r.cell());
-        with_aided_hazard += aided > 0 ? 1 : 0;
-      }
-    }
-    std::int64_t ever = 0, half = 0;
-    float max_e = 0.0f;
-    for (std::size_t i = 0; i < r.hazardous.size(); ++i) {
-      ever += r.hazardous[i] > 0 ? 1 : 0;
-      half += r.hazardous[i] > 0 && 2 * static_cast<std::size_t>(r.hazardous[i]) >= n ? 1 : 0;
-      max_e = std::max(max_e, r.max_w_m2[i]);
-    }
-    const char* unit = r.plane ? "_m2" : "_m3";
-    rs.push_back(
-        {{"name", r.name},
-         {"kind", r.plane ? "plane" : "box"},
-         {"file", r.studyFile()},
-         {"geo_files", studyMapOnTheEarth(study, r)
-                           ? nlohmann::json{output_names::planeGeoTiff(r.name),
-                                            output_names::planeZonesGeoJson(r.name),
-                                            output_names::planeZonesKml(r.name)}
-                           : nlohmann::json::array()},
-         {"peak_hazard_ratio", quantilesJson(peak)},
-         {std::string(r.plane ? "hazardous_area" : "hazard_volume") + unit, quantilesJson(extent)},
-         {"scenarios_with_hazard", with_hazard},
-         {"fraction_of_scenarios_with_hazard",
-          n > 0 ? static_cast<double>(with_hazard) / static_cast<double>(n) : 0.0},
-         {"max_irradiance_w_m2", max_e},
-         {std::string("hazardous_in_any_scenario") + unit, static_cast<double>(ever) * r.cell()},
-         {std::string("hazardous_in_half_or_more") + unit, static_cast<double>(half) * r.cell()},
-         {"coverage_confidence", coverageConfidenceJson(study, r, n)}});
-    if (h.aid) {
-      std::int64_t aided_ever = 0;
-      for (std::uint32_t c : r.aided_hazardous) aided_ever += c > 0 ? 1 : 0;
-      nlohmann::json& a = rs.back();
-      a[std::string("aided_hazardous_in_any_scenario") + unit] =
-          static_cast<double>(aided_ever) * r.cell();
-      a["aided_peak_hazard_ratio"] = quantilesJson(aided_peak);
-      a[std::string(r.plane ? "aided_hazardous_area" : "aided_hazard_volume") + unit] =
-          quantilesJson(aided_extent);
-      a["scenarios_with_aided_hazard"] = with_aided_hazard;
-    }
-  }
+  for (std::size_t k = 0; k < lattices.size(); ++k)
+    rs.push_back(regionSummaryJson(study, lattices[k], k, records, n));
   j["regions"] = rs;
-  if (study.base.far_field.enabled) {
-    std::vector<double> nohd;
-    std::size_t beyond = 0;
-    const nlohmann::json* farthest = nullptr;
-    std::size_t farthest_index = 0;
-    for (const auto& [index, rec] : records) {
-      const nlohmann::json& f = rec.at("far_field");
-      const double d = f.at("max_nohd_m").get<double>();
-      nohd.push_back(d);
-      beyond += d > 0.0 ? 1 : 0;
-      if (farthest == nullptr || d > farthest->at("max_nohd_m").get<double>()) {
-        farthest = &f;
-        farthest_index = index;
-      }
-    }
-    nlohmann::json far = {{"max_nohd_m", quantilesJson(nohd)},
-                          {"scenarios_hazardous_beyond_far_radius", beyond}};
-    if (farthest != nullptr) {
-      far["farthest"] = {{"scenario", farthest_index},
-                         {"max_nohd_m", farthest->at("max_nohd_m")},
-                         {"direction", farthest->at("max_nohd_direction")},
-                         {"far_radius_m", farthest->at("far_radius_m")}};
-    }
-    if (h.aid) {
-      std::vector<double> aided;
-      for (const auto& [index, rec] : records) {
-        aided.push_back(rec.at("far_field").at("aided_max_nohd_m").get<double>());
-      }
-      far["aided_max_nohd_m"] = quantilesJson(aided);
-    }
-    j["far_field"] = far;
-  }
+  if (study.base.far_field.enabled)
+    j["far_field"] = farFieldSummaryJson(records, h.aid.has_value());
   if (study.base.wantsReach()) j["hazard_reach"] = studyReachJson(records, h.aid.has_value());
   return j;
 }
