@@ -48,17 +48,26 @@ double BlockGeometry::sampleSpacing(const Index3& o, const BlockSize& size) cons
   const int widest = std::max({size[0], size[1], flat_ ? 0 : size[2]});
   if (spec_.surface) return surfaceSampleSpacing(o, size);
   if (!spec_.radial) return spec_.voxel_m * std::max(1, widest / 2);
-  // A radial block's edges are straight (rays and lines on a layer's plane): the longest.
-  const std::array<Vec3, 8> c = corners(o, size);
-  double longest_m = 0.0;
-  for (int q = 0; q < 8; ++q)
-    for (const int axis : {4, 2, 1}) {
-      if ((q & axis) == 0) {
-        longest_m = std::max(longest_m, glm::length(c[static_cast<std::size_t>(q | axis)] -
-                                                    c[static_cast<std::size_t>(q)]));
+  // A radial block's samples are not evenly spaced: its layers grow outward, and its rays
+  // spread. The widest gap between neighbouring samples, measured (their lines are straight).
+  const std::array<int, 3> h = {std::max(1, size[0] / 2), std::max(1, size[1] / 2),
+                                std::max(1, size[2] / 2)};
+  double widest_m = 0.0;
+  for (int a = 0; a <= size[0]; a += h[0])
+    for (int b = 0; b <= size[1]; b += h[1])
+      for (int c = 0; c <= size[2]; c += h[2]) {
+        const Vec3 p = spec_.position(o[0] + a, o[1] + b, o[2] + c);
+        if (a + h[0] <= size[0])
+          widest_m = std::max(widest_m,
+                              glm::length(spec_.position(o[0] + a + h[0], o[1] + b, o[2] + c) - p));
+        if (b + h[1] <= size[1])
+          widest_m = std::max(widest_m,
+                              glm::length(spec_.position(o[0] + a, o[1] + b + h[1], o[2] + c) - p));
+        if (c + h[2] <= size[2])
+          widest_m = std::max(widest_m,
+                              glm::length(spec_.position(o[0] + a, o[1] + b, o[2] + c + h[2]) - p));
       }
-    }
-  return 0.5 * longest_m;
+  return widest_m;
 }
 
 // The convex hull of a radial lattice's block is a frustum of a pyramid with its apex at the
