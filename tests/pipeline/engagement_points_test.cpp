@@ -178,7 +178,10 @@ TEST(EngagementRun, ABoxWhoseMapsOutgrowTheBudgetIsRefusedBeforeTheWork) {
   const test::Outcome o = glint({"run", f.write("scene.json", scene).string(), "-o",
                                  (f.dir / "out").string(), "--memory", "100M"});
   EXPECT_EQ(o.status, 2) << o.err;
-  EXPECT_NE(o.err.find("observer box (209×209×113 lattice points at 0.1 m, dense) needs at least"),
+  // The maps themselves (40 bytes a point) and as much again for engagement.vdb's grids, a
+  // float of each of its ten channels a point.
+  EXPECT_NE(o.err.find("observer box (209×209×113 lattice points at 0.1 m, dense, 188 MB of it to "
+                       "write engagement.vdb) needs at least 377 MB"),
             std::string::npos)
       << o.err;
   EXPECT_FALSE(fs::exists(f.dir / "out"));
