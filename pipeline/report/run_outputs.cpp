@@ -280,6 +280,8 @@ std::uint64_t targetVtp(const Scene& scene, const FieldSpec*) {
   return memory_model::saturated(
       pieces * (9.0 * sizeof(double) + 4.0 * sizeof(std::int64_t) + sizeof(double) + sizeof(int)));
 }
+
+// planeMap()'s channels, and as many again flipped for the file.
 std::uint64_t planeExr(const Scene& scene, const FieldSpec* plane) {
   return memory_model::saturated(2.0 * planeMapChannels(scene, *plane) * kFloat *
                                  latticePoints(*plane));
