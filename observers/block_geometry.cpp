@@ -45,27 +45,29 @@ double BlockGeometry::radius(const Index3& o, const BlockSize& size) const {
 }
 
 double BlockGeometry::sampleSpacing(const Index3& o, const BlockSize& size) const {
+  if (spec_.surface || spec_.radial) return measuredSampleSpacing(o, size);
   const int widest = std::max({size[0], size[1], flat_ ? 0 : size[2]});
-  if (spec_.surface) return surfaceSampleSpacing(o, size);
-  if (!spec_.radial) return spec_.voxel_m * std::max(1, widest / 2);
-  // A radial block's samples are not evenly spaced: its layers grow outward, and its rays
-  // spread. The widest gap between neighbouring samples, measured (their lines are straight).
+  return spec_.voxel_m * std::max(1, widest / 2);
+}
+
+// Neither a radial lattice's samples (its layers grow outward, its rays spread) nor a surface's
+// (a slope stretches them) are evenly spaced: the widest gap between neighbouring samples of the
+// block's 3 × 3 × 3 (3 × 3 on a plane), measured along their straight lines.
+double BlockGeometry::measuredSampleSpacing(const Index3& o, const BlockSize& size) const {
+  const int depth = flat_ ? 0 : size[2];
   const std::array<int, 3> h = {std::max(1, size[0] / 2), std::max(1, size[1] / 2),
-                                std::max(1, size[2] / 2)};
+                                std::max(1, depth / 2)};
   double widest_m = 0.0;
+  const auto gap = [&](const Vec3& p, int a, int b, int c) {
+    widest_m = std::max(widest_m, glm::length(spec_.position(o[0] + a, o[1] + b, o[2] + c) - p));
+  };
   for (int a = 0; a <= size[0]; a += h[0])
     for (int b = 0; b <= size[1]; b += h[1])
-      for (int c = 0; c <= size[2]; c += h[2]) {
+      for (int c = 0; c <= depth; c += h[2]) {
         const Vec3 p = spec_.position(o[0] + a, o[1] + b, o[2] + c);
-        if (a + h[0] <= size[0])
-          widest_m = std::max(widest_m,
-                              glm::length(spec_.position(o[0] + a + h[0], o[1] + b, o[2] + c) - p));
-        if (b + h[1] <= size[1])
-          widest_m = std::max(widest_m,
-                              glm::length(spec_.position(o[0] + a, o[1] + b + h[1], o[2] + c) - p));
-        if (c + h[2] <= size[2])
-          widest_m = std::max(widest_m,
-                              glm::length(spec_.position(o[0] + a, o[1] + b, o[2] + c + h[2]) - p));
+        if (a + h[0] <= size[0]) gap(p, a + h[0], b, c);
+        if (b + h[1] <= size[1]) gap(p, a, b + h[1], c);
+        if (c + h[2] <= depth) gap(p, a, b, c + h[2]);
       }
   return widest_m;
 }
@@ -99,22 +101,6 @@ double BlockGeometry::surfaceRadius(const Index3& o, const BlockSize& size) cons
   const std::array<double, 2> r = offsetRange(o, size);
   const double u = spec_.voxel_m * size[0], v = spec_.voxel_m * size[1], w = r[1] - r[0];
   return 0.5 * std::sqrt(u * u + v * v + w * w) * (1.0 + 1e-12);
-}
-
-// The widest gap between neighbouring samples of the block's 3 × 3 (in space: a slope
-// stretches them).
-double BlockGeometry::surfaceSampleSpacing(const Index3& o, const BlockSize& size) const {
-  const int hu = std::max(1, size[0] / 2), hv = std::max(1, size[1] / 2);
-  double widest_m = 0.0;
-  for (int a = 0; a <= size[0]; a += hu)
-    for (int c = 0; c <= size[1]; c += hv) {
-      const Vec3 p = spec_.position(o[0] + a, o[1] + c, 0);
-      if (a + hu <= size[0])
-        widest_m = std::max(widest_m, glm::length(spec_.position(o[0] + a + hu, o[1] + c, 0) - p));
-      if (c + hv <= size[1])
-        widest_m = std::max(widest_m, glm::length(spec_.position(o[0] + a, o[1] + c + hv, 0) - p));
-    }
-  return widest_m;
 }
 
 }  // namespace glint::field

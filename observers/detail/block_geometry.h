@@ -35,7 +35,7 @@ class BlockGeometry {
   [[nodiscard]] std::array<double, 2> offsetRange(const Index3& o, const BlockSize& size) const;
   [[nodiscard]] Vec3 surfaceCentre(const Index3& o, const BlockSize& size) const;
   [[nodiscard]] double surfaceRadius(const Index3& o, const BlockSize& size) const;
-  [[nodiscard]] double surfaceSampleSpacing(const Index3& o, const BlockSize& size) const;
+  [[nodiscard]] double measuredSampleSpacing(const Index3& o, const BlockSize& size) const;
 
   const FieldSpec& spec_;
   bool flat_;  // one lattice layer: a plane's blocks have no depth
