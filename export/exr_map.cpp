@@ -114,6 +114,7 @@ void writeExr(std::ostream& out, const PlaneMap& map, const ExrInfo& info) {
   if (!map.aided_hazard_ratio.empty()) {
     channels.push_back({"aided_hazard_ratio", &map.aided_hazard_ratio});
   }
+  for (const auto& [name, values] : map.level_ratios) channels.push_back({name, &values});
   channels.push_back({"level", &map.level});
   channels.push_back({"status", &map.status});
   if (!map.observer_z_m.empty()) channels.push_back({"observer_z_m", &map.observer_z_m});

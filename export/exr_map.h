@@ -5,6 +5,7 @@
 
 #include <ostream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "facets/vec3.h"
@@ -27,8 +28,11 @@ struct PlaneMap : PlaneGrid {
   std::vector<float> irradiance_w_m2;
   std::vector<float> hazard_ratio;        ///< irradiance / MPE
   std::vector<float> aided_hazard_ratio;  ///< irradiance × aid gain / MPE; empty without an aid
-  std::vector<float> level;               ///< refinement level (0 = coarsest block)
-  std::vector<float> status;              ///< VoxelStatus: why a 0 is 0 (proven below floor, ...)
+  /// Per level judged beside the MPE: its channel's name (`<level>_ratio`) and irradiance /
+  /// the level's threshold.
+  std::vector<std::pair<std::string, std::vector<float>>> level_ratios;
+  std::vector<float> level;   ///< refinement level (0 = coarsest block)
+  std::vector<float> status;  ///< VoxelStatus: why a 0 is 0 (proven below floor, ...)
   /// A plane laid over the terrain: each observer's height, local z (m); empty for a flat one.
   std::vector<float> observer_z_m;
 };

@@ -338,6 +338,8 @@ ExposureVerdict judgeExposure(std::span<const double> time_s,
   }
   v.aided_ratio = v.ratio * hazard.aidGain();
   v.time_above_mpe_s = timeAtOrAbove(time_s, irradiance_w_m2, hazard.mpe_w_m2);
+  for (const ExposureLevel& l : hazard.levels)
+    v.time_above_level_s.push_back(timeAtOrAbove(time_s, irradiance_w_m2, l.thresholdW_m2()));
   v.stare_ratio = hazard.ratio(peak_w_m2);
   return v;
 }

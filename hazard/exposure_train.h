@@ -117,6 +117,8 @@ struct ExposureVerdict {
   /// the gain times the unaided one (the unaided ratio without an aid).
   double aided_ratio = 0.0;
   double time_above_mpe_s = 0.0;  ///< at or above the stare MPE (HazardSpec::mpe_w_m2)
+  /// Per level (HazardSpec::levels): how long the irradiance is at or above its threshold.
+  std::vector<double> time_above_level_s;
   /// The per-pose verdict: the peak irradiance as if stared at for the whole exposure
   /// (peak / HazardSpec::mpe_w_m2), what judging each pose alone would report.
   double stare_ratio = 0.0;

@@ -119,6 +119,13 @@ double opticalGain(double aperture_m, double magnification, double transmission,
 
 void completeHazard(HazardSpec& h) {
   const double wavelength_nm = h.wavelength_nm;
+  for (ExposureLevel& l : h.levels) {
+    if (l.visually_corrected &&
+        !(wavelength_nm >= kVisibleMinNm && wavelength_nm <= kVisibleMaxNm)) {
+      throw std::out_of_range("a visually corrected level applies from 400 nm to 700 nm only");
+    }
+    l.visual_correction = l.visually_corrected ? photopicEfficiency(wavelength_nm) : 1.0;
+  }
   h.train.reset();
   if (!h.pulse) {
     h.mpe = tableMpe(wavelength_nm, h.exposure_s, h.standard, h.tissue);
@@ -173,14 +180,27 @@ HazardZone hazardZone(const ObserverField& field, const HazardSpec& h,
       std::max(h.ratio(s.unconverged_max_upper_w_m2), h.aidedRatio(s.unconverged_max_upper_w_m2));
   z.narrow_glint_ratio_bound =
       std::max(h.ratio(s.unresolved_max_bound_w_m2), h.aidedRatio(s.unresolved_max_bound_w_m2));
-  z.narrow_glint_may_be_hazardous = s.unresolved_points > 0;
+  // A level below the MPE lowers the fields' threshold, and with it where points are marked
+  // unresolved: only a bound that reaches the MPE makes one hazardous.
+  z.narrow_glint_may_be_hazardous = s.unresolved_points > 0 && !(z.narrow_glint_ratio_bound < 1.0);
+  for (const ExposureLevel& l : h.levels) {
+    HazardZone::Level level;
+    level.peak_ratio = l.ratio(s.peak_w_m2);
+    level.above = field.exceedance(l.thresholdW_m2(), target_centre_m);
+    level.unconverged_may_reach = !(l.ratio(s.unconverged_max_upper_w_m2) < 1.0);
+    level.narrow_glint_may_reach =
+        s.unresolved_points > 0 && !(l.ratio(s.unresolved_max_bound_w_m2) < 1.0);
+    z.levels.push_back(level);
+  }
   return z;
 }
 
 FarHazard farHazard(const FarField& field, const HazardSpec& h) {
   const double mu = h.atmosphere.extinction_per_m;
-  FarHazard f{farReach(field, h.mpe_w_m2, mu), std::nullopt};
+  FarHazard f{farReach(field, h.mpe_w_m2, mu), std::nullopt, {}};
   if (h.aid) f.aided = farReach(field, h.aidedMpeW_m2(), mu);
+  for (const ExposureLevel& l : h.levels)
+    f.levels.push_back(farReach(field, l.thresholdW_m2(), mu));
   return f;
 }
 

@@ -14,8 +14,10 @@
 #include <algorithm>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "facets/vec3.h"
+#include "hazard/levels.h"
 #include "hazard/mpe.h"
 #include "hazard/standard.h"
 #include "observers/far_field.h"
@@ -145,6 +147,8 @@ struct HazardSpec {
   double pulse_exposure_s = 0.0;
   AtmosphereSpec atmosphere;
   std::optional<OpticalAidSpec> aid;
+  /// Levels judged beside the MPE, for the naked eye (`hazard.flight_zones`, `hazard.levels`).
+  std::vector<ExposureLevel> levels;
 
   /// @brief E / MPE for unaided viewing.
   [[nodiscard]] double ratio(double irradiance_w_m2) const { return irradiance_w_m2 / mpe_w_m2; }
@@ -156,9 +160,23 @@ struct HazardSpec {
   /// @brief The irradiance at the naked eye that the aid lifts to the MPE: MPE / gain (the
   /// MPE without an aid).
   [[nodiscard]] double aidedMpeW_m2() const { return mpe_w_m2 / aidGain(); }
-  /// @brief The lowest irradiance that is hazardous to any viewer the scene describes (aided
-  /// where the aid gathers more than the eye): what defaults of floors are scaled from.
-  [[nodiscard]] double lowestHazardousW_m2() const { return mpe_w_m2 / std::max(1.0, aidGain()); }
+  /// @brief The lowest irradiance judged for any viewer the scene describes (aided where the aid
+  /// gathers more than the eye) or any level: what defaults of floors are scaled from.
+  [[nodiscard]] double lowestHazardousW_m2() const {
+    double lowest = mpe_w_m2 / std::max(1.0, aidGain());
+    for (const ExposureLevel& l : levels) lowest = std::min(lowest, l.thresholdW_m2());
+    return lowest;
+  }
+  /// @brief Every irradiance threshold judged, in the outputs' order: the MPE, the aided MPE
+  /// with an aid, then each level's (ExposureLevel::thresholdW_m2()).
+  [[nodiscard]] std::vector<double> thresholdsW_m2() const {
+    std::vector<double> t = {mpe_w_m2};
+    if (aid) t.push_back(aidedMpeW_m2());
+    for (const ExposureLevel& l : levels) t.push_back(l.thresholdW_m2());
+    return t;
+  }
+  /// @brief Where the levels begin in thresholdsW_m2().
+  [[nodiscard]] std::size_t firstLevelThreshold() const { return aid ? 2 : 1; }
   /// @brief The irradiance below which the fields need not resolve anything: their default
   /// floors. A thousandth of lowestHazardousW_m2(): hazard ratios down to 1e-3 are resolved,
   /// below what even an undeclared 50 mm binocular (about 50× the collected power of a 7 mm
@@ -206,7 +224,17 @@ struct HazardZone {
   /// allows where a glint narrower than the lattice may pass (status 6); 0 where there is none.
   /// Such points exist only where the bound reaches the MPE: they may be hazardous.
   double narrow_glint_ratio_bound = 0.0;
-  bool narrow_glint_may_be_hazardous = false;  ///< some point has status 6
+  /// Some point has status 6 and its bound reaches the MPE (aided, where there is an aid).
+  bool narrow_glint_may_be_hazardous = false;
+
+  /// Where a level (HazardSpec::levels, in order) is reached, and what may reach it unseen.
+  struct Level {
+    double peak_ratio = 0.0;  ///< peak irradiance / the level's threshold
+    ObserverField::Exceedance above;
+    bool unconverged_may_reach = false;   ///< an unconverged point's value + error reaches it
+    bool narrow_glint_may_reach = false;  ///< a status-6 point's bound reaches it
+  };
+  std::vector<Level> levels;
 };
 
 /// @brief The zones of @p field under @p h, distances from @p target_centre_m.
@@ -217,6 +245,7 @@ HazardZone hazardZone(const ObserverField& field, const HazardSpec& h, const Vec
 struct FarHazard {
   FarReach unaided;
   std::optional<FarReach> aided;  ///< with an aid only
+  std::vector<FarReach> levels;   ///< per level (HazardSpec::levels), the naked eye's
   /// The farther of the two: what a study's coverage and a warning are judged by.
   [[nodiscard]] const FarReach& farthest() const {
     return aided && aided->nohd_m > unaided.nohd_m ? *aided : unaided;

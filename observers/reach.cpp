@@ -206,15 +206,33 @@ ReachSummary summarizeReach(const NearReach& near, const FarField& far, std::siz
                             double extinction_per_m) {
   ReachSummary s;
   s.threshold_w_m2 = near.spec.thresholds_w_m2.at(t);
+  // The farthest of what toward() gives over every direction: within a lattice cell, the
+  // farthest layer plane of its four rays taken along the cell's most oblique corner, which
+  // lies beyond every one of the four rays' own reach where the farthest plane is not that
+  // corner's.
   const int n = near.spec.face_cells;
+  const double step = 2.0 / n;
   for (int f = 0; f < cube::kFaces; ++f) {
     const std::vector<float>& r = near.faces[static_cast<std::size_t>(f)].reach_m[t];
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i <= n; ++i) {
-        const double d = r[rayIndex(i, j, n)];
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        double plane_m = 0.0, stretch = 0.0;
+        int corner_i = i, corner_j = j;
+        for (int c = 0; c < 4; ++c) {
+          const int a = i + (c & 1), b = j + (c >> 1);
+          const double u = -1.0 + step * a, v = -1.0 + step * b;
+          const double k = std::sqrt(1.0 + u * u + v * v);
+          plane_m = std::max(plane_m, static_cast<double>(r[rayIndex(a, b, n)]) / k);
+          if (k > stretch) {
+            stretch = k;
+            corner_i = a;
+            corner_j = b;
+          }
+        }
+        const double d = plane_m * stretch;
         if (d > s.distance_m) {
           s.distance_m = d;
-          s.direction = cube::planeDirection(f, i, j, n);
+          s.direction = cube::planeDirection(f, corner_i, corner_j, n);
         }
       }
   }

@@ -45,8 +45,8 @@ struct ReachSpec {
   double ratio = 1.02;    ///< between layers: the reach's resolution along a ray
   int face_cells = 64;    ///< rays per cube-face edge (a multiple of block_voxels)
   int block_voxels = 16;  ///< coarsest block edge
-  /// The thresholds the reach is given for (W/m²): the MPE, then the aided MPE if any. The
-  /// lattice is refined for the lowest.
+  /// The thresholds the reach is given for (W/m²): the MPE, then the aided MPE if any, then
+  /// each level's (HazardSpec::thresholdsW_m2()). The lattice is refined for the lowest.
   std::vector<double> thresholds_w_m2;
   double tolerance = 1e-2;
   double floor_w_m2 = 0.0;  ///< negligible irradiance (a thousandth of the lowest threshold)
@@ -98,7 +98,8 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
 /// @brief The reach for one threshold, from the lattices and the far field.
 struct ReachSummary {
   double threshold_w_m2 = 0.0;
-  /// The farthest hazardous point's distance from the lit centre (m; 0: nothing hazardous
+  /// The reach's largest distance from the lit centre over every direction, as toward() and
+  /// the maps give it between the rays (m; 0: nothing hazardous
   /// outside the target but in the unclassified cube; +∞ where the far field has a glint it
   /// could not bound).
   double distance_m = 0.0;

@@ -293,7 +293,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
     tally.evaluations += far.stats().evaluations;
     if (scene.wantsReach()) {
       const SceneReach reach = sceneReach(target, scene, far, {watch, w.what + ", hazard reach"});
-      record["hazard_reach"] = reachSummaryJson(reach.summaries);
+      record["hazard_reach"] = reachSummaryJson(reach.summaries, scene.hazard);
       tally.evaluations += reach.near.evaluations();
     }
   }
@@ -602,6 +602,10 @@ void runScenarios(const BatchArgs& args, const Study& study, std::vector<StudyLa
     if (r.combinations > 1) {
       cluster.sumToRoot(r.hazardous_by_combination);
       if (r.aided) cluster.sumToRoot(r.aided_hazardous_by_combination);
+    }
+    for (std::size_t k = 0; k < r.level_reached.size(); ++k) {
+      cluster.sumToRoot(r.level_reached[k]);
+      if (r.combinations > 1) cluster.sumToRoot(r.level_reached_by_combination[k]);
     }
     // Rank 0 holds them all now: the others start the next round from nothing, or they would
     // add their share again.

@@ -140,10 +140,10 @@ void printSummary(std::ostream& err, const PointsArgs& args, const Scene& scene,
 }
 
 // The hazard of each observer: its ratio (E / MPE), through the optical aid where the scene has
-// one, and one pulse's radiant exposure for a pulsed laser.
+// one, one pulse's radiant exposure for a pulsed laser, and its ratio to each level.
 std::vector<CsvColumn> hazardColumns(const HazardSpec& h, std::span<const ObserverResult> results) {
   std::vector<CsvColumn> columns;
-  auto add = [&](const char* name, auto value) {
+  auto add = [&](const std::string& name, auto value) {
     CsvColumn c{name, {}};
     c.values.reserve(results.size());
     for (const ObserverResult& r : results) c.values.push_back(value(r.irradiance_w_m2));
@@ -154,6 +154,8 @@ std::vector<CsvColumn> hazardColumns(const HazardSpec& h, std::span<const Observ
   if (h.pulse) {
     add("radiant_exposure_j_m2_per_pulse", [&](double e) { return h.pulseRadiantExposureJ_m2(e); });
   }
+  for (const ExposureLevel& l : h.levels)
+    add(l.name + "_ratio", [&](double e) { return l.ratio(e); });
   return columns;
 }
 

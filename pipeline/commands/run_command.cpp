@@ -274,13 +274,13 @@ void runPlanes(const RunContext& c, RunSummary& s) {
     c.outputs.writePlane(p, {field, c.scene.hazard, c.info, nullptr, {}});
     const HazardZone zone =
         hazardZone(field, c.scene.hazard, targetCentre(problem.integrator.target()));
-    planes.push_back(planeJson(plane, field, zone));
+    planes.push_back(planeJson(plane, field, zone, c.scene.hazard));
     if (site) planes.back()["map"] = planeMapJson(plane, field, *site);
     if (field.stats().peak_w_m2 > 0.0) {
       s.probes.emplace_back("plane " + plane.name + "'s peak", field.stats().peak_at_m);
     }
     s.describeTarget(c.scene, problem);
-    if (!c.args.quiet) printPlane(c.err, plane, field, zone);
+    if (!c.args.quiet) printPlane(c.err, plane, field, zone, c.scene.hazard);
   }
   s.j["planes"] = planes;
 }
@@ -306,7 +306,7 @@ void runEngagement(const RunContext& c, RunSummary& s) {
     c.outputs.writeEngagementBox({spec, channels, c.info});
     s.j["box"] =
         engagementRegionJson("box", output_names::kEngagementVdb, spec, box, c.scene.hazard);
-    if (!c.args.quiet) printEngagementRegion(c.err, "the box", spec, box);
+    if (!c.args.quiet) printEngagementRegion(c.err, "the box", spec, box, c.scene.hazard);
   }
   nlohmann::json planes = nlohmann::json::array();
   for (std::size_t p = 0; p < c.scene.planes.size(); ++p) {
@@ -320,7 +320,7 @@ void runEngagement(const RunContext& c, RunSummary& s) {
     c.outputs.writeEngagementPlane(p, {m.maps.grid, channels, c.info, nullptr, {}});
     planes.push_back(engagementRegionJson(plane.name, output_names::planeExr(plane.name), spec, m,
                                           c.scene.hazard));
-    if (!c.args.quiet) printEngagementRegion(c.err, what, spec, m);
+    if (!c.args.quiet) printEngagementRegion(c.err, what, spec, m, c.scene.hazard);
   }
   s.j["engagement"] = engagementJson(e);
   if (!planes.empty()) s.j["planes"] = planes;
@@ -329,8 +329,8 @@ void runEngagement(const RunContext& c, RunSummary& s) {
 // The hazard reach, its files, its entry in the summary and its line on the terminal.
 void runReach(const RunContext& c, const FarResult& far, RunSummary& s) {
   const SceneReach reach = sceneReach(c.target, c.scene, *far.far, c.work("the hazard reach"));
-  s.j["hazard_reach"] = reachJson(reach.near, reach.summaries, reach.seconds);
-  if (!c.args.quiet) printReach(c.err, reach.near, reach.summaries, reach.seconds);
+  s.j["hazard_reach"] = reachJson(reach.near, reach.summaries, reach.seconds, c.scene.hazard);
+  if (!c.args.quiet) printReach(c.err, reach.near, reach.summaries, reach.seconds, c.scene.hazard);
   std::optional<ReachFootprint> footprint;
   if (const std::optional<FootprintSpec>& spec = c.scene.reach.footprint) {
     const SiteFrame site(*c.scene.site);
@@ -350,7 +350,10 @@ void runReach(const RunContext& c, const FarResult& far, RunSummary& s) {
         {"files",
          {output_names::kReachFootprintTif, output_names::kReachFootprintGeoJson,
           output_names::kReachFootprintKml}}};
-    if (footprint->area_m2.size() > 1) f["aided_area_m2"] = footprint->area_m2[1];
+    const HazardSpec& h = c.scene.hazard;
+    if (h.aid) f["aided_area_m2"] = footprint->area_m2.at(1);
+    for (std::size_t k = 0; k < h.levels.size(); ++k)
+      f["levels"][h.levels[k].name]["area_m2"] = footprint->area_m2.at(h.firstLevelThreshold() + k);
     s.j["hazard_reach"]["footprint"] = f;
   }
   c.outputs.writeReach(
@@ -485,8 +488,8 @@ void runScene(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   if (!scene.planes.empty()) runPlanes(c, summary);
   if (far.far && writer) {
     outputs.writeFar({*far.far, scene.hazard, info});
-    summary.j["far_field"] = farFieldJson(*far.far, far.hazard, outputs.farNames());
-    if (!args.quiet) printFarField(err, *far.far, far.hazard);
+    summary.j["far_field"] = farFieldJson(*far.far, far.hazard, outputs.farNames(), scene.hazard);
+    if (!args.quiet) printFarField(err, *far.far, far.hazard, scene.hazard);
   }
   if (scene.wantsReach()) runReach(c, far, summary);
   if (scene.hasMeshes() && writer) checkSurfaces(c, far, summary);

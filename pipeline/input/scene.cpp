@@ -72,6 +72,7 @@ HazardSpec readExposure(ObjectReader& r, double wavelength_nm,
   HazardSpec h;
   h.standard = limits.standard;
   h.tissue = limits.tissue;
+  h.levels = limits.levels;
   h.wavelength_nm = wavelength_nm;
   if (!(wavelength_nm >= 400.0 && wavelength_nm <= 1.0e6)) {
     r.fail("wavelength_nm",
@@ -161,6 +162,80 @@ SiteSpec readSite(ObjectReader r) {
   return site;
 }
 
+// The levels beside the MPE (`hazard.flight_zones`, `hazard.levels`); what they need of the
+// laser is checked once it is read (checkLevels()).
+void readLevels(ObjectReader& r, HazardSpec& h) {
+  if (r.has("flight_zones")) {
+    bool wanted = true, corrected = true;
+    if (r.raw().at("flight_zones").is_object()) {
+      ObjectReader z = r.object("flight_zones");
+      corrected = z.boolean("visual_correction", true);
+      z.finish();
+    } else {
+      wanted = r.boolean("flight_zones", false);
+    }
+    if (wanted) h.levels = flightZoneLevels(corrected);
+  }
+  if (!r.has("levels")) return;
+  const nlohmann::json& list = r.raw().at("levels");
+  if (!list.is_array() || list.empty()) r.fail("levels", "must be a non-empty array of levels");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string at = r.at("levels") + "/" + std::to_string(i);
+    if (!list[i].is_object()) throw InputError(r.source() + ": " + at + ": must be an object");
+    ObjectReader l(list[i], at, r.source());
+    ExposureLevel level;
+    level.name = l.string("name");
+    if (const std::string problem = levelNameProblem(level.name); !problem.empty())
+      l.fail("name", problem);
+    for (const ExposureLevel& other : h.levels) {
+      if (other.name == level.name) l.fail("name", "\"" + level.name + "\" is named twice");
+    }
+    level.level_w_m2 = positive(l, "irradiance_w_m2", l.number("irradiance_w_m2"));
+    inRange(l, "irradiance_w_m2", level.level_w_m2, 1e-12, 1e12, "W/m²");
+    level.visually_corrected = l.boolean("visual_correction", false);
+    level.source = l.string("source", "the scene's own level");
+    level.label = level.name + " (" + formatNumber("%.3g", level.level_w_m2) + " W/m²" +
+                  (level.visually_corrected ? " effective" : "") + ")";
+    l.finish();
+    h.levels.push_back(level);
+  }
+}
+
+// What the levels ask of the laser: the flight zones are visual levels for a pilot's eye, from
+// 400 nm to 700 nm and for a continuous laser; any visually corrected level is visible only.
+void checkLevels(ObjectReader& r, const HazardSpec& h) {
+  if (h.levels.empty()) return;
+  ObjectReader hazard = r.object("hazard");
+  const bool zones = hazard.has("flight_zones") && hazard.raw().at("flight_zones") != false;
+  const std::string wavelength = formatNumber("%g", h.wavelength_nm) + " nm";
+  const bool visible = h.wavelength_nm >= kVisibleMinNm && h.wavelength_nm <= kVisibleMaxNm;
+  if (zones) {
+    if (!visible) {
+      hazard.fail("flight_zones",
+                  "the flight zones' levels are visual interference (glare, flash blindness) and "
+                  "apply from 400 nm to 700 nm; the laser's wavelength is " +
+                      wavelength + ". Its hazard to aircrew is the MPE's alone");
+    }
+    if (h.tissue == Tissue::Skin) {
+      hazard.fail("flight_zones", "are levels for a pilot's eye, and hazard.tissue is \"skin\"");
+    }
+    if (h.pulse) {
+      hazard.fail("flight_zones",
+                  "glint gives the flight zones' levels for a continuous laser only: their "
+                  "pulsed form (a radiant exposure per pulse) is not implemented; give the level "
+                  "you apply as hazard.levels, judged on the mean irradiance");
+    }
+  }
+  for (const ExposureLevel& l : h.levels) {
+    if (l.visually_corrected && !visible) {
+      hazard.fail(zones ? "flight_zones" : "levels",
+                  "a visually corrected level applies from 400 nm to 700 nm (CIE V(λ)); the "
+                  "laser's wavelength is " +
+                      wavelength + "; set visual_correction to false");
+    }
+  }
+}
+
 // The limits' standard and tissue (`hazard`); ANSI Z136.1-2014 for the eye by default.
 void readHazardLimits(ObjectReader r, HazardSpec& h) {
   if (r.has("standard")) {
@@ -182,6 +257,7 @@ void readHazardLimits(ObjectReader r, HazardSpec& h) {
     h.standard = *standard;
   }
   h.tissue = r.choice("tissue", {"eye", "skin"}, 0) == 0 ? Tissue::Eye : Tissue::Skin;
+  readLevels(r, h);
   r.finish();
 }
 
@@ -868,6 +944,7 @@ EngagementSpec readEngagement(ObjectReader r, const Scene& scene) {
 void readLaserAndHazard(ObjectReader& r, Scene& scene) {
   if (r.has("hazard")) readHazardLimits(r.object("hazard"), scene.hazard);
   scene.laser = readLaser(r.object("laser"), scene.hazard);
+  checkLevels(r, scene.hazard);
   const double wavelength_nm = scene.hazard.wavelength_nm;
   if (r.has("atmosphere")) {
     scene.hazard.atmosphere = readAtmosphere(r.object("atmosphere"), wavelength_nm);

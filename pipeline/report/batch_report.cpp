@@ -48,8 +48,19 @@ double reachDistance(const nlohmann::json& entry) {
   return d.is_null() ? std::numeric_limits<double>::infinity() : d.get<double>();
 }
 
+// The levels judged beside the MPE (hazard.levels), as the scenarios' reach records name them:
+// every scenario of a study has the same.
+std::vector<std::string> reachLevelNames(const std::map<std::size_t, nlohmann::json>& records) {
+  std::vector<std::string> names;
+  if (records.empty()) return names;
+  const nlohmann::json& reach = records.begin()->second.at("hazard_reach");
+  if (!reach.contains("levels")) return names;
+  for (const auto& item : reach.at("levels").items()) names.push_back(item.key());
+  return names;
+}
+
 // The study's hazard reach: quantiles of the scenarios' distances, how many are closed, and the
-// farthest scenario.
+// farthest scenario; the aided reach's and each level's quantiles.
 nlohmann::json studyReachJson(const std::map<std::size_t, nlohmann::json>& records, bool aided) {
   std::vector<double> distance, aided_distance;
   std::size_t closed = 0;
@@ -75,6 +86,16 @@ nlohmann::json studyReachJson(const std::map<std::size_t, nlohmann::json>& recor
                      {"closed", farthest->at("closed")}};
   }
   if (aided) j["aided_distance_m"] = quantilesJson(aided_distance);
+  for (const std::string& name : reachLevelNames(records)) {
+    std::vector<double> level;
+    std::size_t level_closed = 0;
+    for (const auto& [index, rec] : records) {
+      const nlohmann::json& l = rec.at("hazard_reach").at("levels").at(name);
+      level.push_back(reachDistance(l));
+      level_closed += l.at("closed").get<bool>() ? 1 : 0;
+    }
+    j["levels"][name] = {{"distance_m", quantilesJson(level)}, {"scenarios_closed", level_closed}};
+  }
   return j;
 }
 
@@ -136,6 +157,9 @@ std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
   if (far_field && aided) csv += ",far_aided_max_nohd_m";
   if (reach) csv += ",reach_m,reach_closed";
   if (reach && aided) csv += ",aided_reach_m";
+  const std::vector<std::string> levels =
+      reach ? reachLevelNames(records) : std::vector<std::string>{};
+  for (const std::string& name : levels) csv += "," + name + "_reach_m";
   csv += ",unconverged_points,evaluations,seconds\n";
   for (const auto& [index, rec] : records) {
     const nlohmann::json& p = rec.at("parameters");
@@ -179,6 +203,10 @@ std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
       if (aided) {
         const nlohmann::json& a = h.at("aided").at("distance_m");
         cell(a.is_null() ? "inf" : csvNumber(a.get<double>()));
+      }
+      for (const std::string& name : levels) {
+        const nlohmann::json& l = h.at("levels").at(name).at("distance_m");
+        cell(l.is_null() ? "inf" : csvNumber(l.get<double>()));
       }
     }
     cell(std::to_string(rec.at("unconverged_points").get<std::int64_t>()));
@@ -246,34 +274,89 @@ bool studyMapOnTheEarth(const Study& study, const StudyLattice& r) {
   return mappable(p.u_axis, p.v_axis);
 }
 
+namespace {
+
+// The arrays of a study's map beside the maximum irradiance: the largest hazard ratio, the
+// coverage and its interval, the same through the aid, and each level's coverage.
+struct StudyMapArrays {
+  std::vector<float> max_ratio, cover, aided_max_ratio, aided_cover;
+  CoverageBounds bounds, aided_bounds;
+  std::vector<std::vector<float>> level_cover;
+  std::vector<CoverageBounds> level_bounds;
+};
+
+StudyMapArrays studyMapArrays(const StudyLattice& r, const Study& study, std::size_t scenarios) {
+  const HazardSpec& h = study.base.hazard;
+  StudyMapArrays a;
+  // A pose's ratio is its irradiance's, so the largest follows from the largest irradiance;
+  // an engagement's worst windows were kept apart (StudyLattice::max_ratio).
+  const auto largestRatio = [&](const std::vector<float>& kept, auto ratio) {
+    if (r.engagement) return kept;
+    std::vector<float> out(r.max_w_m2.size());
+    for (std::size_t i = 0; i < out.size(); ++i)
+      out[i] = static_cast<float>(ratio(static_cast<double>(r.max_w_m2[i])));
+    return out;
+  };
+  a.max_ratio = largestRatio(r.max_ratio, [&](double e) { return h.ratio(e); });
+  a.cover = coverage(r.hazardous, scenarios);
+  // Each point's exact interval at the study's confidence.
+  const double alpha_each_side = 0.5 * (1.0 - study.coverage_confidence);
+  a.bounds = r.coverageBounds(false, scenarios, alpha_each_side);
+  if (h.aid) {
+    a.aided_max_ratio = largestRatio(r.aided_max_ratio, [&](double e) { return h.aidedRatio(e); });
+    a.aided_cover = coverage(r.aided_hazardous, scenarios);
+    a.aided_bounds = r.coverageBounds(true, scenarios, alpha_each_side);
+  }
+  for (std::size_t k = 0; k < h.levels.size(); ++k) {
+    a.level_cover.push_back(coverage(r.level_reached.at(k), scenarios));
+    a.level_bounds.push_back(r.levelCoverageBounds(k, scenarios, alpha_each_side));
+  }
+  return a;
+}
+
+// The map's channels with their units, in the order both files hold them.
+std::vector<LatticeChannel> studyMapChannels(const StudyLattice& r, const HazardSpec& h,
+                                             const StudyMapArrays& a) {
+  std::vector<LatticeChannel> c = {
+      {"max_irradiance_w_m2", "W/m^2", &r.max_w_m2},
+      {"max_hazard_ratio",
+       r.engagement ? "1 (worst window's exposure / its MPE)" : "1 (irradiance / MPE)",
+       &a.max_ratio},
+      {"coverage_probability", "1 (fraction of scenarios at or above the MPE)", &a.cover},
+      {"coverage_lower", "1 (Clopper-Pearson lower bound at coverage_confidence)", &a.bounds.lower},
+      {"coverage_upper", "1 (Clopper-Pearson upper bound at coverage_confidence)",
+       &a.bounds.upper}};
+  if (h.aid) {
+    c.push_back(
+        {"aided_max_hazard_ratio", "1 (irradiance x optical aid gain / MPE)", &a.aided_max_ratio});
+    c.push_back({"aided_coverage_probability",
+                 "1 (fraction of scenarios at or above the MPE through the aid)", &a.aided_cover});
+    c.push_back(
+        {"aided_coverage_lower", "1 (Clopper-Pearson lower bound, aided)", &a.aided_bounds.lower});
+    c.push_back(
+        {"aided_coverage_upper", "1 (Clopper-Pearson upper bound, aided)", &a.aided_bounds.upper});
+  }
+  for (std::size_t k = 0; k < h.levels.size(); ++k) {
+    const std::string& name = h.levels[k].name;
+    c.push_back(
+        {name + "_coverage_probability",
+         "1 (fraction of scenarios whose irradiance reaches the " + name + " level's threshold)",
+         &a.level_cover[k]});
+    c.push_back(
+        {name + "_coverage_lower", "1 (Clopper-Pearson lower bound)", &a.level_bounds[k].lower});
+    c.push_back(
+        {name + "_coverage_upper", "1 (Clopper-Pearson upper bound)", &a.level_bounds[k].upper});
+  }
+  return c;
+}
+
+}  // namespace
+
 void writeStudyMap(OutputSet& outputs, const std::filesystem::path& path, const StudyLattice& r,
                    const Study& study, std::size_t scenarios) {
   const HazardSpec& h = study.base.hazard;
-  // A pose's ratio is its irradiance's, so the largest follows from the largest irradiance;
-  // an engagement's worst windows were kept apart (StudyLattice::max_ratio).
-  std::vector<float> max_ratio = r.max_ratio;
-  if (!r.engagement) {
-    max_ratio.resize(r.max_w_m2.size());
-    for (std::size_t i = 0; i < max_ratio.size(); ++i)
-      max_ratio[i] = static_cast<float>(h.ratio(static_cast<double>(r.max_w_m2[i])));
-  }
-  const std::vector<float> cover = coverage(r.hazardous, scenarios);
-  // Each point's exact interval at the study's confidence.
-  const double alpha_each_side = 0.5 * (1.0 - study.coverage_confidence);
-  const CoverageBounds bounds = r.coverageBounds(false, scenarios, alpha_each_side);
-  // With an optical aid, the same through it.
-  std::vector<float> aided_max_ratio, aided_cover;
-  CoverageBounds aided_bounds;
-  if (h.aid) {
-    aided_max_ratio = r.aided_max_ratio;
-    if (!r.engagement) {
-      aided_max_ratio.resize(r.max_w_m2.size());
-      for (std::size_t i = 0; i < aided_max_ratio.size(); ++i)
-        aided_max_ratio[i] = static_cast<float>(h.aidedRatio(static_cast<double>(r.max_w_m2[i])));
-    }
-    aided_cover = coverage(r.aided_hazardous, scenarios);
-    aided_bounds = r.coverageBounds(true, scenarios, alpha_each_side);
-  }
+  const StudyMapArrays arrays = studyMapArrays(r, study, scenarios);
+  const std::vector<LatticeChannel> channels = studyMapChannels(r, h, arrays);
   const std::string program = std::string("glint ") + GLINT_VERSION;
   AtomicFile& file = outputs.open(path);
   if (r.plane) {
@@ -286,61 +369,32 @@ void writeStudyMap(OutputSet& outputs, const std::filesystem::path& path, const 
     g.u_axis = p.u_axis;
     g.v_axis = p.v_axis;
     g.pixel_m = r.spec.voxel_m;
-    std::vector<ExrChannel> channels = {{"max_irradiance_w_m2", &r.max_w_m2},
-                                        {"max_hazard_ratio", &max_ratio},
-                                        {"coverage_probability", &cover},
-                                        {"coverage_lower", &bounds.lower},
-                                        {"coverage_upper", &bounds.upper}};
-    if (h.aid) {
-      channels.push_back({"aided_max_hazard_ratio", &aided_max_ratio});
-      channels.push_back({"aided_coverage_probability", &aided_cover});
-      channels.push_back({"aided_coverage_lower", &aided_bounds.lower});
-      channels.push_back({"aided_coverage_upper", &aided_bounds.upper});
-    }
+    std::vector<ExrChannel> maps;
+    for (const LatticeChannel& c : channels) maps.push_back({c.name, c.values});
     file.write([&](std::ostream& out) {
-      writeExr(out, g, channels,
+      writeExr(out, g, maps,
                {program, study.base.hazard.wavelength_nm, h.mpe_w_m2, hazardCitation(h)});
     });
     if (studyMapOnTheEarth(study, r)) {
-      writeStudyGeoMaps(outputs, path.parent_path(), g, channels, r, study, cover, aided_cover,
-                        program, scenarios);
+      writeStudyGeoMaps(outputs, path.parent_path(), g, maps, r, study, arrays.cover,
+                        arrays.aided_cover, program, scenarios);
     }
-  } else {
-    LatticeMeta meta;
-    meta.strings = {{"program", program},
-                    {"study_file", study.source},
-                    {"study_fnv1a64", study.fnv1a64},
-                    {"length_unit", "m"},
-                    {"mpe_rule", hazardCitation(h)}};
-    meta.numbers = {{"scenarios", static_cast<double>(scenarios)},
-                    {"coverage_confidence", study.coverage_confidence},
-                    {"wavelength_nm", study.base.hazard.wavelength_nm},
-                    {"exposure_s", h.exposure_s},
-                    {"mpe_w_m2", h.mpe_w_m2},
-                    {"voxel_m", r.spec.voxel_m}};
-    std::vector<LatticeChannel> channels = {
-        {"max_irradiance_w_m2", "W/m^2", &r.max_w_m2},
-        {"max_hazard_ratio",
-         r.engagement ? "1 (worst window's exposure / its MPE)" : "1 (irradiance / MPE)",
-         &max_ratio},
-        {"coverage_probability", "1 (fraction of scenarios at or above the MPE)", &cover},
-        {"coverage_lower", "1 (Clopper-Pearson lower bound at coverage_confidence)", &bounds.lower},
-        {"coverage_upper", "1 (Clopper-Pearson upper bound at coverage_confidence)",
-         &bounds.upper}};
-    if (h.aid) {
-      meta.numbers["optical_aid_gain"] = h.aid->gain;
-      channels.push_back(
-          {"aided_max_hazard_ratio", "1 (irradiance x optical aid gain / MPE)", &aided_max_ratio});
-      channels.push_back({"aided_coverage_probability",
-                          "1 (fraction of scenarios at or above the MPE through the aid)",
-                          &aided_cover});
-      channels.push_back(
-          {"aided_coverage_lower", "1 (Clopper-Pearson lower bound, aided)", &aided_bounds.lower});
-      channels.push_back(
-          {"aided_coverage_upper", "1 (Clopper-Pearson upper bound, aided)", &aided_bounds.upper});
-    }
-    file.write([&](std::ostream& out) { writeLatticeVdb(out, r.spec, channels, meta); });
+    return;
   }
+  LatticeMeta meta;
+  meta.strings = {{"program", program},
+                  {"study_file", study.source},
+                  {"study_fnv1a64", study.fnv1a64},
+                  {"length_unit", "m"},
+                  {"mpe_rule", hazardCitation(h)}};
+  meta.numbers = {{"scenarios", static_cast<double>(scenarios)},
+                  {"coverage_confidence", study.coverage_confidence},
+                  {"wavelength_nm", study.base.hazard.wavelength_nm},
+                  {"exposure_s", h.exposure_s},
+                  {"mpe_w_m2", h.mpe_w_m2},
+                  {"voxel_m", r.spec.voxel_m}};
+  if (h.aid) meta.numbers["optical_aid_gain"] = h.aid->gain;
+  file.write([&](std::ostream& out) { writeLatticeVdb(out, r.spec, channels, meta); });
 }
 
 namespace {
@@ -454,6 +508,26 @@ nlohmann::json regionSummaryJson(const Study& study, const StudyLattice& r, std:
         quantilesJson(s.aided_extent);
     a["scenarios_with_aided_hazard"] = s.with_aided_hazard;
   }
+  const std::vector<ExposureLevel>& levels = study.base.hazard.levels;
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    std::int64_t ever = 0, half = 0;
+    for (const std::uint32_t c : r.level_reached.at(l)) {
+      ever += c > 0 ? 1 : 0;
+      half += c > 0 && 2 * static_cast<std::size_t>(c) >= n ? 1 : 0;
+    }
+    std::vector<double> extent;
+    std::size_t with = 0;
+    for (const auto& [index, rec] : records) {
+      const nlohmann::json& x = rec.at("regions").at(k).at("levels").at(levels[l].name);
+      extent.push_back(x.at(r.plane ? "area_m2" : "volume_m3").get<double>());
+      with += x.at("points").get<std::int64_t>() > 0 ? 1 : 0;
+    }
+    a["levels"][levels[l].name] = {
+        {std::string(r.plane ? "area" : "volume") + unit, quantilesJson(extent)},
+        {"scenarios_reaching", with},
+        {std::string("reached_in_any_scenario") + unit, static_cast<double>(ever) * r.cell()},
+        {std::string("reached_in_half_or_more") + unit, static_cast<double>(half) * r.cell()}};
+  }
   return a;
 }
 
@@ -549,6 +623,25 @@ nlohmann::json scenarioParametersJson(const Scenario& s) {
   return p;
 }
 
+namespace {
+
+// A scenario's region against each level: its peak ratio, the points that reach it and their
+// area or volume (`levels`, nothing without levels).
+nlohmann::json scenarioLevelsJson(const StudyLattice& r, double peak_w_m2, const HazardSpec& h,
+                                  const HazardousPoints& hazardous) {
+  nlohmann::json j = nlohmann::json::object();
+  for (std::size_t k = 0; k < h.levels.size(); ++k) {
+    const std::int64_t points = hazardous.levels.at(k);
+    j["levels"][h.levels[k].name] = {
+        {"peak_ratio", h.levels[k].ratio(peak_w_m2)},
+        {"points", points},
+        {r.plane ? "area_m2" : "volume_m3", static_cast<double>(points) * r.cell()}};
+  }
+  return j;
+}
+
+}  // namespace
+
 nlohmann::json scenarioRegionJson(const StudyLattice& r, const FieldStats& st, const HazardSpec& h,
                                   const HazardousPoints& hazardous) {
   const char* extent = r.plane ? "hazardous_area_m2" : "hazard_volume_m3";
@@ -571,6 +664,7 @@ nlohmann::json scenarioRegionJson(const StudyLattice& r, const FieldStats& st, c
     region["aided_hazardous_points"] = hazardous.aided;
     region[std::string("aided_") + extent] = static_cast<double>(hazardous.aided) * r.cell();
   }
+  region.update(scenarioLevelsJson(r, st.peak_w_m2, h, hazardous));
   return region;
 }
 
@@ -594,6 +688,9 @@ nlohmann::json scenarioEngagementRegionJson(const StudyLattice& r, const Engagem
     j["aided_hazardous_points"] = hazardous.aided;
     j["aided_" + extent] = static_cast<double>(hazardous.aided) * r.cell();
   }
+  float peak_w_m2 = 0.0f;
+  for (const float e : region.maps.peak_irradiance_w_m2) peak_w_m2 = std::max(peak_w_m2, e);
+  j.update(scenarioLevelsJson(r, static_cast<double>(peak_w_m2), h, hazardous));
   return j;
 }
 
@@ -610,7 +707,7 @@ nlohmann::json scenarioFarFieldJson(const FarField& far, const HazardSpec& h) {
                       {"peak_direction", {peak.x, peak.y, peak.z}},
                       {"evaluations", far.stats().evaluations},
                       {"unconverged_directions", far.stats().unconverged_points}};
-  j.update(farHazardJson(farHazard(far, h)));
+  j.update(farHazardJson(farHazard(far, h), h));
   if (far.stats().unconverged_points > 0) {
     j["unconverged_max_intensity_plus_error_w_sr"] = far.stats().unconverged_max_upper_w_m2;
   }

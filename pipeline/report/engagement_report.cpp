@@ -68,7 +68,7 @@ std::string decidedBy(const ExposureVerdict& v) {
 std::vector<CsvColumn> engagementColumns(const EngagementResults& results,
                                          const HazardSpec& hazard) {
   std::vector<CsvColumn> columns;
-  auto add = [&](const char* name, auto value, bool integer = false) {
+  auto add = [&](const std::string& name, auto value, bool integer = false) {
     CsvColumn c{name, {}, integer};
     for (std::size_t i = 0; i < results.histories.size(); ++i) {
       c.values.push_back(value(results.histories[i], results.verdicts[i]));
@@ -104,6 +104,11 @@ std::vector<CsvColumn> engagementColumns(const EngagementResults& results,
   add("pulse_exposure_j_m2", [](H, V v) { return v.train.pulse_exposure_j_m2; });
   if (hazard.aid) add("aided_hazard_ratio", [](H, V v) { return v.aided_ratio; });
   add("stare_hazard_ratio", [](H, V v) { return v.stare_ratio; });
+  for (std::size_t k = 0; k < hazard.levels.size(); ++k) {
+    const ExposureLevel& l = hazard.levels[k];
+    add(l.name + "_peak_ratio", [&](H h, V) { return l.ratio(h.peak_w_m2); });
+    add("time_above_" + l.name + "_s", [k](H, V v) { return v.time_above_level_s.at(k); });
+  }
   add(
       "time_samples", [](H h, V) { return static_cast<double>(h.time_s.size()); }, true);
   add(
@@ -183,6 +188,26 @@ void printEngagementSummary(std::ostream& err, const Scene& scene, std::span<con
   err << "\n    exposure " << formatNumber("%.4g", h.exposure_j_m2) << " J/m², peak "
       << formatNumber("%.4g", h.peak_w_m2) << " W/m² at " << formatNumber("%.6g", h.peak_time_s)
       << " s, " << formatNumber("%.3g", v.time_above_mpe_s) << " s at or above the stare MPE\n";
+  // Per level, the observer that spends the longest at or above it.
+  for (std::size_t k = 0; k < scene.hazard.levels.size(); ++k) {
+    std::size_t longest = 0;
+    for (std::size_t i = 1; i < n; ++i) {
+      if (results.verdicts[i].time_above_level_s.at(k) >
+          results.verdicts[longest].time_above_level_s.at(k))
+        longest = i;
+    }
+    const double t = results.verdicts[longest].time_above_level_s.at(k);
+    err << "  " << levelLine(scene.hazard.levels[k]) << ": ";
+    if (t > 0.0) {
+      err << "longest " << formatNumber("%.4g", t) << " s at or above it, row " << longest + 1
+          << " (peak ratio "
+          << formatNumber("%.3g",
+                          scene.hazard.levels[k].ratio(results.histories[longest].peak_w_m2))
+          << ")\n";
+    } else {
+      err << "no observer reaches it\n";
+    }
+  }
   const ExposureVerdict& s = results.verdicts[stare_worst];
   err << "  judged pose by pose as a " << formatNumber("%g", scene.hazard.exposure_s)
       << " s stare (" << hazardLine(scene.hazard) << "): peak ratio "
@@ -250,6 +275,11 @@ nlohmann::json engagementRegionJson(const std::string& name, const std::string& 
   j[extent.key("")] = extent.of(maps.hazardous);
   j[extent.key("stare_")] = extent.of(maps.stare_hazardous);
   if (hazard.aid) j[extent.key("aided_")] = extent.of(maps.aided_hazardous);
+  for (std::size_t k = 0; k < hazard.levels.size(); ++k) {
+    // Where the irradiance reaches the level at some moment of the span.
+    j["levels"][hazard.levels[k].name][spec.plane ? "area_m2" : "volume_m3"] =
+        extent.of(maps.level_reached.at(k));
+  }
   if (!results.histories.empty()) {
     const std::size_t w = worstRow(results);
     const ExposureHistory& h = results.histories[w];
@@ -310,7 +340,7 @@ nlohmann::json engagementJson(const EngagementSpec& e) {
 }
 
 void printEngagementRegion(std::ostream& err, const std::string& what, const FieldSpec& spec,
-                           const EngagementRegion& region) {
+                           const EngagementRegion& region, const HazardSpec& hazard) {
   const EngagementMaps& maps = region.maps;
   const EngagementResults& results = region.results;
   const Extent extent(spec);
@@ -334,6 +364,14 @@ void printEngagementRegion(std::ostream& err, const std::string& what, const Fie
   if (maps.train_decides > 0)
     err << "; the pulse train sets the verdict at " << maps.train_decides << " points";
   err << "\n";
+  for (std::size_t k = 0; k < maps.time_above_level_s.size(); ++k) {
+    const std::vector<float>& t = maps.time_above_level_s[k].second;
+    err << "  " << levelLine(hazard.levels.at(k)) << ": reached over "
+        << formatNumber("%.4g", extent.of(maps.level_reached.at(k))) << " " << extent.unit()
+        << ", at most "
+        << formatNumber("%.3g", static_cast<double>(*std::max_element(t.begin(), t.end())))
+        << " s at a point\n";
+  }
   if (maps.unconverged > 0) {
     err << "  warning: " << maps.unconverged
         << " points did not reach the tolerance in time (status 5)\n";

@@ -25,8 +25,8 @@ namespace glint {
 /// `worst_window_mpe_j_m2` (rules 1 and 2), `pulses`, `pulse_train_ratio`, `pulse_reduction`,
 /// `pulse_window_s`, `pulse_window_exposure_j_m2`, `pulse_duration_s`, `pulse_exposure_j_m2`
 /// (rule 3: the pulses counted, its ratio and reduction, and the pulse that sets it),
-/// `aided_hazard_ratio` (with an optical aid), `stare_hazard_ratio`, `time_samples`,
-/// `evaluations`, `converged`.
+/// `aided_hazard_ratio` (with an optical aid), `stare_hazard_ratio`, per level of the scene
+/// `<level>_peak_ratio` and `time_above_<level>_s`, `time_samples`, `evaluations`, `converged`.
 std::vector<CsvColumn> engagementColumns(const EngagementResults& results,
                                          const HazardSpec& hazard);
 
@@ -53,8 +53,9 @@ nlohmann::json engagementRegionJson(const std::string& name, const std::string& 
 /// @brief The summary's `engagement`: the span, the motion's kinds and the time sampling.
 nlohmann::json engagementJson(const EngagementSpec& engagement);
 
-/// @brief One region's lines on the terminal, @p what naming it ("plane wall").
+/// @brief One region's lines on the terminal, @p what naming it ("plane wall"), a line per level
+/// of @p hazard.
 void printEngagementRegion(std::ostream& err, const std::string& what, const FieldSpec& spec,
-                           const EngagementRegion& region);
+                           const EngagementRegion& region, const HazardSpec& hazard);
 
 }  // namespace glint

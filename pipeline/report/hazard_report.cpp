@@ -27,6 +27,23 @@ std::string hazardLine(const HazardSpec& h) {
   return s;
 }
 
+std::string levelLine(const ExposureLevel& l) {
+  std::string s = l.label + ": " + formatNumber("%.4g", l.thresholdW_m2()) + " W/m²";
+  if (l.visually_corrected) {
+    s += " (" + formatNumber("%.4g", l.level_w_m2) + " W/m² effective, visual correction " +
+         formatNumber("%.3g", l.visual_correction) + ")";
+  }
+  return s;
+}
+
+nlohmann::json levelJson(const ExposureLevel& l) {
+  return {{"level_w_m2", l.level_w_m2},
+          {"visually_corrected", l.visually_corrected},
+          {"visual_correction", l.visual_correction},
+          {"threshold_w_m2", l.thresholdW_m2()},
+          {"source", l.source}};
+}
+
 nlohmann::json hazardLimitsJson(const HazardSpec& h) {
   const StandardClauses& c = clauses(h.standard);
   nlohmann::json j = {{"standard", c.name},
@@ -77,6 +94,14 @@ nlohmann::json hazardLimitsJson(const HazardSpec& h) {
     }
     j["optical_aid"] = aid;
   }
+  if (!h.levels.empty()) {
+    nlohmann::json levels = nlohmann::json::object();
+    for (const ExposureLevel& l : h.levels) levels[l.name] = levelJson(l);
+    j["levels"] = levels;
+    j["levels_rule"] =
+        "each level is reached where irradiance x visual_correction >= level_w_m2, i.e. "
+        "irradiance >= threshold_w_m2 (the naked eye's mean irradiance over the exposure)";
+  }
   return j;
 }
 
@@ -92,9 +117,17 @@ nlohmann::json reachJson(const FarReach& r, const std::string& prefix) {
 }
 }  // namespace
 
-nlohmann::json farHazardJson(const FarHazard& hazard) {
+nlohmann::json farHazardJson(const FarHazard& hazard, const HazardSpec& h) {
   nlohmann::json j = reachJson(hazard.unaided, "");
   if (hazard.aided) j.update(reachJson(*hazard.aided, "aided_"));
+  if (!hazard.levels.empty()) {
+    nlohmann::json levels = nlohmann::json::object();
+    for (std::size_t k = 0; k < hazard.levels.size(); ++k) {
+      // max_nohd_m is the level's distance: the same rule with the level for the MPE.
+      levels[h.levels.at(k).name] = reachJson(hazard.levels[k], "");
+    }
+    j["levels"] = levels;
+  }
   return j;
 }
 
@@ -126,6 +159,16 @@ nlohmann::json hazardJson(const HazardSpec& h, const HazardZone* zone) {
   if (z.aided_above_mpe) {
     j["aided_nominal_hazard_zone"] = zoneJson(*z.aided_above_mpe, z.target_centre_m);
   }
+  if (!z.levels.empty()) {
+    for (std::size_t k = 0; k < z.levels.size(); ++k) {
+      const HazardZone::Level& l = z.levels[k];
+      nlohmann::json& level = j["levels"][h.levels.at(k).name];
+      level["peak_ratio"] = l.peak_ratio;
+      level["zone"] = zoneJson(l.above, z.target_centre_m);
+      level["unconverged_may_reach"] = l.unconverged_may_reach;
+      level["narrow_glint_may_reach"] = l.narrow_glint_may_reach;
+    }
+  }
   return j;
 }
 
@@ -134,6 +177,13 @@ std::vector<ScaledArray> hazardArrays(const HazardSpec& h) {
   if (h.aid) {
     arrays.push_back({"aided_hazard_ratio", "1 (irradiance x optical aid gain / MPE)",
                       h.aid->gain / h.mpe_w_m2});
+  }
+  for (const ExposureLevel& l : h.levels) {
+    arrays.push_back({l.name + "_ratio",
+                      "1 (irradiance" +
+                          std::string(l.visually_corrected ? " x visual correction" : "") + " / " +
+                          l.name + " level)",
+                      1.0 / l.thresholdW_m2()});
   }
   return arrays;
 }
@@ -161,6 +211,10 @@ PlaneMap planeMap(const ObserverField& field, const HazardSpec& h) {
   const std::size_t count = m.irradiance_w_m2.size();
   for (auto* channel : {&m.hazard_ratio, &m.level, &m.status}) channel->reserve(count);
   if (h.aid) m.aided_hazard_ratio.reserve(count);
+  for (const ExposureLevel& l : h.levels) {
+    m.level_ratios.push_back({l.name + "_ratio", {}});
+    m.level_ratios.back().second.reserve(count);
+  }
   for (int j = 0; j < n[1]; ++j)
     for (int i = 0; i < n[0]; ++i) {
       // The stored float is the field's own (irradiance() widens it), so the ratios are as
@@ -170,6 +224,8 @@ PlaneMap planeMap(const ObserverField& field, const HazardSpec& h) {
                             static_cast<std::size_t>(i)]);
       m.hazard_ratio.push_back(static_cast<float>(h.ratio(e)));
       if (h.aid) m.aided_hazard_ratio.push_back(static_cast<float>(h.aidedRatio(e)));
+      for (std::size_t k = 0; k < h.levels.size(); ++k)
+        m.level_ratios[k].second.push_back(static_cast<float>(h.levels[k].ratio(e)));
       m.level.push_back(static_cast<float>(field.level(i, j, 0)));
       m.status.push_back(static_cast<float>(static_cast<int>(field.status(i, j, 0))));
       if (spec.surface) m.observer_z_m.push_back(static_cast<float>(spec.position(i, j, 0).z));

@@ -18,20 +18,27 @@ namespace glint {
 /// thermal)", with the pulse's MPE, the air and the aid where the scene has them.
 std::string hazardLine(const HazardSpec& h);
 
+/// @brief One level for the terminal: its label, its threshold at the eye and, where visually
+/// corrected, the level and the correction.
+std::string levelLine(const ExposureLevel& l);
+
+/// @brief A level as the summary records it: its value, correction, threshold and source.
+nlohmann::json levelJson(const ExposureLevel& l);
+
 /// @brief The limits as `summary.json` and `result.json` record them (docs/hazard.md):
 /// exposure, MPE and its rule, the pulse train's rules, the air, the aid.
 nlohmann::json hazardLimitsJson(const HazardSpec& h);
 
 /// @brief The far-field hazard's entries of `far_field` in the summaries: `max_nohd_m` and its
-/// direction, the aided ones with an aid.
-nlohmann::json farHazardJson(const FarHazard& hazard);
+/// direction, the aided ones with an aid, and per level (`levels`) its own.
+nlohmann::json farHazardJson(const FarHazard& hazard, const HazardSpec& h);
 
 /// @brief The hazard arrays the volumes carry beside irradiance: `hazard_ratio` (per W/m²:
-/// 1/MPE) and, with an optical aid, `aided_hazard_ratio` (gain/MPE).
+/// 1/MPE), with an optical aid `aided_hazard_ratio` (gain/MPE), and per level `<level>_ratio`.
 std::vector<ScaledArray> hazardArrays(const HazardSpec& h);
 
 /// @brief A plane's field as the map its EXR holds: lattice row j along v, column i along u;
-/// `hazard_ratio` and (with an aid) `aided_hazard_ratio` as @p h forms them.
+/// `hazard_ratio`, (with an aid) `aided_hazard_ratio` and each level's ratio as @p h forms them.
 PlaneMap planeMap(const ObserverField& field, const HazardSpec& h);
 
 /// @brief A plane's irradiance as its map holds it (planeMap()'s `irradiance_w_m2`): the floats
@@ -39,7 +46,8 @@ PlaneMap planeMap(const ObserverField& field, const HazardSpec& h);
 std::vector<float> planeIrradiance(const ObserverField& field);
 
 /// @brief hazardLimitsJson() with, where there is a @p zone, its peak ratios and the nominal
-/// hazard zone (`nominal_hazard_zone`, and `aided_nominal_hazard_zone` with an aid).
+/// hazard zone (`nominal_hazard_zone`, and `aided_nominal_hazard_zone` with an aid), and per
+/// level (`levels`) its peak ratio and zone.
 nlohmann::json hazardJson(const HazardSpec& h, const HazardZone* zone);
 
 }  // namespace glint

@@ -59,13 +59,15 @@ void writeFarVtp(std::ostream& out, const FarResults& r, double threshold_w_m2) 
 void writeReachExr(std::ostream& out, const ReachResults& r) {
   const double mu = r.hazard.atmosphere.extinction_per_m;
   const int height = std::max(farMapHeight(r.far.spec().face_pixels), 2 * r.near.spec.face_cells);
-  const std::vector<float> reach = reachLatLong(r.near, r.far, 0, height, mu);
-  std::vector<float> aided;
-  std::vector<ExrChannel> channels = {{"reach_m", &reach}};
-  if (r.near.spec.thresholds_w_m2.size() > 1) {
-    aided = reachLatLong(r.near, r.far, 1, height, mu);
-    channels.push_back({"aided_reach_m", &aided});
-  }
+  const HazardSpec& h = r.hazard;
+  std::vector<std::vector<float>> maps;
+  std::vector<std::string> names = {"reach_m"};
+  if (h.aid) names.emplace_back("aided_reach_m");
+  for (const ExposureLevel& l : h.levels) names.push_back(l.name + "_reach_m");
+  for (std::size_t t = 0; t < names.size(); ++t)
+    maps.push_back(reachLatLong(r.near, r.far, t, height, mu));
+  std::vector<ExrChannel> channels;
+  for (std::size_t t = 0; t < names.size(); ++t) channels.push_back({names[t], &maps[t]});
   writeLatLongExr(out, {2 * height, height, r.near.spec.centre_m, r.far.spec().far_radius_m},
                   channels, exrInfo(r.info));
 }
@@ -89,6 +91,10 @@ void writePlaneGeoTiff(std::ostream& out, const PlaneResults& r) {
   if (r.hazard.aid) {
     channels.push_back({"aided_hazard_ratio", &m.aided_hazard_ratio});
     units.emplace_back("1 (irradiance x optical aid gain / MPE)");
+  }
+  for (std::size_t k = 0; k < m.level_ratios.size(); ++k) {
+    channels.push_back({m.level_ratios[k].first, &m.level_ratios[k].second});
+    units.push_back("1 (irradiance / the " + r.hazard.levels[k].name + " level's threshold)");
   }
   channels.push_back({"status", &m.status});
   units.emplace_back(voxelStatusMeanings());
@@ -153,9 +159,14 @@ void writeFootprintTif(std::ostream& out, const ReachResults& r) {
   for (const auto& inside : f.inside) masks.emplace_back(inside.begin(), inside.end());
   std::vector<ExrChannel> channels = {{"reach", &masks[0]}};
   std::vector<std::string> units = {"1 where the naked eye's hazard reach covers the pixel"};
-  if (masks.size() > 1) {
-    channels.push_back({"aided_reach", &masks[1]});
+  const HazardSpec& h = r.hazard;
+  if (h.aid) {
+    channels.push_back({"aided_reach", &masks.at(1)});
     units.emplace_back("1 where the aided hazard reach covers the pixel");
+  }
+  for (std::size_t k = 0; k < h.levels.size(); ++k) {
+    channels.push_back({h.levels[k].name + "_reach", &masks.at(h.firstLevelThreshold() + k)});
+    units.push_back("1 where the " + h.levels[k].name + " level's reach covers the pixel");
   }
   channels.push_back({"observer_z_m", &f.ground_z_m});
   units.emplace_back("m (each observer's height in the site's local frame)");
@@ -169,9 +180,15 @@ void writeFootprintZones(std::ostream& out, const ReachResults& r, VectorFormat 
        "the naked eye's hazard reach on the ground, at eye height, where the ground does "
        "not hide the lit centre",
        f.inside[0]}};
-  if (f.inside.size() > 1) {
+  const HazardSpec& h = r.hazard;
+  if (h.aid) {
     zones.push_back(
-        {"aided_reach", "the hazard reach through the optical aid, on the ground", f.inside[1]});
+        {"aided_reach", "the hazard reach through the optical aid, on the ground", f.inside.at(1)});
+  }
+  for (std::size_t k = 0; k < h.levels.size(); ++k) {
+    zones.push_back({h.levels[k].name + "_reach",
+                     "where the " + h.levels[k].label + " is reached, on the ground",
+                     f.inside.at(h.firstLevelThreshold() + k)});
   }
   writeZones(out, format, f.grid, zones, *r.site, footprintInfo(r));
 }
@@ -183,9 +200,13 @@ void writePlaneZones(std::ostream& out, const PlaneResults& r, VectorFormat form
   const PlaneMap m = planeMap(r.field, r.hazard);
   const std::size_t n = m.hazard_ratio.size();
   ZoneMask hazardous{"hazardous", "hazard ratio >= 1: irradiance at or above the MPE", {}};
+  // A level below the MPE lowers the threshold at which the lattice marks such points.
   ZoneMask unresolved{"may_be_hazardous",
-                      "a glint narrower than the lattice may pass here, and its bound reaches "
-                      "the MPE (status 6)",
+                      r.hazard.levels.empty()
+                          ? "a glint narrower than the lattice may pass here, and its bound "
+                            "reaches the MPE (status 6)"
+                          : "a glint narrower than the lattice may pass here, and its bound "
+                            "reaches the lowest level judged (status 6)",
                       {}};
   hazardous.inside.resize(n);
   unresolved.inside.resize(n);
@@ -201,6 +222,13 @@ void writePlaneZones(std::ostream& out, const PlaneResults& r, VectorFormat form
     for (std::size_t k = 0; k < n; ++k) aided.inside[k] = m.aided_hazard_ratio[k] >= 1.0F;
     zones.push_back(std::move(aided));
   }
+  for (std::size_t l = 0; l < m.level_ratios.size(); ++l) {
+    const ExposureLevel& level = r.hazard.levels[l];
+    ZoneMask z{level.name, "where the " + level.label + " is reached", {}};
+    z.inside.resize(n);
+    for (std::size_t k = 0; k < n; ++k) z.inside[k] = m.level_ratios[l].second[k] >= 1.0F;
+    zones.push_back(std::move(z));
+  }
   writeZones(out, format, m, zones, *r.site, geoInfo(r));
 }
 
@@ -215,14 +243,17 @@ double latticePoints(const FieldSpec& spec) {
 }
 
 // The channels planeMap() makes of a plane: irradiance, ratio, level and status, the aided
-// ratio with an aid, each observer's height over a surface.
+// ratio with an aid, a ratio per level, each observer's height over a surface.
 double planeMapChannels(const Scene& scene, const FieldSpec& plane) {
-  return 4.0 + (scene.hazard.aid ? 1.0 : 0.0) + (plane.surface ? 1.0 : 0.0);
+  return 4.0 + (scene.hazard.aid ? 1.0 : 0.0) + static_cast<double>(scene.hazard.levels.size()) +
+         (plane.surface ? 1.0 : 0.0);
 }
 
 // An engagement's maps are made before the writers run (EngagementMaps::channels(): ten, the
-// aided ratio among them).
-constexpr double kEngagementChannels = 10.0;
+// aided ratio among them, and a time above each level).
+double engagementChannels(const Scene& scene) {
+  return 10.0 + static_cast<double>(scene.hazard.levels.size());
+}
 
 // A cube-sphere surface of c² quads a face: points (3 doubles and two floats) and quads.
 double cubeSphereBytes(int cells) {
@@ -243,7 +274,10 @@ double footprintPixels(const Scene& scene) {
   return n * n;
 }
 
-double hazardThresholds(const Scene& scene) { return scene.hazard.aid ? 2.0 : 1.0; }
+// The thresholds judged: the MPE, the aided MPE with an aid, each level.
+double hazardThresholds(const Scene& scene) {
+  return static_cast<double>(scene.hazard.thresholdsW_m2().size());
+}
 
 // target.vtp splits each coarse facet this deep (4^depth pieces): the target as integrated.
 constexpr int kTargetVtpDepth = 2;
@@ -292,14 +326,15 @@ std::uint64_t planeGeoTiff(const Scene& scene, const FieldSpec* plane) {
   return planeExr(scene, plane);
 }
 
-// The map, and a byte per pixel of each zone (hazardous, may be hazardous, aided).
+// The map, and a byte per pixel of each zone (hazardous, may be hazardous, aided, levels).
 std::uint64_t planeZones(const Scene& scene, const FieldSpec* plane) {
-  return memory_model::saturated((planeMapChannels(scene, *plane) * kFloat + 3.0) *
+  return memory_model::saturated((planeMapChannels(scene, *plane) * kFloat + 3.0 +
+                                  static_cast<double>(scene.hazard.levels.size())) *
                                  latticePoints(*plane));
 }
 
-std::uint64_t engagementPlaneMap(const Scene&, const FieldSpec* plane) {
-  return memory_model::saturated(kEngagementChannels * kFloat * latticePoints(*plane));
+std::uint64_t engagementPlaneMap(const Scene& scene, const FieldSpec* plane) {
+  return memory_model::saturated(engagementChannels(scene) * kFloat * latticePoints(*plane));
 }
 
 std::uint64_t engagementPlaneZones(const Scene&, const FieldSpec* plane) {
@@ -307,14 +342,14 @@ std::uint64_t engagementPlaneZones(const Scene&, const FieldSpec* plane) {
 }
 
 // writeLatticeVdb() makes a float grid of each channel, a value per lattice point.
-std::uint64_t engagementVdb(const Scene&, const FieldSpec* box) {
-  return memory_model::saturated(kEngagementChannels * kFloat * latticePoints(*box));
+std::uint64_t engagementVdb(const Scene& scene, const FieldSpec* box) {
+  return memory_model::saturated(engagementChannels(scene) * kFloat * latticePoints(*box));
 }
 
 // latLongMap() while it is made, then its two or three channels and their rows flipped.
 std::uint64_t farExr(const Scene& scene, const FieldSpec*) {
   const int h = farMapHeight(farFieldLattice(scene).face_pixels);
-  const double channels = 1.0 + hazardThresholds(scene);
+  const double channels = 1.0 + (scene.hazard.aid ? 2.0 : 1.0);  // the levels have none
   return std::max(latLongMapBytes(h),
                   memory_model::saturated(2.0 * h * h * 2.0 * channels * kFloat));
 }

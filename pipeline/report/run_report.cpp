@@ -83,6 +83,29 @@ void printNarrowGlints(std::ostream& err, const FieldStats& s, const HazardZone&
   err << "\n";
 }
 
+// One line per level beside the MPE: how much of the box (m³) or plane (m², @p cell_m2 a pixel)
+// reaches it and how far from the target, or why none may still be short of proof.
+void printLevelZones(std::ostream& err, const HazardSpec& h, const HazardZone& zone,
+                     const char* unit, double cell_m2 = 0.0) {
+  for (std::size_t k = 0; k < zone.levels.size(); ++k) {
+    const HazardZone::Level& l = zone.levels[k];
+    err << "  " << levelLine(h.levels.at(k)) << ": ";
+    if (l.above.points == 0) {
+      err << (l.narrow_glint_may_reach || l.unconverged_may_reach
+                  ? "none at the lattice points, but not proven (a narrow glint or an "
+                    "unconverged point may reach it)\n"
+                  : "not reached\n");
+      continue;
+    }
+    const double extent =
+        cell_m2 > 0.0 ? static_cast<double>(l.above.points) * cell_m2 : l.above.volume_m3;
+    err << formatNumber("%.4g", extent) << " " << unit << ", out to "
+        << formatNumber("%.4g", l.above.farthest_m) << " m from the target centre, peak ratio "
+        << formatNumber("%.3g", l.peak_ratio)
+        << (l.above.reaches_edge ? "; it reaches the edge and may go on beyond it" : "") << "\n";
+  }
+}
+
 }  // namespace
 
 nlohmann::json runJson(const RunInfo& info) {
@@ -295,6 +318,7 @@ void printVolume(std::ostream& err, const ObserverField& field, const Scene& sce
   };
   printZone(zone.above_mpe, "nominal hazard zone (ratio ≥ 1)");
   if (zone.aided_above_mpe) printZone(*zone.aided_above_mpe, "aided hazard zone (aided ratio ≥ 1)");
+  printLevelZones(err, scene.hazard, zone, "m³");
   printUnconverged(err, s, zone, "  ");
   printNarrowGlints(err, s, zone, "voxel_m");
   err << "  memory: " << formatNumber("%.3g", static_cast<double>(s.grid_bytes) / 1e6)
@@ -306,7 +330,7 @@ void printVolume(std::ostream& err, const ObserverField& field, const Scene& sce
 }
 
 void printPlane(std::ostream& err, const PlaneSpec& plane, const ObserverField& field,
-                const HazardZone& zone) {
+                const HazardZone& zone, const HazardSpec& h) {
   const FieldStats& s = field.stats();
   err << "plane " << plane.name << ": " << s.nodes[0] << "×" << s.nodes[1] << " pixels at "
       << field.spec().voxel_m << " m, " << s.evaluated_points << " evaluated, "
@@ -314,12 +338,13 @@ void printPlane(std::ostream& err, const PlaneSpec& plane, const ObserverField& 
       << formatDuration(s.seconds) << "; peak hazard ratio "
       << formatNumber("%.3g", zone.peak_ratio) << ", hazardous area "
       << formatNumber("%.4g", hazardousArea(field, zone.above_mpe)) << " m²\n";
+  printLevelZones(err, h, zone, "m²", field.spec().voxel_m * field.spec().voxel_m);
   printUnconverged(err, s, zone, "  ");
   printNarrowGlints(err, s, zone, "pixel_m");
 }
 
-nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
-                         const HazardZone& zone) {
+nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field, const HazardZone& zone,
+                         const HazardSpec& h) {
   const FieldStats& s = field.stats();
   const FieldSpec& spec = field.spec();
   const ObserverField::Exceedance& r = zone.above_mpe;
@@ -345,6 +370,19 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
   if (zone.aided_above_mpe) {
     j["aided_peak_hazard_ratio"] = zone.aided_peak_ratio;
     j["aided_hazardous_area_m2"] = hazardousArea(field, *zone.aided_above_mpe);
+  }
+  for (std::size_t k = 0; k < zone.levels.size(); ++k) {
+    const HazardZone::Level& l = zone.levels[k];
+    nlohmann::json level = {{"peak_ratio", l.peak_ratio},
+                            {"area_m2", hazardousArea(field, l.above)},
+                            {"unconverged_may_reach", l.unconverged_may_reach},
+                            {"narrow_glint_may_reach", l.narrow_glint_may_reach}};
+    if (l.above.points > 0) {
+      level["farthest_from_target_m"] = l.above.farthest_m;
+      level["farthest_at_m"] = {l.above.farthest_at_m.x, l.above.farthest_at_m.y,
+                                l.above.farthest_at_m.z};
+    }
+    j["levels"][h.levels.at(k).name] = level;
   }
   if (s.unconverged_points > 0) j["unconverged"] = unconvergedJson(s, zone);
   if (s.unresolved_points > 0) j["narrow_glints"] = narrowGlintsJson(s, zone);
@@ -376,7 +414,7 @@ nlohmann::json farRadiusCheckJson(const FarRadiusCheck& check) {
 }
 
 nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard,
-                            const std::vector<std::string>& files) {
+                            const std::vector<std::string>& files, const HazardSpec& h) {
   const FarFieldSpec& spec = field.spec();
   const FieldStats& s = field.stats();
   const Vec3& c = field.ball().centre_m;
@@ -420,14 +458,15 @@ nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard,
                                 "the forward cone"},
       {"first_order_far_radius_m", spec.first_order_far_radius_m},
       {"far_radius_check", farRadiusCheckJson(field.farRadiusCheck())}};
-  j.update(farHazardJson(hazard));
+  j.update(farHazardJson(hazard, h));
   if (s.unconverged_points > 0) {
     j["unconverged_max_intensity_plus_error_w_sr"] = s.unconverged_max_upper_w_m2;
   }
   return j;
 }
 
-void printFarField(std::ostream& err, const FarField& field, const FarHazard& far_hazard) {
+void printFarField(std::ostream& err, const FarField& field, const FarHazard& far_hazard,
+                   const HazardSpec& h) {
   const FarReach& hazard = far_hazard.unaided;
   const FarFieldSpec& spec = field.spec();
   const FieldStats& s = field.stats();
@@ -487,6 +526,16 @@ void printFarField(std::ostream& err, const FarField& field, const FarHazard& fa
                            : std::string("no direction is hazardous beyond the far radius"))
         << "\n";
   }
+  for (std::size_t k = 0; k < far_hazard.levels.size(); ++k) {
+    const FarReach& a = far_hazard.levels[k];
+    err << "  " << h.levels.at(k).label << ": "
+        << (a.nohd_m > 0.0 ? "reached out to " + formatNumber("%.4g", a.nohd_m) + " m toward (" +
+                                 formatNumber("%.4f", a.direction.x) + ", " +
+                                 formatNumber("%.4f", a.direction.y) + ", " +
+                                 formatNumber("%.4f", a.direction.z) + ")"
+                           : std::string("not reached beyond the far radius"))
+        << "\n";
+  }
   if (s.unconverged_points > 0) {
     err << "  note: " << s.unconverged_points
         << " directions did not reach the integration tolerance; intensity plus error at most "
@@ -523,17 +572,22 @@ nlohmann::json reachEntry(const ReachSummary& r) {
 
 }  // namespace
 
-nlohmann::json reachSummaryJson(const std::vector<ReachSummary>& reach) {
+nlohmann::json reachSummaryJson(const std::vector<ReachSummary>& reach, const HazardSpec& h) {
   nlohmann::json j = reachEntry(reach.at(0));
-  if (reach.size() > 1) j["aided"] = reachEntry(reach[1]);
+  if (h.aid) j["aided"] = reachEntry(reach.at(1));
+  for (std::size_t k = 0; k < h.levels.size(); ++k) {
+    nlohmann::json level = reachEntry(reach.at(h.firstLevelThreshold() + k));
+    level.update(levelJson(h.levels[k]));
+    j["levels"][h.levels[k].name] = level;
+  }
   return j;
 }
 
 nlohmann::json reachJson(const NearReach& near, const std::vector<ReachSummary>& reach,
-                         double seconds) {
+                         double seconds, const HazardSpec& h) {
   const ReachSpec& spec = near.spec;
   const RadialLattice& lattice = *near.faces[0].spec.radial;
-  nlohmann::json j = reachSummaryJson(reach);
+  nlohmann::json j = reachSummaryJson(reach, h);
   j["centre_m"] = {spec.centre_m.x, spec.centre_m.y, spec.centre_m.z};
   j["lattice"] = {{"face_cells", spec.face_cells},
                   {"layer_ratio", spec.ratio},
@@ -560,7 +614,7 @@ nlohmann::json reachJson(const NearReach& near, const std::vector<ReachSummary>&
 }
 
 void printReach(std::ostream& err, const NearReach& near, const std::vector<ReachSummary>& reach,
-                double seconds) {
+                double seconds, const HazardSpec& h) {
   const auto line = [&](const ReachSummary& r, const char* who) {
     err << who;
     if (!std::isfinite(r.distance_m)) {
@@ -585,7 +639,10 @@ void printReach(std::ostream& err, const NearReach& near, const std::vector<Reac
         << ")\n";
   };
   line(reach.at(0), "hazard reach: ");
-  if (reach.size() > 1) line(reach[1], "  through the optical aid: ");
+  if (h.aid) line(reach.at(1), "  through the optical aid: ");
+  for (std::size_t k = 0; k < h.levels.size(); ++k) {
+    line(reach.at(h.firstLevelThreshold() + k), ("  " + h.levels[k].label + ": ").c_str());
+  }
   err << "  " << near.evaluatedPoints() << " lattice points evaluated ("
       << formatNumber("%.3g", static_cast<double>(near.evaluations())) << " evaluations) in "
       << formatDuration(seconds) << ", " << near.unresolvedPoints() << " unresolved\n";

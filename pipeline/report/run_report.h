@@ -49,36 +49,38 @@ void printVolume(std::ostream& err, const ObserverField& field, const Scene& sce
                  const HazardZone& zone, const RunInfo& info, bool uniform,
                  const std::string& beyond_box);
 
-/// @brief One plane's entry of summary.json's `planes`.
-nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field,
-                         const HazardZone& zone);
+/// @brief One plane's entry of summary.json's `planes`, with each level of @p h (`levels`).
+nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field, const HazardZone& zone,
+                         const HazardSpec& h);
 
-/// @brief One plane's lines on the terminal.
+/// @brief One plane's lines on the terminal, a line per level of @p h.
 void printPlane(std::ostream& err, const PlaneSpec& plane, const ObserverField& field,
-                const HazardZone& zone);
+                const HazardZone& zone, const HazardSpec& h);
 
 /// @brief summary.json's `far_field`: the @p files written of it, the map, its far radius and
 /// rule, counts, the peak and @p hazard's NOHD.
 nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard,
-                            const std::vector<std::string>& files);
+                            const std::vector<std::string>& files, const HazardSpec& h);
 
-/// @brief The far field's lines on the terminal.
-void printFarField(std::ostream& err, const FarField& field, const FarHazard& hazard);
+/// @brief The far field's lines on the terminal, a line per level of @p h.
+void printFarField(std::ostream& err, const FarField& field, const FarHazard& hazard,
+                   const HazardSpec& h);
 
 /// @brief The reach per threshold: the MPE's entry (distance, direction and its azimuth and
 /// elevation, where it comes from, closed, farthest point, volume, the lit ball's volume), and
-/// the aided MPE's under `aided` (a scenario's result.json holds this).
-nlohmann::json reachSummaryJson(const std::vector<ReachSummary>& reach);
+/// the aided MPE's under `aided`, each level's under `levels` (a scenario's result.json holds
+/// this).
+nlohmann::json reachSummaryJson(const std::vector<ReachSummary>& reach, const HazardSpec& h);
 
-/// @brief summary.json's `hazard_reach`: per threshold (the MPE, then the aided MPE) the
+/// @brief summary.json's `hazard_reach`: per threshold (the MPE, the aided MPE, the levels) the
 /// farthest hazardous point, its direction, whether the boundary is closed and the volume;
 /// the lattice and its cost (@p seconds).
 nlohmann::json reachJson(const NearReach& near, const std::vector<ReachSummary>& reach,
-                         double seconds);
+                         double seconds, const HazardSpec& h);
 
-/// @brief The reach's line on the terminal (and the aided reach's).
+/// @brief The reach's line on the terminal (and the aided reach's and each level's).
 void printReach(std::ostream& err, const NearReach& near, const std::vector<ReachSummary>& reach,
-                double seconds);
+                double seconds, const HazardSpec& h);
 
 /// @brief What the files of a run of @p scene record about it: the program, the scene file and
 /// the hash of its text @p scene_text, the scheme ("adaptive" or "uniform"), the laser and MPE.

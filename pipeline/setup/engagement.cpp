@@ -65,6 +65,7 @@ std::vector<ExrChannel> EngagementMaps::channels() const {
       {"hazard_rule", &hazard_rule},           {"pulses", &pulses},
       {"worst_window_s", &worst_window_s},     {"stare_hazard_ratio", &stare_hazard_ratio}};
   if (!aided_hazard_ratio.empty()) c.push_back({"aided_hazard_ratio", &aided_hazard_ratio});
+  for (const auto& [name, values] : time_above_level_s) c.push_back({name, &values});
   c.push_back({"status", &status});
   return c;
 }
@@ -86,6 +87,7 @@ std::vector<LatticeChannel> EngagementMaps::latticeChannels() const {
     c.push_back(
         {"aided_hazard_ratio", "1 (worst window through the optical aid)", &aided_hazard_ratio});
   }
+  for (const auto& [name, values] : time_above_level_s) c.push_back({name, "s", &values});
   c.push_back({"status", "1 integrated, 3 dark by the bound, 5 unconverged", &status});
   return c;
 }
@@ -102,6 +104,10 @@ EngagementMaps engagementMaps(const FieldSpec& spec, std::span<const std::uint8_
     channel->assign(count, 0.0f);
   }
   if (hazard.aid) m.aided_hazard_ratio.assign(count, 0.0f);
+  for (const ExposureLevel& l : hazard.levels)
+    m.time_above_level_s.push_back(
+        {"time_above_" + l.name + "_s", std::vector<float>(count, 0.0f)});
+  m.level_reached.assign(hazard.levels.size(), 0);
   m.status.assign(count, 3.0f);  // dark over the whole span by the bound
   std::size_t row = 0;
   for (std::size_t p = 0; p < count; ++p) {
@@ -118,6 +124,10 @@ EngagementMaps engagementMaps(const FieldSpec& spec, std::span<const std::uint8_
     m.worst_window_s[p] = static_cast<float>(v.worst_window.duration_s);
     m.stare_hazard_ratio[p] = static_cast<float>(v.stare_ratio);
     if (hazard.aid) m.aided_hazard_ratio[p] = static_cast<float>(v.aided_ratio);
+    for (std::size_t k = 0; k < m.time_above_level_s.size(); ++k) {
+      m.time_above_level_s[k].second[p] = static_cast<float>(v.time_above_level_s.at(k));
+      m.level_reached[k] += v.time_above_level_s[k] > 0.0 ? 1 : 0;
+    }
     m.status[p] = h.converged ? 1.0f : 5.0f;
     ++m.integrated;
     m.hazardous += v.ratio >= 1.0 ? 1 : 0;

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "export/exr_map.h"
@@ -47,11 +48,15 @@ struct EngagementMaps {
   PlaneGrid grid;  ///< a plane's (its first two axes for the box)
   std::vector<float> exposure_j_m2, peak_irradiance_w_m2, time_above_mpe_s, hazard_ratio,
       hazard_rule, pulses, aided_hazard_ratio, stare_hazard_ratio, worst_window_s, status;
-  std::int64_t integrated = 0;       ///< lattice points sampled in time
-  std::int64_t hazardous = 0;        ///< hazard_ratio ≥ 1
-  std::int64_t train_decides = 0;    ///< points whose verdict rule 3 sets
-  std::int64_t stare_hazardous = 0;  ///< stare_hazard_ratio ≥ 1
-  std::int64_t aided_hazardous = 0;  ///< aided_hazard_ratio ≥ 1 (with an aid)
+  /// Per level of the scene (HazardSpec::levels): its channel's name, `time_above_<level>_s`,
+  /// and how long each point's irradiance is at or above the level's threshold.
+  std::vector<std::pair<std::string, std::vector<float>>> time_above_level_s;
+  std::vector<std::int64_t> level_reached;  ///< per level: points where that time is above 0
+  std::int64_t integrated = 0;              ///< lattice points sampled in time
+  std::int64_t hazardous = 0;               ///< hazard_ratio ≥ 1
+  std::int64_t train_decides = 0;           ///< points whose verdict rule 3 sets
+  std::int64_t stare_hazardous = 0;         ///< stare_hazard_ratio ≥ 1
+  std::int64_t aided_hazardous = 0;         ///< aided_hazard_ratio ≥ 1 (with an aid)
   std::int64_t unconverged = 0;
   /// @brief The EXR channels, in the order the file holds them.
   [[nodiscard]] std::vector<ExrChannel> channels() const;

@@ -54,6 +54,17 @@ HazardousPoints StudyLattice::add(const RegionValues& v, const HazardSpec& h,
       ++n.aided;
     }
   }
+  n.levels.assign(level_thresholds_w_m2.size(), 0);
+  for (std::size_t k = 0; k < level_thresholds_w_m2.size(); ++k) {
+    const double threshold = level_thresholds_w_m2[k];
+    std::vector<std::uint32_t>& reached = level_reached[k];
+    for (std::size_t i = 0; i < e_w_m2.size(); ++i) {
+      if (!(static_cast<double>(e_w_m2[i]) >= threshold)) continue;
+      ++reached[i];
+      if (apart) ++level_reached_by_combination[k][offset + i];
+      ++n.levels[k];
+    }
+  }
   return n;
 }
 
@@ -62,8 +73,9 @@ std::uint64_t StudyLattice::mapBytes() const {
   const std::uint64_t points = static_cast<std::uint64_t>(n[0]) * static_cast<std::uint64_t>(n[1]) *
                                static_cast<std::uint64_t>(n[2]);
   const std::uint64_t ratios = engagement ? sizeof(float) * (aided ? 2 : 1) : 0;
-  const std::uint64_t counts =
-      sizeof(std::uint32_t) * (aided ? 2 : 1) * (1 + (combinations > 1 ? combinations : 0));
+  const std::uint64_t counts = sizeof(std::uint32_t) *
+                               ((aided ? 2 : 1) + level_thresholds_w_m2.size()) *
+                               (1 + (combinations > 1 ? combinations : 0));
   return points * (sizeof(float) + counts + ratios);
 }
 
@@ -82,6 +94,10 @@ void StudyLattice::allocate() {
     hazardous_by_combination.assign(points * combinations, 0u);
     if (aided) aided_hazardous_by_combination.assign(points * combinations, 0u);
   }
+  const std::size_t levels = level_thresholds_w_m2.size();
+  level_reached.assign(levels, std::vector<std::uint32_t>(points, 0u));
+  level_reached_by_combination.assign(
+      levels, std::vector<std::uint32_t>(combinations > 1 ? points * combinations : 0, 0u));
 }
 
 std::vector<StudyLattice> studyLattices(const Scene& base) {
@@ -89,6 +105,8 @@ std::vector<StudyLattice> studyLattices(const Scene& base) {
   StudyLattice kind;
   kind.aided = base.hazard.aid.has_value();
   kind.engagement = base.engagement.has_value();
+  for (const ExposureLevel& l : base.hazard.levels)
+    kind.level_thresholds_w_m2.push_back(l.thresholdW_m2());
   if (base.observers) {
     StudyLattice& box = lattices.emplace_back(kind);
     box.name = "box";
@@ -127,9 +145,10 @@ struct Bounds {
   std::vector<double> lower, upper;
 };
 
-Bounds latticeBounds(const StudyLattice& r, bool aided_counts, std::size_t scenarios,
+// The intervals of @p counts (their combinations' apart in @p by where r has several).
+Bounds latticeBounds(const StudyLattice& r, const std::vector<std::uint32_t>& counts,
+                     const std::vector<std::uint32_t>& by, std::size_t scenarios,
                      double alpha_each_side) {
-  const std::vector<std::uint32_t>& counts = aided_counts ? r.aided_hazardous : r.hazardous;
   Bounds b;
   b.lower.resize(counts.size());
   b.upper.resize(counts.size());
@@ -146,8 +165,6 @@ Bounds latticeBounds(const StudyLattice& r, bool aided_counts, std::size_t scena
   // all hold together with probability at least 1 − alpha; and when they all hold, the mean of
   // their ends holds the mean of their probabilities, which the coverage estimates.
   const std::size_t c = r.combinations;
-  const std::vector<std::uint32_t>& by =
-      aided_counts ? r.aided_hazardous_by_combination : r.hazardous_by_combination;
   const std::vector<ProportionInterval> table =
       intervalTable(scenarios / c, alpha_each_side / static_cast<double>(c));
   const std::size_t points = counts.size();
@@ -163,26 +180,51 @@ Bounds latticeBounds(const StudyLattice& r, bool aided_counts, std::size_t scena
   return b;
 }
 
+Bounds latticeBounds(const StudyLattice& r, bool aided_counts, std::size_t scenarios,
+                     double alpha_each_side) {
+  return aided_counts ? latticeBounds(r, r.aided_hazardous, r.aided_hazardous_by_combination,
+                                      scenarios, alpha_each_side)
+                      : latticeBounds(r, r.hazardous, r.hazardous_by_combination, scenarios,
+                                      alpha_each_side);
+}
+
 double widestHalfWidthOf(const StudyLattice& r, std::size_t scenarios, double confidence) {
   double widest = 0.0;
-  for (const bool aided_counts : {false, true}) {
-    if (aided_counts && !r.aided) continue;
-    const Bounds b = latticeBounds(r, aided_counts, scenarios, 0.5 * (1.0 - confidence));
+  const auto widen = [&](const Bounds& b) {
     for (std::size_t i = 0; i < b.lower.size(); ++i)
       widest = std::max(widest, 0.5 * (b.upper[i] - b.lower[i]));
+  };
+  const double alpha_each_side = 0.5 * (1.0 - confidence);
+  for (const bool aided_counts : {false, true}) {
+    if (aided_counts && !r.aided) continue;
+    widen(latticeBounds(r, aided_counts, scenarios, alpha_each_side));
+  }
+  for (std::size_t k = 0; k < r.level_reached.size(); ++k) {
+    widen(latticeBounds(r, r.level_reached[k], r.level_reached_by_combination[k], scenarios,
+                        alpha_each_side));
   }
   return widest;
+}
+
+CoverageBounds toFloats(const Bounds& b) {
+  CoverageBounds f;
+  for (double x : b.lower) f.lower.push_back(static_cast<float>(x));
+  for (double x : b.upper) f.upper.push_back(static_cast<float>(x));
+  return f;
 }
 
 }  // namespace
 
 CoverageBounds StudyLattice::coverageBounds(bool aided_counts, std::size_t scenarios,
                                             double alpha_each_side) const {
-  const Bounds b = latticeBounds(*this, aided_counts, scenarios, alpha_each_side);
-  CoverageBounds f;
-  for (double x : b.lower) f.lower.push_back(static_cast<float>(x));
-  for (double x : b.upper) f.upper.push_back(static_cast<float>(x));
-  return f;
+  return toFloats(latticeBounds(*this, aided_counts, scenarios, alpha_each_side));
+}
+
+CoverageBounds StudyLattice::levelCoverageBounds(std::size_t level, std::size_t scenarios,
+                                                 double alpha_each_side) const {
+  return toFloats(latticeBounds(*this, level_reached.at(level),
+                                level_reached_by_combination.at(level), scenarios,
+                                alpha_each_side));
 }
 
 double widestCoverageHalfWidth(const std::vector<StudyLattice>& lattices, std::size_t scenarios,

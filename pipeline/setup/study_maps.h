@@ -14,11 +14,12 @@
 
 namespace glint {
 
-/// @brief How many points of one scenario's map reach the MPE, and the aided MPE (0 without an
-/// aid).
+/// @brief How many points of one scenario's map reach the MPE, the aided MPE (0 without an
+/// aid) and each level.
 struct HazardousPoints {
   std::int64_t unaided = 0;
   std::int64_t aided = 0;
+  std::vector<std::int64_t> levels;  ///< per level of the scene: points that reach it
 };
 
 /// @brief A confidence interval for a proportion.
@@ -68,6 +69,12 @@ struct StudyLattice {
   /// are kept apart, [combination × points + point], for intervals that hold.
   std::size_t combinations = 1;
   std::vector<std::uint32_t> hazardous_by_combination, aided_hazardous_by_combination;
+  /// Per level of the scene (HazardSpec::levels): its threshold, and the scenarios whose
+  /// irradiance reaches it at the point (a pose's, or an engagement's peak over its span: the
+  /// levels are irradiance reached at some moment, not an exposure), with the combinations'
+  /// counts kept apart as above.
+  std::vector<double> level_thresholds_w_m2;
+  std::vector<std::vector<std::uint32_t>> level_reached, level_reached_by_combination;
 
   /// @brief Bytes of the maps allocate() makes.
   [[nodiscard]] std::uint64_t mapBytes() const;
@@ -95,6 +102,9 @@ struct StudyLattice {
   /// (Bonferroni: when every combination's interval holds, so does their mean's).
   [[nodiscard]] CoverageBounds coverageBounds(bool aided_counts, std::size_t scenarios,
                                               double alpha_each_side) const;
+  /// @brief coverageBounds() of the counts of level @p level.
+  [[nodiscard]] CoverageBounds levelCoverageBounds(std::size_t level, std::size_t scenarios,
+                                                   double alpha_each_side) const;
 };
 
 /// @brief The lattices of @p base (its box, then its planes), their maps not yet allocated.
@@ -104,7 +114,7 @@ std::vector<StudyLattice> studyLattices(const Scene& base);
 std::vector<float> coverage(const std::vector<std::uint32_t>& counts, std::size_t scenarios);
 
 /// @brief Half the width of the widest coverage interval of any point of @p lattices after
-/// @p scenarios (clopperPearson() at @p confidence, half the rest a side), aided counts
+/// @p scenarios (clopperPearson() at @p confidence, half the rest a side), aided and level counts
 /// included: what a study asking for a precision compares with it.
 double widestCoverageHalfWidth(const std::vector<StudyLattice>& lattices, std::size_t scenarios,
                                double confidence);

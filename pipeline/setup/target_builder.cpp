@@ -197,8 +197,7 @@ ReachSpec reachSpec(const Scene& scene, const FarField& far) {
   r.far_m = far.spec().far_radius_m;
   r.ratio = scene.reach.layer_ratio;
   r.face_cells = scene.reach.face_cells;
-  r.thresholds_w_m2 = {scene.hazard.mpe_w_m2};
-  if (scene.hazard.aid) r.thresholds_w_m2.push_back(scene.hazard.aidedMpeW_m2());
+  r.thresholds_w_m2 = scene.hazard.thresholdsW_m2();
   r.tolerance = accuracy.tolerance;
   r.floor_w_m2 = accuracy.floor_w_m2;
   return r;

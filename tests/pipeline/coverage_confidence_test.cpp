@@ -301,5 +301,52 @@ TEST(StudyPrecision, IsRefusedBesideASweepWhoseScenariosShareTheirJitter) {
   EXPECT_FALSE(std::filesystem::exists(studies.out("swept")));
 }
 
+// A level beside the MPE in a study: each scenario counts where its irradiance reaches the
+// level's threshold, and the map gives that share with its interval as for the MPE. In the
+// jittered mirror's pencil the eye sees 0.9 × 100 W / (π 0.25 m²) = 114.6 W/m² or nothing: a
+// level of 10 W/m² is reached exactly where the MPE (50 W/m²) is, and one of 200 W/m² nowhere.
+// The per-scenario records agree with the map, and the summary gives each level's share.
+TEST(ClopperPearson, EachLevelOfAStudyHasItsCoverageAndIntervalAsTheMpeHas) {
+  const JitterMirrorStudies studies("glint_coverage_levels");
+  nlohmann::json scene = nlohmann::json::parse(
+      std::ifstream(std::filesystem::path(GLINT_TEST_DATA_DIR) / "jitter_mirror.json"));
+  scene["hazard"] = {{"levels",
+                      {{{"name", "glare"}, {"irradiance_w_m2", 10.0}},
+                       {{"name", "beyond_the_pencil"}, {"irradiance_w_m2", 200.0}}}}};
+  std::ofstream(studies.dir / "jitter_mirror.json") << scene.dump();
+  const test::Outcome run = studies.run("levels", R"("samples": 40, "seed": 3)");
+  ASSERT_EQ(run.status, 0) << run.err;
+  const std::string map = (studies.out("levels") / "eye.exr").string();
+  int w = 0, h = 0;
+  for (const char* channel : {"coverage_probability", "coverage_lower", "coverage_upper"}) {
+    const std::vector<float> mpe = readExrChannel(map, channel, w, h);
+    const std::vector<float> glare = readExrChannel(map, std::string("glare_") + channel, w, h);
+    const std::vector<float> none =
+        readExrChannel(map, std::string("beyond_the_pencil_") + channel, w, h);
+    ASSERT_EQ(glare.size(), mpe.size()) << channel;
+    ASSERT_EQ(none.size(), mpe.size()) << channel;
+    for (std::size_t i = 0; i < mpe.size(); ++i) {
+      EXPECT_EQ(glare[i], mpe[i]) << channel << " " << i;
+      if (std::string(channel) != "coverage_upper") {
+        EXPECT_EQ(none[i], 0.0F) << channel << " " << i;
+      }
+    }
+  }
+  // Nothing reached in 40 scenarios: the upper end is 1 − 0.025^(1/40).
+  EXPECT_NEAR(static_cast<double>(readExrChannel(map, "beyond_the_pencil_coverage_upper", w, h)[0]),
+              1.0 - std::pow(0.025, 1.0 / 40.0), 1e-6);
+  const double cover = static_cast<double>(readExrChannel(map, "coverage_probability", w, h)[0]);
+  EXPECT_GT(cover, 0.2) << "premise: the pencil covers the eye in some scenarios";
+  EXPECT_LT(cover, 0.8) << "premise: and misses it in others";
+  const nlohmann::json summary =
+      nlohmann::json::parse(std::ifstream(studies.out("levels") / "summary.json"));
+  const nlohmann::json& region = summary.at("regions").at(0);
+  EXPECT_EQ(region.at("levels").at("glare").at("scenarios_reaching"),
+            region.at("scenarios_with_hazard"))
+      << region.dump();
+  EXPECT_EQ(region.at("levels").at("beyond_the_pencil").at("scenarios_reaching"), 0)
+      << region.dump();
+}
+
 }  // namespace
 }  // namespace glint
