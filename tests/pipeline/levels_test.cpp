@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "export/exr_map.h"
 #include "pipeline/input/scene.h"
@@ -142,6 +143,25 @@ TEST(Levels, AnAnalystsOwnLevelIsPlainIrradianceUnlessCorrected) {
   EXPECT_NE(m.find("MPE's own entries"), std::string::npos) << m;
 }
 
+// @p scene written to a folder of its own under the temporary directory and run there by
+// `glint run` into its `out` (with @p more arguments): the folder, to read the outputs from and
+// remove, and what the run said.
+struct SceneRun {
+  fs::path dir;
+  test::Outcome outcome;
+};
+SceneRun runInFolder(const json& scene, const std::string& folder,
+                     const std::vector<std::string>& more = {}) {
+  const fs::path dir = fs::temp_directory_path() / folder;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "scene.json") << scene.dump();
+  std::vector<std::string> args = {"run", (dir / "scene.json").string(), "-o",
+                                   (dir / "out").string()};
+  args.insert(args.end(), more.begin(), more.end());
+  return {dir, test::glint(args)};
+}
+
 // A mirror ball of radius R in a uniform beam E0 sends I = ρ E0 R² / 4 into every direction
 // it reflects into (away from the beam's forward cone), so a level of threshold T is reached out
 // to √(I / T) from the virtual sources, which lie within R / 2 of the ball's centre. The reach
@@ -156,12 +176,7 @@ TEST(LevelReach, AMirrorBallsLevelsReachTheClosedFormsDistanceNeverShort) {
   j["hazard"] = {{"flight_zones", true}};
   j["reach"] = {{"face_cells", 16}, {"layer_ratio", 1.05}};
   j["far_field"] = {{"face_pixels", 64}};
-  const fs::path dir = fs::temp_directory_path() / "glint_level_reach";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  std::ofstream(dir / "scene.json") << j.dump();
-  const test::Outcome o =
-      test::glint({"run", (dir / "scene.json").string(), "-o", (dir / "out").string()});
+  const auto [dir, o] = runInFolder(j, "glint_level_reach");
   ASSERT_EQ(o.status, 0) << o.err;
   const json summary = json::parse(std::ifstream(dir / "out" / "summary.json"));
   const json& reach = summary.at("hazard_reach");
@@ -207,12 +222,7 @@ TEST(LevelReach, AFlatMirrorsLevelsReachTheLobesClosedFormAlongTheBeam) {
     "reach": {"face_cells": 16, "layer_ratio": 1.05},
     "far_field": {"face_pixels": 64}
   })");
-  const fs::path dir = fs::temp_directory_path() / "glint_level_flat_mirror";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  std::ofstream(dir / "scene.json") << scene.dump();
-  const test::Outcome o =
-      test::glint({"run", (dir / "scene.json").string(), "-o", (dir / "out").string(), "--quiet"});
+  const auto [dir, o] = runInFolder(scene, "glint_level_flat_mirror", {"--quiet"});
   ASSERT_EQ(o.status, 0) << o.err;
   const json summary = json::parse(std::ifstream(dir / "out" / "summary.json"));
   const double sigma = 0.03;
@@ -250,12 +260,7 @@ TEST(Levels, APlanesMapAndThePointsTableCarryEachLevelsRatio) {
                   {"size_m", {40, 40}},
                   {"pixel_m", 0.5},
                   {"block_m", 8}}};
-  const fs::path dir = fs::temp_directory_path() / "glint_level_plane";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  std::ofstream(dir / "scene.json") << j.dump();
-  const test::Outcome o =
-      test::glint({"run", (dir / "scene.json").string(), "-o", (dir / "out").string()});
+  const auto [dir, o] = runInFolder(j, "glint_level_plane");
   ASSERT_EQ(o.status, 0) << o.err;
   const json summary = json::parse(std::ifstream(dir / "out" / "summary.json"));
   const json& levels = summary.at("hazard").at("levels");
