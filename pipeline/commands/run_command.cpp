@@ -326,6 +326,24 @@ void runEngagement(const RunContext& c, RunSummary& s) {
   if (!planes.empty()) s.j["planes"] = planes;
 }
 
+// The footprint at each flight altitude: its reference and the area each threshold covers.
+nlohmann::json footprintAltitudesJson(const ReachFootprint& f, const FootprintSpec& spec,
+                                      const HazardSpec& h) {
+  nlohmann::json list = nlohmann::json::array();
+  const double cell_m2 = f.grid.pixel_m * f.grid.pixel_m;
+  for (const ReachFootprint::Altitude& a : f.altitudes) {
+    nlohmann::json j = {{"altitude_m", a.altitude_m},
+                        {"reference", spec.altitudes_above_ellipsoid ? "ellipsoid" : "ground"},
+                        {"area_m2", a.area_m2.at(0)},
+                        {"hidden_by_ground_m2", static_cast<double>(a.hidden_pixels) * cell_m2}};
+    if (h.aid) j["aided_area_m2"] = a.area_m2.at(1);
+    for (std::size_t k = 0; k < h.levels.size(); ++k)
+      j["levels"][h.levels[k].name]["area_m2"] = a.area_m2.at(h.firstLevelThreshold() + k);
+    list.push_back(j);
+  }
+  return list;
+}
+
 // The hazard reach, its files, its entry in the summary and its line on the terminal.
 void runReach(const RunContext& c, const FarResult& far, RunSummary& s) {
   const SceneReach reach = sceneReach(c.target, c.scene, *far.far, c.work("the hazard reach"));
@@ -354,10 +372,12 @@ void runReach(const RunContext& c, const FarResult& far, RunSummary& s) {
     if (h.aid) f["aided_area_m2"] = footprint->area_m2.at(1);
     for (std::size_t k = 0; k < h.levels.size(); ++k)
       f["levels"][h.levels[k].name]["area_m2"] = footprint->area_m2.at(h.firstLevelThreshold() + k);
+    f["altitudes"] = footprintAltitudesJson(*footprint, *spec, h);
     s.j["hazard_reach"]["footprint"] = f;
   }
   c.outputs.writeReach(
-      {reach.near, *far.far, c.scene.hazard, c.info, footprint ? &*footprint : nullptr, nullptr});
+      {reach.near, *far.far, c.scene.hazard, c.info, footprint ? &*footprint : nullptr, nullptr,
+       c.scene.reach.footprint && c.scene.reach.footprint->altitudes_above_ellipsoid});
 }
 
 // The meshes' surface model against the alternatives, at the regions' peaks and the far

@@ -817,6 +817,18 @@ ReachSettings readReach(ObjectReader r) {
     }
     spec.above_ground_m = inRange(
         f, "above_ground_m", f.number("above_ground_m", spec.above_ground_m), 0.05, 1000.0, "m");
+    if (f.has("flight_altitudes_m")) {
+      const nlohmann::json& list = f.raw().at("flight_altitudes_m");
+      if (!list.is_array() || list.empty() || list.size() > 16)
+        f.fail("flight_altitudes_m", "must be a list of 1 to 16 altitudes (m)");
+      for (const nlohmann::json& a : list) {
+        if (!a.is_number() || !(a.get<double>() >= -500.0 && a.get<double>() <= 20000.0))
+          f.fail("flight_altitudes_m", "each must be a number in [-500, 20000] m");
+        spec.flight_altitudes_m.push_back(a.get<double>());
+      }
+    }
+    spec.altitudes_above_ellipsoid =
+        f.choice("altitude_reference", {"ground", "ellipsoid"}, 0) == 1;
     f.finish();
     reach.footprint = spec;
   }

@@ -117,6 +117,10 @@ struct FootprintSpec {
   double radius_m = 2000.0;     ///< about the lit centre, along the ground
   double pixel_m = 0.0;         ///< 0: the radius over 512
   double above_ground_m = 1.7;  ///< eye height
+  /// Flight altitudes at which the footprint is drawn too (m): above the ground (over the
+  /// terrain, or the ellipsoid at the site's height without one), or above the ellipsoid.
+  std::vector<double> flight_altitudes_m;
+  bool altitudes_above_ellipsoid = false;
 };
 
 /// @brief The hazard reach without a box (key `reach`, all optional; observers/reach.h).

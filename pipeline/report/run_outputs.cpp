@@ -11,6 +11,7 @@
 #include "export/vtk_files.h"
 #include "facets/integrator.h"
 #include "pipeline/base/memory_model.h"
+#include "pipeline/base/number_format.h"
 #include "pipeline/base/output_names.h"
 #include "pipeline/input/input_files.h"
 #include "pipeline/input/scene.h"
@@ -153,44 +154,61 @@ GeoInfo footprintInfo(const ReachResults& r) {
           r.info.mpe_w_m2};
 }
 
+// The footprint's masks, each with its name and what it means: per threshold at eye height,
+// then the same at each flight altitude (`<name>_at_<altitude>m`).
+struct FootprintMask {
+  std::string name, meaning;
+  const std::vector<unsigned char>* inside;
+};
+
+std::vector<FootprintMask> footprintMasks(const ReachResults& r) {
+  const ReachFootprint& f = *r.footprint;
+  const HazardSpec& h = r.hazard;
+  std::vector<std::pair<std::string, std::string>> thresholds = {
+      {"reach", "the naked eye's hazard reach"}};
+  if (h.aid) thresholds.emplace_back("aided_reach", "the hazard reach through the optical aid");
+  for (const ExposureLevel& l : h.levels)
+    thresholds.emplace_back(l.name + "_reach", "where the " + l.label + " is reached");
+  std::vector<FootprintMask> masks;
+  for (std::size_t t = 0; t < thresholds.size(); ++t) {
+    masks.push_back({thresholds[t].first,
+                     thresholds[t].second +
+                         " on the ground, at eye height, where the ground does not hide the lit "
+                         "centre",
+                     &f.inside.at(t)});
+  }
+  const std::string reference =
+      r.footprint_above_ellipsoid ? "above the ellipsoid" : "above the ground";
+  for (const ReachFootprint::Altitude& a : f.altitudes) {
+    const std::string at = formatNumber("%g", a.altitude_m);
+    for (std::size_t t = 0; t < thresholds.size(); ++t) {
+      masks.push_back({thresholds[t].first + "_at_" + at + "m",
+                       thresholds[t].second + " at " + at + " m " + reference, &a.inside.at(t)});
+    }
+  }
+  return masks;
+}
+
 void writeFootprintTif(std::ostream& out, const ReachResults& r) {
   const ReachFootprint& f = *r.footprint;
-  std::vector<std::vector<float>> masks;
-  for (const auto& inside : f.inside) masks.emplace_back(inside.begin(), inside.end());
-  std::vector<ExrChannel> channels = {{"reach", &masks[0]}};
-  std::vector<std::string> units = {"1 where the naked eye's hazard reach covers the pixel"};
-  const HazardSpec& h = r.hazard;
-  if (h.aid) {
-    channels.push_back({"aided_reach", &masks.at(1)});
-    units.emplace_back("1 where the aided hazard reach covers the pixel");
-  }
-  for (std::size_t k = 0; k < h.levels.size(); ++k) {
-    channels.push_back({h.levels[k].name + "_reach", &masks.at(h.firstLevelThreshold() + k)});
-    units.push_back("1 where the " + h.levels[k].name + " level's reach covers the pixel");
+  const std::vector<FootprintMask> masks = footprintMasks(r);
+  std::vector<std::vector<float>> bands;
+  for (const FootprintMask& m : masks) bands.emplace_back(m.inside->begin(), m.inside->end());
+  std::vector<ExrChannel> channels;
+  std::vector<std::string> units;
+  for (std::size_t k = 0; k < masks.size(); ++k) {
+    channels.push_back({masks[k].name, &bands[k]});
+    units.push_back("1 where " + masks[k].meaning);
   }
   channels.push_back({"observer_z_m", &f.ground_z_m});
-  units.emplace_back("m (each observer's height in the site's local frame)");
+  units.emplace_back("m (each observer's height at eye height in the site's local frame)");
   writeGeoTiff(out, f.grid, channels, units, *r.site, footprintInfo(r));
 }
 
 void writeFootprintZones(std::ostream& out, const ReachResults& r, VectorFormat format) {
-  const ReachFootprint& f = *r.footprint;
-  std::vector<ZoneMask> zones = {
-      {"reach",
-       "the naked eye's hazard reach on the ground, at eye height, where the ground does "
-       "not hide the lit centre",
-       f.inside[0]}};
-  const HazardSpec& h = r.hazard;
-  if (h.aid) {
-    zones.push_back(
-        {"aided_reach", "the hazard reach through the optical aid, on the ground", f.inside.at(1)});
-  }
-  for (std::size_t k = 0; k < h.levels.size(); ++k) {
-    zones.push_back({h.levels[k].name + "_reach",
-                     "where the " + h.levels[k].label + " is reached, on the ground",
-                     f.inside.at(h.firstLevelThreshold() + k)});
-  }
-  writeZones(out, format, f.grid, zones, *r.site, footprintInfo(r));
+  std::vector<ZoneMask> zones;
+  for (const FootprintMask& m : footprintMasks(r)) zones.push_back({m.name, m.meaning, *m.inside});
+  writeZones(out, format, r.footprint->grid, zones, *r.site, footprintInfo(r));
 }
 
 // The plane's zones: where the ratio reaches 1, naked eye and aided, and where a glint narrower
@@ -265,6 +283,11 @@ double cubeSphereBytes(int cells) {
 // The reach's lat-long map (writeReachExr()): its height as the writer chooses it.
 int reachMapHeight(const Scene& scene) {
   return std::max(farMapHeight(farFieldLattice(scene).face_pixels), 2 * scene.reach.face_cells);
+}
+
+// Eye height and each flight altitude.
+double footprintHeights(const Scene& scene) {
+  return 1.0 + static_cast<double>(scene.reach.footprint.value().flight_altitudes_m.size());
 }
 
 double footprintPixels(const Scene& scene) {
@@ -369,14 +392,16 @@ std::uint64_t reachVtp(const Scene& scene, const FieldSpec*) {
   return memory_model::saturated(cubeSphereBytes(scene.reach.face_cells));
 }
 
-// The footprint's masks as float bands with the ground's height, and their rows flipped.
+// The footprint's masks (per threshold, at eye height and each flight altitude) as float bands
+// with the ground's height, and their rows flipped.
 std::uint64_t footprintTif(const Scene& scene, const FieldSpec*) {
-  return memory_model::saturated(2.0 * (hazardThresholds(scene) + 1.0) * kFloat *
-                                 footprintPixels(scene));
+  return memory_model::saturated(2.0 * (hazardThresholds(scene) * footprintHeights(scene) + 1.0) *
+                                 kFloat * footprintPixels(scene));
 }
 
 std::uint64_t footprintZones(const Scene& scene, const FieldSpec*) {
-  return memory_model::saturated(hazardThresholds(scene) * footprintPixels(scene));
+  return memory_model::saturated(hazardThresholds(scene) * footprintHeights(scene) *
+                                 footprintPixels(scene));
 }
 
 }  // namespace scratch

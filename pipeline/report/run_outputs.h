@@ -84,6 +84,7 @@ struct ReachResults {
   /// Its footprint on the ground (a scene with reach.footprint), and the site RunOutputs fills.
   const ReachFootprint* footprint = nullptr;
   const SiteFrame* site = nullptr;
+  bool footprint_above_ellipsoid = false;  ///< its flight altitudes are above the ellipsoid
 };
 
 /// @brief What an output is written from: the run as a whole (summary.json), the box, each

@@ -22,9 +22,7 @@ ReachFootprint reachFootprint(const NearReach& near, const FarField& far, double
   g.origin_m = {c.x - (n / 2) * pixel, c.y - (n / 2) * pixel, 0.0};
   const std::size_t thresholds = near.spec.thresholds_w_m2.size();
   const auto count = static_cast<std::size_t>(n) * static_cast<std::size_t>(n);
-  f.inside.assign(thresholds, std::vector<unsigned char>(count, 0));
   f.ground_z_m.resize(count);
-  f.area_m2.assign(thresholds, 0.0);
   const double site_height = site.spec().height_m;
   // The reach's lattice starts on the faces of a small cube about the lit centre (reachStartM()):
   // nothing inside it is classified, so every point within its circumscribed ball counts.
@@ -42,39 +40,70 @@ ReachFootprint reachFootprint(const NearReach& near, const FarField& far, double
     const Geodetic here = site.toGeodetic({x, y, 0.0});
     return site.fromGeodetic({here.latitude_deg, here.longitude_deg, site_height}).z;
   };
-  std::vector<char> reached(thresholds, 0);  // per threshold, for the pixel at hand
+  // Which pixels the reach covers with each pixel's observer at height z(x, y), into @p inside
+  // and @p area_m2 (per threshold), counting in @p hidden those the ground hides.
+  const auto cover = [&](const auto& height, std::vector<std::vector<unsigned char>>& inside,
+                         std::vector<double>& area_m2, std::size_t& hidden) {
+    inside.assign(thresholds, std::vector<unsigned char>(count, 0));
+    area_m2.assign(thresholds, 0.0);
+    std::vector<char> reached(thresholds, 0);  // per threshold, for the pixel at hand
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const double x = g.origin_m.x + i * pixel, y = g.origin_m.y + j * pixel;
+        const double z = height(x, y);
+        const std::size_t k =
+            static_cast<std::size_t>(j) * static_cast<std::size_t>(n) + static_cast<std::size_t>(i);
+        // The reach at the pixel's centre and corners: any of them inside puts the pixel in.
+        std::fill(reached.begin(), reached.end(), 0);
+        for (const auto& [dx, dy] :
+             {std::pair{0.0, 0.0}, {-0.5, -0.5}, {0.5, -0.5}, {-0.5, 0.5}, {0.5, 0.5}}) {
+          const Vec3 d = Vec3(x + dx * pixel, y + dy * pixel, z) - c;
+          const double r = glm::length(d);
+          if (!(r > unclassified_m)) {
+            std::fill(reached.begin(), reached.end(), 1);
+            break;
+          }
+          for (std::size_t t = 0; t < thresholds; ++t) {
+            if (reached[t] == 0 && r <= reachToward(near, far, t, d / r, extinction_per_m))
+              reached[t] = 1;
+          }
+        }
+        if (std::none_of(reached.begin(), reached.end(), [](char v) { return v != 0; })) continue;
+        if (terrain != nullptr && !terrain->segmentClear(c, {x, y, z})) {
+          if (reached[0] != 0) ++hidden;
+          continue;
+        }
+        for (std::size_t t = 0; t < thresholds; ++t) {
+          if (reached[t] == 0) continue;
+          inside[t][k] = 1;
+          area_m2[t] += pixel * pixel;
+        }
+      }
+    }
+  };
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < n; ++i) {
       const double x = g.origin_m.x + i * pixel, y = g.origin_m.y + j * pixel;
-      const double z = ground(x, y) + spec.above_ground_m;
-      const std::size_t k =
-          static_cast<std::size_t>(j) * static_cast<std::size_t>(n) + static_cast<std::size_t>(i);
-      f.ground_z_m[k] = static_cast<float>(z);
-      // The reach at the pixel's centre and corners: any of them inside puts the pixel in.
-      std::fill(reached.begin(), reached.end(), 0);
-      for (const auto& [dx, dy] :
-           {std::pair{0.0, 0.0}, {-0.5, -0.5}, {0.5, -0.5}, {-0.5, 0.5}, {0.5, 0.5}}) {
-        const Vec3 d = Vec3(x + dx * pixel, y + dy * pixel, z) - c;
-        const double r = glm::length(d);
-        if (!(r > unclassified_m)) {
-          std::fill(reached.begin(), reached.end(), 1);
-          break;
-        }
-        for (std::size_t t = 0; t < thresholds; ++t) {
-          if (reached[t] == 0 && r <= reachToward(near, far, t, d / r, extinction_per_m))
-            reached[t] = 1;
-        }
-      }
-      if (std::none_of(reached.begin(), reached.end(), [](char v) { return v != 0; })) continue;
-      if (terrain != nullptr && !terrain->segmentClear(c, {x, y, z})) {
-        if (reached[0] != 0) ++f.hidden_pixels;
-        continue;
-      }
-      for (std::size_t t = 0; t < thresholds; ++t) {
-        if (reached[t] == 0) continue;
-        f.inside[t][k] = 1;
-        f.area_m2[t] += pixel * pixel;
-      }
+      f.ground_z_m[static_cast<std::size_t>(j) * static_cast<std::size_t>(n) +
+                   static_cast<std::size_t>(i)] =
+          static_cast<float>(ground(x, y) + spec.above_ground_m);
+    }
+  }
+  cover([&](double x, double y) { return ground(x, y) + spec.above_ground_m; }, f.inside, f.area_m2,
+        f.hidden_pixels);
+  for (const double altitude_m : spec.flight_altitudes_m) {
+    ReachFootprint::Altitude& a = f.altitudes.emplace_back();
+    a.altitude_m = altitude_m;
+    // Above the ellipsoid: the local frame's z of that geodetic height under the pixel.
+    const auto above_ellipsoid = [&](double x, double y) {
+      const Geodetic here = site.toGeodetic({x, y, 0.0});
+      return site.fromGeodetic({here.latitude_deg, here.longitude_deg, altitude_m}).z;
+    };
+    const auto above_ground = [&](double x, double y) { return ground(x, y) + altitude_m; };
+    if (spec.altitudes_above_ellipsoid) {
+      cover(above_ellipsoid, a.inside, a.area_m2, a.hidden_pixels);
+    } else {
+      cover(above_ground, a.inside, a.area_m2, a.hidden_pixels);
     }
   }
   return f;

@@ -19,13 +19,22 @@ namespace glint {
 /// @brief The footprint on a square grid about the lit centre, seen from above.
 struct ReachFootprint {
   PlaneGrid grid;  ///< horizontal, u = +x, v = +y of the site's frame
-  /// Per threshold (naked eye, then aided): 1 where the reach covers the observer at some
+  /// Per threshold (HazardSpec::thresholdsW_m2(): the naked eye, aided, each level): 1 where the
+  /// reach covers the observer at some
   /// corner or the centre of the pixel and the ground does not hide it from the lit centre, and
   /// within the lit ball (√3 × the reach's first layer), which the reach does not classify.
   std::vector<std::vector<unsigned char>> inside;
   std::vector<float> ground_z_m;  ///< the observers' local height (ground + eye height)
   std::vector<double> area_m2;    ///< per threshold: pixels inside × pixel²
   std::size_t hidden_pixels = 0;  ///< within the reach but hidden by the ground (naked eye)
+  /// The same at each flight altitude of the spec (FootprintSpec::flight_altitudes_m), in order.
+  struct Altitude {
+    double altitude_m = 0.0;
+    std::vector<std::vector<unsigned char>> inside;  ///< per threshold
+    std::vector<double> area_m2;                     ///< per threshold
+    std::size_t hidden_pixels = 0;
+  };
+  std::vector<Altitude> altitudes;
 };
 
 /// @brief The footprint of @p near and @p far (thresholds as the lattice's) on the ground of

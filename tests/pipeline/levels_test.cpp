@@ -174,7 +174,12 @@ SceneRun runInFolder(const json& scene, const std::string& folder,
 TEST(LevelReach, AMirrorBallsLevelsReachTheClosedFormsDistanceNeverShort) {
   json j = greenScene();
   j["hazard"] = {{"flight_zones", true}};
-  j["reach"] = {{"face_cells", 16}, {"layer_ratio", 1.05}};
+  // With a site, the footprint at eye height and at a flight altitude of 50 m above the ground
+  // (the ellipsoid at the site's height, through the ball's centre).
+  j["site"] = {{"latitude_deg", 32.9}, {"longitude_deg", -106.4}, {"height_m", 1200.0}};
+  j["reach"] = {{"face_cells", 16},
+                {"layer_ratio", 1.05},
+                {"footprint", {{"radius_m", 150}, {"pixel_m", 2}, {"flight_altitudes_m", {50}}}}};
   j["far_field"] = {{"face_pixels", 64}};
   const auto [dir, o] = runInFolder(j, "glint_level_reach");
   ASSERT_EQ(o.status, 0) << o.err;
@@ -203,6 +208,32 @@ TEST(LevelReach, AMirrorBallsLevelsReachTheClosedFormsDistanceNeverShort) {
     EXPECT_GE(map_max, d / obliquity) << name;
   }
   EXPECT_NE(o.err.find("laser-free flight zone (50 nW/cm²): "), std::string::npos) << o.err;
+
+  // The laser-free zone 50 m up: every point within √(I / T) − R / 2 of the centre reaches the
+  // level (the virtual sources lie within R / 2 of it), at least in the half of the sky the
+  // beam comes from; the footprint holds that disk's half, and is smaller than at eye height.
+  // No pixel lies beyond the level's distance d (plus R for the lit centre) at that height but
+  // for its corners: the area stays within the disk of radius √((d + R)² − 50²) + √2 pixels.
+  const json& footprint = reach.at("footprint");
+  ASSERT_EQ(footprint.at("altitudes").size(), 1u) << footprint.dump();
+  const json& up = footprint.at("altitudes").at(0);
+  EXPECT_EQ(up.at("reference"), "ground");
+  const double threshold =
+      reach.at("levels").at("laser_free_zone").at("threshold_w_m2").get<double>();
+  const double inner_m = std::sqrt(intensity_w_sr / threshold) - radius_m / 2.0;
+  const double disk_m2 = kPi * (inner_m * inner_m - 50.0 * 50.0);
+  const double at_50_m2 = up.at("levels").at("laser_free_zone").at("area_m2").get<double>();
+  EXPECT_GE(at_50_m2, 0.5 * disk_m2) << up.dump();
+  EXPECT_LT(at_50_m2, footprint.at("levels").at("laser_free_zone").at("area_m2").get<double>())
+      << footprint.dump();
+  const double d_m = reach.at("levels").at("laser_free_zone").at("distance_m").get<double>();
+  const double outer_m =
+      std::sqrt((d_m + radius_m) * (d_m + radius_m) - 50.0 * 50.0) + std::sqrt(2.0) * 2.0;
+  EXPECT_LE(at_50_m2, kPi * outer_m * outer_m) << up.dump();
+  std::printf(
+      "[ levels ] laser-free footprint at 50 m: %.4g m² (the half disk %.4g m², the outer "
+      "disk %.4g m²)\n",
+      at_50_m2, 0.5 * disk_m2, kPi * outer_m * outer_m);
   fs::remove_all(dir);
 }
 
