@@ -58,6 +58,12 @@ FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const Integrat
   static std::atomic<std::uint64_t> instances{0};
   id_ = ++instances;
   validateAccuracy(options_);
+  auto terms = std::make_shared<std::vector<std::vector<Material>>>();
+  for (const Material& m : target_->materials) {
+    terms->push_back(m.terms());
+    term_count_ = std::max(term_count_, terms->back().size());
+  }
+  material_terms_ = std::move(terms);
   object_beams_.reserve(target_->objects.size());
   for (const TargetObject& obj : target_->objects) {
     object_beams_.push_back(beam_.relativeTo(obj.origin_m));
@@ -105,14 +111,17 @@ FacetIntegrator FacetIntegrator::withBeam(const Beam& beam) const {
 }
 
 detail::ObserverSetting FacetIntegrator::prepareObserver(const Vec3& observer_m,
-                                                         detail::Workspace& ws) const {
+                                                         detail::Workspace& ws,
+                                                         const IntegratorOptions& options,
+                                                         std::size_t term) const {
   ws.surfaces.bind(id_);
   ws.observer_local_m.resize(target_->objects.size());
   for (std::size_t k = 0; k < target_->objects.size(); ++k) {
     ws.observer_local_m[k] = observer_m - target_->objects[k].origin_m;
   }
-  return {*target_,   options_,        object_beams_, *maps_,          ws.observer_local_m,
-          observer_m, occluder_.get(), lit_,          clusters_.get(), diffuse_moments_.get()};
+  return {*target_,        options, *material_terms_,    term,
+          object_beams_,   *maps_,  ws.observer_local_m, observer_m,
+          occluder_.get(), lit_,    clusters_.get(),     diffuse_moments_.get()};
 }
 
 ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
@@ -124,10 +133,34 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
                                          std::span<const Candidate> candidates,
                                          IntegratorWorkspace& workspace) const {
   detail::Workspace& ws = *workspace.impl_;
-  const detail::ObserverSetting setting = prepareObserver(observer_m, ws);
+  if (term_count_ == 1) {
+    return integrateTerm(prepareObserver(observer_m, ws, options_, 0), candidates, ws);
+  }
+  // The light is linear in the BRDF: each term on its own, with a share of the floor and what
+  // is left of the evaluations, and their sum.
+  ObserverResult total;
+  for (std::size_t term = 0; term < term_count_; ++term) {
+    IntegratorOptions options = options_;
+    options.floor_w_m2 = options_.floor_w_m2 / static_cast<double>(term_count_);
+    options.max_evaluations =
+        std::max<std::int64_t>(1, options_.max_evaluations - total.evaluations);
+    const ObserverResult r =
+        integrateTerm(prepareObserver(observer_m, ws, options, term), candidates, ws);
+    total.irradiance_w_m2 += r.irradiance_w_m2;
+    total.error_estimate_w_m2 += r.error_estimate_w_m2;
+    total.evaluations += r.evaluations;
+    total.converged = total.converged && r.converged;
+    total.depth_limited = total.depth_limited || r.depth_limited;
+  }
+  return total;
+}
+
+ObserverResult FacetIntegrator::integrateTerm(const detail::ObserverSetting& setting,
+                                              std::span<const Candidate> candidates,
+                                              detail::Workspace& ws) {
   // The scheme is chosen here, once per observer: each runs the refinement engine compiled with
   // its own rule (detail/schemes.h).
-  switch (options_.scheme) {
+  switch (setting.options.scheme) {
     case IntegrationScheme::Paper:
       return detail::integratePaper(setting, candidates, ws);
     case IntegrationScheme::Cubature:
@@ -142,10 +175,12 @@ ObserverResult FacetIntegrator::uniform(const Vec3& observer_m, int level,
                                         IntegratorWorkspace& workspace) const {
   if (level < 0 || level > 30) throw std::invalid_argument("uniform level out of range");
   detail::Workspace& ws = *workspace.impl_;
-  const detail::ObserverSetting setting = prepareObserver(observer_m, ws);
   ObserverResult result;
   CompensatedSum total;
+  const detail::ObserverSetting setting = prepareObserver(observer_m, ws, options_, 0);
   detail::forEachSeen(setting, lit_, [&](const Candidate& lit, const detail::Frame& f) {
+    // The kernel takes every lobe of the material at once (its BRDF is their sum).
+    const Material& material = target_->materials[target_->objects[lit.object].material];
     detail::withPatchModel(*target_, lit.facet.coarse, [&](const auto& model) {
       ws.stack.clear();
       ws.stack.push_back(lit.facet);
@@ -154,7 +189,7 @@ ObserverResult FacetIntegrator::uniform(const Vec3& observer_m, int level,
         ws.stack.pop_back();
         if (sub.depth == level) {
           total.add(facetIrradiance(model.template geometry<false>(sub, options_.normals),
-                                    f.observer_m, f.beam, f.material));
+                                    f.observer_m, f.beam, material));
           ++result.evaluations;
         } else {
           for (const SubFacet& c : model.split(sub)) ws.stack.push_back(c);

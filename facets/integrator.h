@@ -174,6 +174,11 @@ class FacetIntegrator {
   FacetIntegrator(Target target, const Beam& beam, const IntegratorOptions& options);
 
   /// @brief Adaptive integration at @p observer_m (world coordinates).
+  ///
+  /// Where a material has several lobes (Material::terms()), each term is integrated on its own,
+  /// to max(tolerance × its |E|, floor / the number of terms), and the results are summed: the
+  /// total is then within tolerance × |E| + floor, its evaluations are the terms' together, and
+  /// it is converged where each term is.
   ObserverResult adaptive(const Vec3& observer_m, IntegratorWorkspace& ws) const;
 
   /// @brief Adaptive integration at @p observer_m over @p candidates only (from
@@ -228,8 +233,13 @@ class FacetIntegrator {
   [[nodiscard]] FacetIntegrator withReturnExtinction(double per_m) const;
 
  private:
-  // Readies the workspace for the observer and returns what a scheme sees of both.
-  detail::ObserverSetting prepareObserver(const Vec3& observer_m, detail::Workspace& ws) const;
+  // Readies the workspace for the observer and returns what a scheme sees of both, for the
+  // materials' @p term at accuracy @p options.
+  detail::ObserverSetting prepareObserver(const Vec3& observer_m, detail::Workspace& ws,
+                                          const IntegratorOptions& options, std::size_t term) const;
+  // One term's integration by the scheme of the options.
+  static ObserverResult integrateTerm(const detail::ObserverSetting& setting,
+                                      std::span<const Candidate> candidates, detail::Workspace& ws);
   // The culling (culling.cpp): lit_ and cull_ under beam_.
   void cull();
   // Builds occluder_ where the options and the target ask for it.
@@ -241,6 +251,9 @@ class FacetIntegrator {
 
   // Shared by the copies withAccuracy() makes; the surface maps point into it.
   std::shared_ptr<const Target> target_;
+  // Per material of the target, its terms (Material::terms()), and the most any has.
+  std::shared_ptr<const std::vector<std::vector<Material>>> material_terms_;
+  std::size_t term_count_ = 1;
   Beam beam_;
   IntegratorOptions options_;
   std::vector<Beam> object_beams_;  // the beam in each object's frame

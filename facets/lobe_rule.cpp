@@ -1,6 +1,7 @@
 #include "facets/lobe_rule.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <limits>
 
@@ -274,6 +275,7 @@ LobeNode lobeNode(const SurfaceMap& map, const Vec3& bary, const Vec3& observer_
 
 LobeNode lobeNode(const SurfacePoint& p, const Vec3& observer_m, const Beam& beam,
                   const Material& material) {
+  assert(material.more_lobes.empty() && "the lobe rule takes one term (Material::terms())");
   LobeNode node;
   if (!p.valid) return node;
   const Beam::Footprint b = beam.footprint(p.position_m);

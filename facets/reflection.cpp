@@ -142,10 +142,20 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
   const double tan2_min = tan2(minNormalAngle(g, h, theta_n, h_turn));
   const double d_min = d - reach;
   const double scale = e_max * g.area_bound_m2 / (d_min * d_min);
+  // Each lobe at its largest beyond θN_min; the sample resolves the specular term only where
+  // it resolves every lobe (the narrowest decides).
+  const auto for_each_lobe = [&material](const auto& fn) {
+    if (material.specular_reflectance > 0.0) fn(material.specular_reflectance, material.lobe);
+    for (const SpecularLobe& l : material.more_lobes) {
+      if (l.reflectance > 0.0) fn(l.reflectance, l.shape);
+    }
+  };
   double specular = 0.0;
-  if (material.specular_reflectance > 0.0) {
-    specular = scale * 0.25 * material.specular_reflectance * material.lobe.maxXiBeyond(tan2_min);
-  }
+  double narrowest_rad = std::numeric_limits<double>::infinity();
+  for_each_lobe([&](double reflectance, const Beckmann& shape) {
+    specular += scale * 0.25 * reflectance * shape.maxXiBeyond(tan2_min);
+    narrowest_rad = std::min(narrowest_rad, shape.widthRad());
+  });
   // A reflectance of 0 contributes 0 even where the scale overflowed (∞ · 0 would be NaN).
   const double diffuse =
       material.diffuse_reflectance > 0.0 ? scale * material.diffuse_reflectance / kPi : 0.0;
@@ -159,10 +169,16 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
                       !beam.profileMayBendInBall(g.centre_m, g.radius_m);
   const bool may_be_clipped = std::abs(angle_i - 0.5 * kPi) <= g.cone_rad + eps_i ||
                               std::abs(angle_o - 0.5 * kPi) <= g.cone_rad + eps_o;
+  const auto flat_where_clipped = [&] {
+    bool flat = true;
+    const double tan2_far = tan2(theta_n + spread);
+    for_each_lobe([&](double, const Beckmann& shape) {
+      flat = flat && shape.logRatio(tan2_min, tan2_far) <= limits.clipped_log_variation;
+    });
+    return flat;
+  };
   const bool specular_smooth =
-      smooth && spread <= limits.lobe * material.lobe.widthRad() &&
-      (!may_be_clipped ||
-       material.lobe.logRatio(tan2_min, tan2(theta_n + spread)) <= limits.clipped_log_variation);
+      smooth && spread <= limits.lobe * narrowest_rad && (!may_be_clipped || flat_where_clipped());
   ContributionBound b;
   b.upper_w_m2 = specular + diffuse;
   b.unresolved_w_m2 = (specular_smooth ? 0.0 : specular) + (smooth ? 0.0 : diffuse);

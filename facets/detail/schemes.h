@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <span>
+#include <vector>
 
 #include "facets/beam.h"
 #include "facets/detail/culling.h"
@@ -27,10 +28,15 @@ struct Frame {
 };
 
 // What a scheme sees of the integrator for one observer: views of the FacetIntegrator's culled
-// target and of the workspace (FacetIntegrator::prepareObserver()).
+// target and of the workspace (FacetIntegrator::prepareObserver()), for one term of the
+// materials (Material::terms()): a material of several lobes is integrated a lobe at a time.
 struct ObserverSetting {
   const Target& target;
   const IntegratorOptions& options;
+  // Per material of the target, its terms; and the term this integration takes of each (a
+  // material with fewer terms reflects nothing in it).
+  std::span<const std::vector<Material>> material_terms;
+  std::size_t term;
   std::span<const Beam> object_beams;      // the beam in each object's frame
   std::span<const SurfaceMap> maps;        // per coarse facet (empty for the paper scheme)
   std::span<const Vec3> observer_local_m;  // the observer in each object's frame
@@ -43,8 +49,10 @@ struct ObserverSetting {
   const DiffuseMomentCache* diffuse_moments;
 
   [[nodiscard]] Frame frame(std::uint32_t object) const {
+    static const Material kDark{};  // reflects nothing: every bound of it is 0
+    const std::vector<Material>& terms = material_terms[target.objects[object].material];
     return {observer_local_m[object], object_beams[object],
-            target.materials[target.objects[object].material]};
+            term < terms.size() ? terms[term] : kDark};
   }
   // Whether the observer sees the candidate's centre past the rest of the target.
   [[nodiscard]] bool visible(const Candidate& c) const {

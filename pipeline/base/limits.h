@@ -19,6 +19,8 @@
 /// are near 1e15 W (continuous lasers stop near 1e6 W), beam radii below a micrometre and
 /// surfaces smoother than σ = 1e-6 are not optics the model describes.
 
+#include <cstddef>
+
 namespace glint::limits {
 
 inline constexpr double kMaxPowerW = 1e15;      ///< laser.power_w ≤ this
@@ -26,5 +28,7 @@ inline constexpr double kMinLengthM = 1e-6;     ///< beam radius, object sizes, 
 inline constexpr double kMaxLengthM = 1e5;      ///< beam radius, object sizes ≤
 inline constexpr double kMaxCoordinateM = 1e7;  ///< |every coordinate| ≤
 inline constexpr double kMinSigma = 1e-6;       ///< material sigma ≥
+/// A material's specular lobes ≤ this: each is integrated as a term of its own.
+inline constexpr std::size_t kMaxLobes = 8;
 
 }  // namespace glint::limits

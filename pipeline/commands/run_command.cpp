@@ -397,6 +397,7 @@ void checkSurfaces(const RunContext& c, const FarResult& far, RunSummary& s) {
 void finishRun(const RunContext& c, const std::filesystem::path& dir,
                const std::vector<std::string>& stale, RunSummary& s) {
   s.j["scene_path"] = sceneIdentity(c.args.scene_path);
+  s.j["materials"] = materialsJson(c.scene);
   if (c.scene.site) s.j["site"] = siteJson(SiteFrame(*c.scene.site));
   s.j["files"] = c.outputs.names();
   if (!stale.empty()) s.j["earlier_files_kept"] = stale;

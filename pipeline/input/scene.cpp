@@ -319,26 +319,79 @@ struct Violation {
   std::string message;
 };
 
-// A material's rules, in the order its reader applies them.
+// One lobe's rules: its reflectance and σ, under the keys @p reflectance_key and @p sigma_key.
+std::optional<Violation> lobeViolation(double reflectance, const Beckmann& shape,
+                                       const std::string& reflectance_key,
+                                       const std::string& sigma_key) {
+  if (auto v = unitIntervalVerdict(reflectance)) return Violation{reflectance_key, *v};
+  if (auto v = positiveVerdict(shape.sigma)) return Violation{sigma_key, *v};
+  if (auto v = inRangeVerdict(shape.sigma, limits::kMinSigma, 1e6, ""))
+    return Violation{sigma_key, *v};
+  return std::nullopt;
+}
+
+// A material's rules, in the order its reader applies them. A material of several lobes came
+// from the key `lobes`, and its lobes are named there.
 std::optional<Violation> materialViolation(const Material& m) {
-  if (auto v = unitIntervalVerdict(m.specular_reflectance))
-    return Violation{"specular_reflectance", *v};
-  if (auto v = positiveVerdict(m.lobe.sigma)) return Violation{"sigma", *v};
-  if (auto v = inRangeVerdict(m.lobe.sigma, limits::kMinSigma, 1e6, ""))
-    return Violation{"sigma", *v};
+  const bool listed = !m.more_lobes.empty();
+  if (auto v = lobeViolation(m.specular_reflectance, m.lobe,
+                             listed ? "lobes/0/reflectance" : "specular_reflectance",
+                             listed ? "lobes/0/sigma" : "sigma"))
+    return v;
+  for (std::size_t k = 0; k < m.more_lobes.size(); ++k) {
+    const std::string at = "lobes/" + std::to_string(k + 1) + "/";
+    if (auto v = lobeViolation(m.more_lobes[k].reflectance, m.more_lobes[k].shape,
+                               at + "reflectance", at + "sigma"))
+      return v;
+  }
   if (auto v = unitIntervalVerdict(m.diffuse_reflectance))
     return Violation{"diffuse_reflectance", *v};
-  if (m.specular_reflectance + m.diffuse_reflectance > 1.0) {
-    return Violation{
-        "", "specular_reflectance + diffuse_reflectance must be ≤ 1 (energy conservation)"};
+  const double total = m.totalSpecularReflectance() + m.diffuse_reflectance;
+  if (total > 1.0) {
+    return Violation{"", (listed ? "the lobes' reflectances + diffuse_reflectance"
+                                 : "specular_reflectance + diffuse_reflectance") +
+                             std::string(" must be ≤ 1 (energy conservation), not ") +
+                             formatNumber("%.6g", total)};
   }
   return std::nullopt;
 }
 
+// The key `lobes`: each lobe's reflectance and σ, the first as the material's own.
+void readLobes(ObjectReader& r, Material& m) {
+  const nlohmann::json& list = r.raw().at("lobes");
+  if (!list.is_array() || list.empty() || list.size() > limits::kMaxLobes) {
+    r.fail("lobes", "must be a list of 1 to " + std::to_string(limits::kMaxLobes) +
+                        " lobes, each {\"reflectance\", \"sigma\"}");
+  }
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string at = r.at("lobes") + "/" + std::to_string(i);
+    if (!list[i].is_object()) throw InputError(r.source() + ": " + at + ": must be an object");
+    ObjectReader l(list[i], at, r.source());
+    SpecularLobe lobe{l.number("reflectance"), Beckmann{l.number("sigma")}};
+    if (auto v = lobeViolation(lobe.reflectance, lobe.shape, "reflectance", "sigma"))
+      l.fail(v->key, v->message);
+    l.finish();
+    if (i == 0) {
+      m.specular_reflectance = lobe.reflectance;
+      m.lobe = lobe.shape;
+    } else {
+      m.more_lobes.push_back(lobe);
+    }
+  }
+}
+
 Material readMaterial(ObjectReader r) {
   Material m;
-  m.specular_reflectance = r.number("specular_reflectance");
-  m.lobe.sigma = r.number("sigma");
+  if (r.has("lobes")) {
+    for (const char* single : {"specular_reflectance", "sigma"}) {
+      if (r.has(single))
+        r.fail(single, "give the lobes either in `lobes` or as specular_reflectance and sigma");
+    }
+    readLobes(r, m);
+  } else {
+    m.specular_reflectance = r.number("specular_reflectance");
+    m.lobe.sigma = r.number("sigma");
+  }
   m.diffuse_reflectance = r.number("diffuse_reflectance", 0.0);
   if (auto v = materialViolation(m)) {
     if (v->key.empty()) r.failHere(v->message);
@@ -1154,7 +1207,8 @@ void recheckScene(const Scene& scene) {
   for (std::size_t i = 0; i < scene.materials.size(); ++i) {
     if (auto v = materialViolation(scene.materials[i])) {
       const std::string at = "/materials/" + escapeToken(scene.material_names[i]);
-      refuse(v->key.empty() ? at : at + "/" + escapeToken(v->key), v->message);
+      // The keys are the reader's own, already JSON pointer fragments (`lobes/1/sigma`).
+      refuse(v->key.empty() ? at : at + "/" + v->key, v->message);
     }
   }
   for (std::size_t i = 0; i < scene.objects.size(); ++i) {

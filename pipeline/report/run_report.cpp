@@ -123,6 +123,36 @@ nlohmann::json targetJson(const CullStats& cull) {
           {"occlusion_rays", cull.occlusion}};
 }
 
+namespace {
+
+// What a material's model is, in words: its lobes and its Lambertian part.
+std::string materialModel(const Material& m) {
+  std::size_t lobes = m.specular_reflectance > 0.0 ? 1 : 0;
+  for (const SpecularLobe& l : m.more_lobes) lobes += l.reflectance > 0.0 ? 1 : 0;
+  std::string model = lobes == 0   ? ""
+                      : lobes == 1 ? "Beckmann lobe"
+                                   : std::to_string(lobes) + " Beckmann lobes";
+  if (m.diffuse_reflectance > 0.0) model += model.empty() ? "Lambertian" : " + Lambertian";
+  return model.empty() ? "black (reflects nothing)" : model;
+}
+
+}  // namespace
+
+nlohmann::json materialsJson(const Scene& scene) {
+  nlohmann::json j = nlohmann::json::object();
+  for (std::size_t i = 0; i < scene.materials.size(); ++i) {
+    const Material& m = scene.materials[i];
+    nlohmann::json lobes = nlohmann::json::array();
+    lobes.push_back({{"reflectance", m.specular_reflectance}, {"sigma", m.lobe.sigma}});
+    for (const SpecularLobe& l : m.more_lobes)
+      lobes.push_back({{"reflectance", l.reflectance}, {"sigma", l.shape.sigma}});
+    j[scene.material_names[i]] = {{"model", materialModel(m)},
+                                  {"lobes", lobes},
+                                  {"diffuse_reflectance", m.diffuse_reflectance}};
+  }
+  return j;
+}
+
 nlohmann::json meshesJson(const Scene& scene, const std::vector<MeshStats>& stats) {
   nlohmann::json meshes = nlohmann::json::array();
   std::size_t k = 0;

@@ -26,6 +26,10 @@ nlohmann::json runJson(const RunInfo& info);
 /// @brief summary.json's `target`: what the culling made of the coarse facets.
 nlohmann::json targetJson(const CullStats& cull);
 
+/// @brief Each material of the scene by name: its model in words ("2 Beckmann lobes +
+/// Lambertian"), its lobes (reflectance, σ) and its diffuse reflectance.
+nlohmann::json materialsJson(const Scene& scene);
+
 /// @brief summary.json's `meshes`: what became of each mesh's triangles (@p stats in the
 /// order of the scene's meshes).
 nlohmann::json meshesJson(const Scene& scene, const std::vector<MeshStats>& stats);

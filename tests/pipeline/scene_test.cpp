@@ -48,6 +48,21 @@ TEST(Scene, MinimalSceneLoadsWithDefaults) {
   EXPECT_NEAR(s.accuracy.floor_w_m2, 1e-9 * 1000.0 / (kPi * 4.0), 1e-20);
 }
 
+TEST(Scene, AMaterialOfSeveralLobesListsThemInOrder) {
+  json j = minimal();
+  j["materials"]["polished"] = {
+      {"lobes", {{{"reflectance", 0.5}, {"sigma", 0.01}}, {{"reflectance", 0.3}, {"sigma", 0.1}}}},
+      {"diffuse_reflectance", 0.05}};
+  const Scene s = parseScene(j.dump(), "scene.json");
+  const Material& m = s.materials.at(0);
+  EXPECT_EQ(m.specular_reflectance, 0.5) << "the first lobe is the material's own";
+  EXPECT_EQ(m.lobe.sigma, 0.01);
+  ASSERT_EQ(m.more_lobes.size(), 1u);
+  EXPECT_EQ(m.more_lobes[0].reflectance, 0.3);
+  EXPECT_EQ(m.more_lobes[0].shape.sigma, 0.1);
+  EXPECT_EQ(m.diffuse_reflectance, 0.05);
+}
+
 TEST(Scene, FlatNormalsWithoutASchemeSelectThePaperScheme) {
   json j = minimal();
   j["accuracy"] = {{"normals", "flat"}};
@@ -236,6 +251,34 @@ TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
        "scene.json: /accuracy/scheme: flat normals (normals: flat) are the paper scheme's only"},
       {[](json& j) { j["materials"] = json::object(); },
        "scene.json: /materials: must define at least one material"},
+      {[](json& j) {
+         j["materials"]["polished"]["lobes"] = {{{"reflectance", 0.5}, {"sigma", 0.01}}};
+       },
+       "scene.json: /materials/polished/specular_reflectance: give the lobes either in `lobes` "
+       "or as specular_reflectance and sigma"},
+      {[](json& j) {
+         j["materials"]["polished"] = {
+             {"lobes", {{{"reflectance", 0.5}, {"sigma", 0.01}}, {{"reflectance", 0.3}}}}};
+       },
+       "scene.json: /materials/polished/lobes/1/sigma: missing (required)"},
+      {[](json& j) {
+         j["materials"]["polished"] = {{"lobes", json::array()}};
+       },
+       "scene.json: /materials/polished/lobes: must be a list of 1 to 8 lobes"},
+      {[](json& j) {
+         j["materials"]["polished"] = {
+             {"lobes",
+              {{{"reflectance", 0.5}, {"sigma", 0.01}}, {{"reflectance", 0.4}, {"sigma", -0.1}}}}};
+       },
+       "scene.json: /materials/polished/lobes/1/sigma: must be > 0"},
+      {[](json& j) {
+         j["materials"]["polished"] = {
+             {"lobes",
+              {{{"reflectance", 0.6}, {"sigma", 0.01}}, {{"reflectance", 0.35}, {"sigma", 0.1}}}},
+             {"diffuse_reflectance", 0.1}};
+       },
+       "scene.json: /materials/polished: the lobes' reflectances + diffuse_reflectance must be ≤ 1 "
+       "(energy conservation), not 1.05"},
       {[](json& j) { j["laser"]["wavelength_nm"] = 355.0; },
        "scene.json: /laser/wavelength_nm: must be in 400 nm to 1 mm, the range of the MPE table"},
       {[](json& j) { j["laser"]["exposure_s"] = 1e5; },
