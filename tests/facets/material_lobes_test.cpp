@@ -41,8 +41,8 @@ double hemisphericalReflectance(const Material& m, const Vec3& wi) {
   const auto ring = [&](double alpha) {
     return test::simpson(
         [&](double beta) {
-          const Vec3 wo = std::cos(alpha) * r +
-                          std::sin(alpha) * (std::cos(beta) * e1 + std::sin(beta) * e2);
+          const Vec3 wo =
+              std::cos(alpha) * r + std::sin(alpha) * (std::cos(beta) * e1 + std::sin(beta) * e2);
           const double cos_r = glm::dot(n, wo);
           if (!(cos_r > 0.0)) return 0.0;
           return m.cosineWeightedBrdf(n, wi, wo, cos_i, cos_r) / cos_i;
@@ -83,8 +83,8 @@ TEST(MaterialLobes, HemisphericalReflectanceIsEachLobesOwnPlusTheFloor) {
     const double t = deg * kPi / 180.0;
     const Vec3 wi(std::sin(t), 0.0, std::cos(t));
     const double brute = hemisphericalReflectance(m, wi);
-    const double reference = 0.5 * slopeSpaceReflectance(0.02, wi) +
-                             0.3 * slopeSpaceReflectance(0.08, wi) + 0.1;
+    const double reference =
+        0.5 * slopeSpaceReflectance(0.02, wi) + 0.3 * slopeSpaceReflectance(0.08, wi) + 0.1;
     // Both quadratures are far finer than the lobes (Simpson's error ~ (h / 2σ)⁴, Gauss's
     // converged): agreement to 1e-6 of the albedo.
     EXPECT_NEAR(brute, reference, 1e-6) << deg << " deg";
@@ -173,10 +173,11 @@ TEST(MaterialLobes, ATwoLobeFinishIsTheSumOfItsLobesRunAlone) {
   // The terms are the separate runs, but for the floor each gets half of.
   EXPECT_LE(both_evaluations, alone_evaluations * 11 / 10)
       << "two lobes cost about what the two runs do";
-  std::printf("[ lobes ] two lobes vs the sum of their runs: worst %.2e relative; %lld against "
-              "%lld evaluations; against the uniform twin at level 6: worst %.2e\n",
-              worst, static_cast<long long>(both_evaluations),
-              static_cast<long long>(alone_evaluations), worst_uniform);
+  std::printf(
+      "[ lobes ] two lobes vs the sum of their runs: worst %.2e relative; %lld against "
+      "%lld evaluations; against the uniform twin at level 6: worst %.2e\n",
+      worst, static_cast<long long>(both_evaluations), static_cast<long long>(alone_evaluations),
+      worst_uniform);
 }
 
 // What the bounds promise holds for every lobe: a piece's bound is never below its own sample,

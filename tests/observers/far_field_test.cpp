@@ -478,6 +478,45 @@ TEST(FarField, APencilBetweenTheMapsDirectionsIsReportedByItsBound) {
       f.narrowGlints().size());
 }
 
+// A flat disk mirror of area A in a uniform beam E sends I = E A Σk ρk Ξk(θN) / 4 toward every
+// direction, Ξk(0) = 1 / (2π σk²) at the mirror direction: a narrow lobe and a haze add there.
+// The narrower lobe, listed second, sets the map's lattice; the peak and the reach hold the sum
+// of the two closed forms, never short of it.
+TEST(FarField, TwoLobesPeakIsTheSumOfTheirClosedFormsAndTheNarrowerSetsTheLattice) {
+  const Scene s = parseScene(R"({"laser": {"position": [-100, 0, 0], "direction": [1, 0, 0],
+      "power_w": 1000.0, "wavelength_nm": 1064, "beam": {"profile": "flat_top", "radius_m": 2.0}},
+      "materials": {"m": {"lobes": [{"reflectance": 0.3, "sigma": 0.1},
+                                    {"reflectance": 0.5, "sigma": 0.01}]}},
+      "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [-1, 1, 0],
+                   "radius": 0.5, "material": "m", "segments": 16}],
+      "planes": [], "far_field": {"tolerance": 0.01}})",
+                             "two_lobes.json");
+  FieldSpec any;
+  any.tolerance = 1e-2;
+  const SceneTarget target = sceneTarget(s, any);
+  FarFieldSpec spec = farFieldSpec(s, target.integrator);
+  spec.floor_w_sr = 1.0;  // 1e-4 of the peak: the haze's flanks are mapped, not proven dark
+  const FarField f = computeFarField(target.integrator, spec);
+  EXPECT_EQ(spec.narrowest_sigma, 0.01) << "the narrower lobe sets the lattice";
+  const double area_m2 = kPi * 0.25;  // the disk is exact: its rim is the circle's
+  const double e_w_m2 = 1000.0 / (kPi * 4.0);
+  const double closed_w_sr =
+      e_w_m2 * area_m2 / 4.0 * (0.3 / (2 * kPi * 0.01) + 0.5 / (2 * kPi * 1e-4));
+  EXPECT_GE(f.peak().intensity_w_sr, closed_w_sr * (1.0 - 1e-3)) << "never short of the sum";
+  // Within the map's tolerance and a lattice step of the narrow lobe's top.
+  EXPECT_LE(f.peak().intensity_w_sr, closed_w_sr * 1.05);
+  // A threshold the sum reaches out to twice the far radius along the mirror direction (+y).
+  const double distance_m = 2.0 * farRadiusToward(spec, Vec3(0.0, 1.0, 0.0));
+  const double nohd_m = farReach(f, closed_w_sr / (distance_m * distance_m)).nohd_m;
+  EXPECT_GE(nohd_m, distance_m * (1.0 - 1e-3)) << "never short of the sum's reach";
+  EXPECT_LE(nohd_m, distance_m * std::sqrt(1.05));
+  std::printf(
+      "[ far field ] two lobes: peak %.6g W/sr (lattice %.6g, basis %d) against the closed "
+      "form %.6g W/sr; reach %.6g m against %.6g m; %d pixels a face\n",
+      f.peak().intensity_w_sr, f.latticePeak().intensity_w_sr, static_cast<int>(f.peak().basis),
+      closed_w_sr, nohd_m, distance_m, spec.face_pixels);
+}
+
 // The far radius grows as 1/σ and 1/tolerance (first order, farRadius()).
 TEST(FarField, FarRadiusGrowsAsTheLobeNarrowsAndTheToleranceTightens) {
   EXPECT_DOUBLE_EQ(farRadius(1.0, 0.01, 0.01), 1.0 + 103.0 / 0.01);
