@@ -14,6 +14,7 @@
 #include "pipeline/base/number_format.h"
 #include "pipeline/base/output_names.h"
 #include "pipeline/report/engagement_report.h"
+#include "pipeline/report/run_report.h"
 
 namespace glint {
 namespace {
@@ -581,7 +582,9 @@ nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLatti
       {"scenarios", {{"count", n}, {"computed", n - resumed}, {"resumed", resumed}}},
       {"ranks", ranks},
       {"wall_seconds", wall_s},
-      {"hazard", hazardLimitsJson(h)}};
+      {"hazard", hazardLimitsJson(h)},
+      // As the scene gives them; a sweep of sigma or specular_reflectance changes the first lobe.
+      {"materials", materialsJson(study.base)}};
   if (study.precision_half_width) j["precision"] = precisionJson(study, lattices, n);
   // Each scenario integrated over the engagement: its regions' ratios are their worst windows'.
   if (study.base.engagement) j["engagement"] = engagementJson(*study.base.engagement);

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "pipeline/base/input_error.h"
+#include "pipeline/report/run_report.h"
 #include "pipeline/setup/target_builder.h"
 #include "support/refusal.h"
 
@@ -61,6 +62,13 @@ TEST(Scene, AMaterialOfSeveralLobesListsThemInOrder) {
   EXPECT_EQ(m.more_lobes[0].reflectance, 0.3);
   EXPECT_EQ(m.more_lobes[0].shape.sigma, 0.1);
   EXPECT_EQ(m.diffuse_reflectance, 0.05);
+  // summary.json names the model.
+  const nlohmann::json summary = materialsJson(s);
+  EXPECT_EQ(summary.at("polished").at("model"), "2 Beckmann lobes + Lambertian") << summary;
+  EXPECT_EQ(summary.at("polished").at("lobes").at(1).at("sigma"), 0.1) << summary;
+  j = minimal();
+  EXPECT_EQ(materialsJson(parseScene(j.dump(), "scene.json")).at("polished").at("model"),
+            "Beckmann lobe");
 }
 
 TEST(Scene, FlatNormalsWithoutASchemeSelectThePaperScheme) {
