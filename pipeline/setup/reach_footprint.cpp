@@ -40,7 +40,16 @@ ReachFootprint reachFootprint(const NearReach& near, const FarField& far, double
     const Geodetic here = site.toGeodetic({x, y, 0.0});
     return site.fromGeodetic({here.latitude_deg, here.longitude_deg, site_height}).z;
   };
-  // Which pixels the reach covers with each pixel's observer at height z(x, y), into @p inside
+  // The ground under each pixel, found once for eye height and every altitude above it.
+  std::vector<double> ground_m(count);
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      ground_m[static_cast<std::size_t>(j) * static_cast<std::size_t>(n) +
+               static_cast<std::size_t>(i)] =
+          ground(g.origin_m.x + i * pixel, g.origin_m.y + j * pixel);
+    }
+  }
+  // Which pixels the reach covers with pixel k's observer at height z(k, x, y), into @p inside
   // and @p area_m2 (per threshold), counting in @p hidden those the ground hides.
   const auto cover = [&](const auto& height, std::vector<std::vector<unsigned char>>& inside,
                          std::vector<double>& area_m2, std::size_t& hidden) {
@@ -50,9 +59,9 @@ ReachFootprint reachFootprint(const NearReach& near, const FarField& far, double
     for (int j = 0; j < n; ++j) {
       for (int i = 0; i < n; ++i) {
         const double x = g.origin_m.x + i * pixel, y = g.origin_m.y + j * pixel;
-        const double z = height(x, y);
         const std::size_t k =
             static_cast<std::size_t>(j) * static_cast<std::size_t>(n) + static_cast<std::size_t>(i);
+        const double z = height(k, x, y);
         // The reach at the pixel's centre and corners: any of them inside puts the pixel in.
         std::fill(reached.begin(), reached.end(), 0);
         for (const auto& [dx, dy] :
@@ -81,25 +90,21 @@ ReachFootprint reachFootprint(const NearReach& near, const FarField& far, double
       }
     }
   };
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const double x = g.origin_m.x + i * pixel, y = g.origin_m.y + j * pixel;
-      f.ground_z_m[static_cast<std::size_t>(j) * static_cast<std::size_t>(n) +
-                   static_cast<std::size_t>(i)] =
-          static_cast<float>(ground(x, y) + spec.above_ground_m);
-    }
-  }
-  cover([&](double x, double y) { return ground(x, y) + spec.above_ground_m; }, f.inside, f.area_m2,
-        f.hidden_pixels);
+  for (std::size_t k = 0; k < count; ++k)
+    f.ground_z_m[k] = static_cast<float>(ground_m[k] + spec.above_ground_m);
+  cover([&](std::size_t k, double, double) { return ground_m[k] + spec.above_ground_m; }, f.inside,
+        f.area_m2, f.hidden_pixels);
   for (const double altitude_m : spec.flight_altitudes_m) {
     ReachFootprint::Altitude& a = f.altitudes.emplace_back();
     a.altitude_m = altitude_m;
     // Above the ellipsoid: the local frame's z of that geodetic height under the pixel.
-    const auto above_ellipsoid = [&](double x, double y) {
+    const auto above_ellipsoid = [&](std::size_t, double x, double y) {
       const Geodetic here = site.toGeodetic({x, y, 0.0});
       return site.fromGeodetic({here.latitude_deg, here.longitude_deg, altitude_m}).z;
     };
-    const auto above_ground = [&](double x, double y) { return ground(x, y) + altitude_m; };
+    const auto above_ground = [&](std::size_t k, double, double) {
+      return ground_m[k] + altitude_m;
+    };
     if (spec.altitudes_above_ellipsoid) {
       cover(above_ellipsoid, a.inside, a.area_m2, a.hidden_pixels);
     } else {
