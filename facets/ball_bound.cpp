@@ -113,10 +113,9 @@ BallBound FacetIntegrator::boundBall(const Vec3& centre_m, double radius_m,
     // and lobe (±2 widths in the normal, twice that after reflection) spread over the distance.
     const Candidate& c = kept[k];
     const TargetObject& obj = target_->objects[c.object];
-    // The narrowest lobe of the material: its light is the narrowest the facet sends.
+    // The narrowest term of the material: its light is the narrowest the facet sends.
     const Material& material = target_->materials[obj.material];
-    const std::optional<Beckmann> narrowest = narrowestLobe({&material, 1});
-    const double lobe_rad = narrowest ? narrowest->widthRad() : material.lobe.widthRad();
+    const double lobe_rad = material.narrowestWidthRad().value_or(material.lobe.widthRad());
     const Vec3 x = centre_m - obj.origin_m;
     const double d_min =
         std::max(0.0, glm::length(x - c.geometry.centre_m) - c.fan_radius_m - radius_m);

@@ -63,6 +63,12 @@ FacetIntegrator::FacetIntegrator(Target target, const Beam& beam, const Integrat
     terms->push_back(m.terms());
     term_count_ = std::max(term_count_, terms->back().size());
   }
+  term_sampled_.assign(term_count_, 0);
+  for (const std::vector<Material>& t : *terms) {
+    for (std::size_t k = 0; k < t.size(); ++k) {
+      if (t[k].sampledOnly()) term_sampled_[k] = 1;
+    }
+  }
   material_terms_ = std::move(terms);
   object_beams_.reserve(target_->objects.size());
   for (const TargetObject& obj : target_->objects) {
@@ -133,17 +139,20 @@ ObserverResult FacetIntegrator::adaptive(const Vec3& observer_m,
                                          std::span<const Candidate> candidates,
                                          IntegratorWorkspace& workspace) const {
   detail::Workspace& ws = *workspace.impl_;
-  if (term_count_ == 1) {
+  const bool lobe = options_.scheme == IntegrationScheme::Lobe;
+  if (term_count_ == 1 && !(lobe && term_sampled_[0] != 0)) {
     return integrateTerm(prepareObserver(observer_m, ws, options_, 0), candidates, ws);
   }
   // The light is linear in the BRDF: each term on its own, with a share of the floor and what
-  // is left of the evaluations, and their sum.
+  // is left of the evaluations, and their sum. A term the lobe rule has no closed form for (ABg,
+  // a table) is sampled by the cubature rule instead.
   ObserverResult total;
   for (std::size_t term = 0; term < term_count_; ++term) {
     IntegratorOptions options = options_;
     options.floor_w_m2 = options_.floor_w_m2 / static_cast<double>(term_count_);
     options.max_evaluations =
         std::max<std::int64_t>(1, options_.max_evaluations - total.evaluations);
+    if (lobe && term_sampled_[term] != 0) options.scheme = IntegrationScheme::Cubature;
     const ObserverResult r =
         integrateTerm(prepareObserver(observer_m, ws, options, term), candidates, ws);
     total.irradiance_w_m2 += r.irradiance_w_m2;

@@ -254,6 +254,9 @@ class FacetIntegrator {
   // Per material of the target, its terms (Material::terms()), and the most any has.
   std::shared_ptr<const std::vector<std::vector<Material>>> material_terms_;
   std::size_t term_count_ = 1;
+  // Per term: whether some material's term of that rank has no closed form in the lobe rule
+  // (Material::sampledOnly()); the lobe scheme hands such a term to the cubature rule.
+  std::vector<char> term_sampled_;
   Beam beam_;
   IntegratorOptions options_;
   std::vector<Beam> object_beams_;  // the beam in each object's frame

@@ -139,11 +139,12 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
     return theta < 0.5 * kPi ? std::tan(theta) * std::tan(theta)
                              : std::numeric_limits<double>::infinity();
   };
-  const double tan2_min = tan2(minNormalAngle(g, h, theta_n, h_turn));
+  const double theta_n_min = minNormalAngle(g, h, theta_n, h_turn);
+  const double tan2_min = tan2(theta_n_min);
   const double d_min = d - reach;
   const double scale = e_max * g.area_bound_m2 / (d_min * d_min);
-  // Each lobe at its largest beyond θN_min; the sample resolves the specular term only where
-  // it resolves every lobe (the narrowest decides).
+  // Each directional term at its largest beyond θN_min; the sample resolves them only where it
+  // resolves every one (the narrowest decides).
   const auto for_each_lobe = [&material](const auto& fn) {
     if (material.specular_reflectance > 0.0) fn(material.specular_reflectance, material.lobe);
     for (const SpecularLobe& l : material.more_lobes) {
@@ -156,6 +157,14 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
     specular += scale * 0.25 * reflectance * shape.maxXiBeyond(tan2_min);
     narrowest_rad = std::min(narrowest_rad, shape.widthRad());
   });
+  if (material.abg && material.abg->a_per_sr > 0.0) {
+    specular += scale * material.abg->maxBeyond(tan2_min);
+    narrowest_rad = std::min(narrowest_rad, material.abg->widthBeyondRad(theta_n_min));
+  }
+  if (material.table) {
+    specular += scale * material.table->maxBeyond(tan2_min);
+    narrowest_rad = std::min(narrowest_rad, material.table->widthRad());
+  }
   // A reflectance of 0 contributes 0 even where the scale overflowed (∞ · 0 would be NaN).
   const double diffuse =
       material.diffuse_reflectance > 0.0 ? scale * material.diffuse_reflectance / kPi : 0.0;
@@ -170,7 +179,9 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
   const bool may_be_clipped = std::abs(angle_i - 0.5 * kPi) <= g.cone_rad + eps_i ||
                               std::abs(angle_o - 0.5 * kPi) <= g.cone_rad + eps_o;
   const auto flat_where_clipped = [&] {
-    bool flat = true;
+    // ABg and a table are not judged flat: where they are clipped they are sampled finer,
+    // unless the rule clips exactly (an infinite allowance).
+    bool flat = !material.sampledOnly() || std::isinf(limits.clipped_log_variation);
     const double tan2_far = tan2(theta_n + spread);
     for_each_lobe([&](double, const Beckmann& shape) {
       flat = flat && shape.logRatio(tan2_min, tan2_far) <= limits.clipped_log_variation;

@@ -49,9 +49,10 @@ struct Target {
   std::vector<std::uint8_t> rim_edges;         ///< bit k: edge (k, k+1) lies on the rim
 
   [[nodiscard]] std::size_t facetCount() const { return corners_m.size(); }
-  /// @brief The narrowest specular lobe of the target's materials (narrowestLobe()).
-  [[nodiscard]] std::optional<Beckmann> narrowestLobe() const {
-    return glint::narrowestLobe(materials);
+  /// @brief The narrowest width of the target's materials' directional terms (rad,
+  /// narrowestWidthRad()).
+  [[nodiscard]] std::optional<double> narrowestWidthRad() const {
+    return glint::narrowestWidthRad(materials);
   }
 
   std::uint32_t addMaterial(const Material& m);

@@ -67,8 +67,8 @@ struct FarFieldSpec {
   double hazard_threshold_w_m2 = 0.0;
   double far_radius_m = 0.0;  ///< farRadius() away from the forward cone: the smallest
   double lit_radius_m = 0.0;  ///< of the LitBall (for farRadiusToward())
-  /// The width of the target's narrowest specular lobe (Target::narrowestLobe(),
-  /// Beckmann::widthRad()); ∞ when nothing reflects specularly.
+  /// The narrowest width of the target's directional terms (Target::narrowestWidthRad(): a
+  /// lobe's σ, ABg's peak, a table's step); ∞ when nothing reflects but diffusely.
   double narrowest_sigma = std::numeric_limits<double>::infinity();
   Vec3 beam_direction{1.0, 0.0, 0.0};  ///< unit propagation direction of the laser
   int bound_split_depth = 2;  ///< FieldSpec::bound_split_depth of the faces: shallow, since

@@ -31,6 +31,9 @@ void InputFiles::addScene(const fs::path& path, const Scene& scene) {
   for (const ObjectSpec& o : scene.objects) {
     if (o.mesh()) add(o.mesh()->file, "mesh file");
   }
+  for (const fs::path& table : scene.material_table_files) {
+    if (!table.empty()) add(table, "BRDF table");
+  }
 }
 
 void InputFiles::requireNotAnInput(const fs::path& output) const {

@@ -19,6 +19,7 @@
 #include "pipeline/base/memory_model.h"
 #include "pipeline/base/number_format.h"
 #include "pipeline/base/output_names.h"
+#include "pipeline/input/brdf_table_file.h"
 #include "pipeline/input/gltf_loader.h"
 #include "pipeline/input/json_reader.h"
 #include "pipeline/input/scene_memory.h"
@@ -330,6 +331,53 @@ std::optional<Violation> lobeViolation(double reflectance, const Beckmann& shape
   return std::nullopt;
 }
 
+// ABg's rules: A, B and g in range, its peak A/B within what the arithmetic carries
+// (limits.h) and its width no finer than the finest lobe's. The keys are the object's own.
+std::optional<Violation> abgViolation(const AbgScatter& abg) {
+  if (auto v = inRangeVerdict(abg.a_per_sr, 0.0, 1e6, "1/sr")) return Violation{"a_per_sr", *v};
+  if (auto v = inRangeVerdict(abg.b, 1e-12, 1e6, "")) return Violation{"b", *v};
+  if (!(abg.g > 0.0 && abg.g <= 4.0)) return Violation{"g", "must be in (0, 4]"};
+  if (!(abg.a_per_sr / abg.b <= 1e10)) {
+    return Violation{
+        "", "the peak A/B must be ≤ 1e10 1/sr, not " + formatNumber("%.6g", abg.a_per_sr / abg.b)};
+  }
+  if (abg.a_per_sr > 0.0 && !(abg.widthRad() >= limits::kMinSigma)) {
+    return Violation{"",
+                     "the peak is narrower than any surface glint models (B^(1/g) / (2 "
+                     "max(1, g)) = " +
+                         formatNumber("%.3g", abg.widthRad()) + " rad < " +
+                         formatNumber("%g", limits::kMinSigma) + "): raise B or g"};
+  }
+  return std::nullopt;
+}
+
+// The energy a material reflects at most, and its parts in words, for the refusal.
+struct EnergyBudget {
+  double total = 0.0;
+  std::vector<std::string> parts;
+};
+
+EnergyBudget energyBudget(const Material& m) {
+  EnergyBudget e;
+  const bool listed = !m.more_lobes.empty();
+  e.total = m.totalSpecularReflectance() + m.diffuse_reflectance;
+  e.parts.emplace_back(listed ? "the lobes' reflectances" : "specular_reflectance");
+  if (m.abg) {
+    const double tis = m.abg->totalIntegratedScatter();
+    e.total += tis;
+    e.parts.push_back("ABg's total integrated scatter (" + formatNumber("%.4g", tis) + ")");
+  }
+  if (m.table) {
+    const BrdfTable::Reflectance r = m.table->maxHemisphericalReflectance();
+    e.total += r.value;
+    e.parts.push_back("the table's largest hemispherical reflectance (" +
+                      formatNumber("%.4g", r.value) + " at θi " +
+                      formatNumber("%.3g", r.theta_i_rad * 180.0 / kPi) + "°)");
+  }
+  e.parts.emplace_back("diffuse_reflectance");
+  return e;
+}
+
 // A material's rules, in the order its reader applies them. A material of several lobes came
 // from the key `lobes`, and its lobes are named there.
 std::optional<Violation> materialViolation(const Material& m) {
@@ -344,14 +392,18 @@ std::optional<Violation> materialViolation(const Material& m) {
                                at + "reflectance", at + "sigma"))
       return v;
   }
+  if (m.abg) {
+    if (auto v = abgViolation(*m.abg))
+      return Violation{v->key.empty() ? "abg" : "abg/" + v->key, v->message};
+  }
   if (auto v = unitIntervalVerdict(m.diffuse_reflectance))
     return Violation{"diffuse_reflectance", *v};
-  const double total = m.totalSpecularReflectance() + m.diffuse_reflectance;
-  if (total > 1.0) {
-    return Violation{"", (listed ? "the lobes' reflectances + diffuse_reflectance"
-                                 : "specular_reflectance + diffuse_reflectance") +
-                             std::string(" must be ≤ 1 (energy conservation), not ") +
-                             formatNumber("%.6g", total)};
+  const EnergyBudget e = energyBudget(m);
+  if (e.total > 1.0) {
+    std::string sum;
+    for (const std::string& part : e.parts) sum += (sum.empty() ? "" : " + ") + part;
+    return Violation{
+        "", sum + " must be ≤ 1 (energy conservation), not " + formatNumber("%.6g", e.total)};
   }
   return std::nullopt;
 }
@@ -380,17 +432,45 @@ void readLobes(ObjectReader& r, Material& m) {
   }
 }
 
-Material readMaterial(ObjectReader r) {
+// The key `abg`: {a_per_sr, b, g}.
+AbgScatter readAbg(ObjectReader r) {
+  AbgScatter abg;
+  abg.a_per_sr = r.number("a_per_sr");
+  abg.b = r.number("b");
+  abg.g = r.number("g");
+  if (auto v = abgViolation(abg)) {
+    if (v->key.empty()) r.failHere(v->message);
+    r.fail(v->key, v->message);
+  }
+  r.finish();
+  return abg;
+}
+
+// A material, and the file of its measured table (empty: none), resolved against @p base.
+std::pair<Material, std::filesystem::path> readMaterial(ObjectReader r,
+                                                        const std::filesystem::path& base) {
   Material m;
+  std::filesystem::path table_file;
+  const bool other = r.has("abg") || r.has("table");
   if (r.has("lobes")) {
     for (const char* single : {"specular_reflectance", "sigma"}) {
       if (r.has(single))
         r.fail(single, "give the lobes either in `lobes` or as specular_reflectance and sigma");
     }
     readLobes(r, m);
-  } else {
+  } else if (!other || r.has("specular_reflectance") || r.has("sigma")) {
+    // A material of ABg or a table alone needs no lobe.
     m.specular_reflectance = r.number("specular_reflectance");
     m.lobe.sigma = r.number("sigma");
+  }
+  if (r.has("abg")) m.abg = readAbg(r.object("abg"));
+  if (r.has("table")) {
+    table_file = base / r.string("table");
+    try {
+      m.table = readBrdfTable(table_file);
+    } catch (const InputError& e) {
+      r.fail("table", e.what());
+    }
   }
   m.diffuse_reflectance = r.number("diffuse_reflectance", 0.0);
   if (auto v = materialViolation(m)) {
@@ -398,7 +478,7 @@ Material readMaterial(ObjectReader r) {
     r.fail(v->key, v->message);
   }
   r.finish();
-  return m;
+  return {std::move(m), std::move(table_file)};
 }
 
 MeshTransform readTransform(ObjectReader r) {
@@ -1027,12 +1107,14 @@ void readLaserAndHazard(ObjectReader& r, Scene& scene) {
   completeHazard(scene.hazard);
 }
 
-void readMaterials(ObjectReader materials, Scene& scene) {
+void readMaterials(ObjectReader materials, Scene& scene, const std::filesystem::path& base) {
   if (materials.raw().empty()) materials.failHere("must define at least one material");
   for (const auto& [name, value] : materials.raw().items()) {
     materials.has(name);
-    scene.materials.push_back(
-        readMaterial(ObjectReader(value, materials.at(name), materials.source())));
+    auto [material, table_file] =
+        readMaterial(ObjectReader(value, materials.at(name), materials.source()), base);
+    scene.materials.push_back(std::move(material));
+    scene.material_table_files.push_back(std::move(table_file));
     scene.material_names.push_back(name);
   }
   materials.finish();
@@ -1135,7 +1217,7 @@ Scene parseScene(std::string_view text, const std::string& source,
   ObjectReader r(root, "", source);
   scene.description = r.string("description", "");
   readLaserAndHazard(r, scene);
-  readMaterials(r.object("materials"), scene);
+  readMaterials(r.object("materials"), scene, base);
   readAccuracyAndObjects(r, scene, base, mesh_limits, memory_budget_bytes);
 
   if (r.has("observers")) scene.observers = readObservers(r.object("observers"), scene.hazard);

@@ -156,6 +156,8 @@ struct Scene {
   HazardSpec hazard;
   std::vector<Material> materials;          ///< key `materials`, in the order of their names
   std::vector<std::string> material_names;  ///< materials[i]'s key
+  /// materials[i]'s measured table file (key `table`, as resolved), or empty.
+  std::vector<std::filesystem::path> material_table_files;
   std::vector<ObjectSpec> objects;
   /// Key `accuracy`; the floor, unless given, 1e-9 × the beam's peak irradiance (far below
   /// any exposure limit, yet scaled to the scene); `paper` the scheme where `normals` is `flat`

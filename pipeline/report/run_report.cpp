@@ -125,14 +125,19 @@ nlohmann::json targetJson(const CullStats& cull) {
 
 namespace {
 
-// What a material's model is, in words: its lobes and its Lambertian part.
+// What a material's model is, in words: its lobes, ABg, its table and its Lambertian part.
 std::string materialModel(const Material& m) {
   std::size_t lobes = m.specular_reflectance > 0.0 ? 1 : 0;
   for (const SpecularLobe& l : m.more_lobes) lobes += l.reflectance > 0.0 ? 1 : 0;
   std::string model = lobes == 0   ? ""
                       : lobes == 1 ? "Beckmann lobe"
                                    : std::to_string(lobes) + " Beckmann lobes";
-  if (m.diffuse_reflectance > 0.0) model += model.empty() ? "Lambertian" : " + Lambertian";
+  const auto add = [&model](const char* part) {
+    model += model.empty() ? part : " + " + std::string(part);
+  };
+  if (m.abg) add("ABg");
+  if (m.table) add("measured table");
+  if (m.diffuse_reflectance > 0.0) add("Lambertian");
   return model.empty() ? "black (reflects nothing)" : model;
 }
 
@@ -143,12 +148,31 @@ nlohmann::json materialsJson(const Scene& scene) {
   for (std::size_t i = 0; i < scene.materials.size(); ++i) {
     const Material& m = scene.materials[i];
     nlohmann::json lobes = nlohmann::json::array();
-    lobes.push_back({{"reflectance", m.specular_reflectance}, {"sigma", m.lobe.sigma}});
+    // A material of ABg or a table alone has no first lobe to list.
+    if (m.specular_reflectance > 0.0 || !m.more_lobes.empty() || !m.sampledOnly())
+      lobes.push_back({{"reflectance", m.specular_reflectance}, {"sigma", m.lobe.sigma}});
     for (const SpecularLobe& l : m.more_lobes)
       lobes.push_back({{"reflectance", l.reflectance}, {"sigma", l.shape.sigma}});
-    j[scene.material_names[i]] = {{"model", materialModel(m)},
-                                  {"lobes", lobes},
-                                  {"diffuse_reflectance", m.diffuse_reflectance}};
+    nlohmann::json entry = {{"model", materialModel(m)},
+                            {"lobes", lobes},
+                            {"diffuse_reflectance", m.diffuse_reflectance}};
+    if (m.abg) {
+      entry["abg"] = {{"a_per_sr", m.abg->a_per_sr},
+                      {"b", m.abg->b},
+                      {"g", m.abg->g},
+                      {"total_integrated_scatter", m.abg->totalIntegratedScatter()}};
+    }
+    if (m.table) {
+      const BrdfTable::Reflectance r = m.table->maxHemisphericalReflectance();
+      nlohmann::json table = {
+          {"nodes", {m.table->givenNodes(0), m.table->givenNodes(1), m.table->givenNodes(2)}},
+          {"max_hemispherical_reflectance", r.value},
+          {"at_theta_i_deg", r.theta_i_rad * 180.0 / kPi}};
+      if (i < scene.material_table_files.size())
+        table["file"] = scene.material_table_files[i].string();
+      entry["table"] = table;
+    }
+    j[scene.material_names[i]] = entry;
   }
   return j;
 }

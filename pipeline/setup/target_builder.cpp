@@ -121,17 +121,17 @@ FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane) {
 
 namespace {
 
-// The lattice of the far field of @p settings for light whose narrowest lobe is @p narrowest.
+// The lattice of the far field of @p settings for light whose narrowest directional term is
+// @p narrowest_rad wide.
 FarFieldSpec farFieldLattice(const FarFieldSettings& settings,
-                             const std::optional<Beckmann>& narrowest) {
+                             const std::optional<double>& narrowest_rad) {
   FarFieldSpec f;
   f.tolerance = settings.tolerance;
   if (settings.face_pixels) {
     f.face_pixels = *settings.face_pixels;
   } else {
     // At a face's centre directions are 2/N rad apart: at most the lobe's width.
-    const double width_rad =
-        narrowest ? narrowest->widthRad() : std::numeric_limits<double>::infinity();
+    const double width_rad = narrowest_rad.value_or(std::numeric_limits<double>::infinity());
     f.face_pixels = 64;
     while (f.face_pixels < 4096 && 2.0 / f.face_pixels > width_rad) f.face_pixels *= 2;
   }
@@ -143,7 +143,7 @@ FarFieldSpec farFieldLattice(const FarFieldSettings& settings,
 
 FarFieldSpec farFieldLattice(const Scene& scene) {
   // The target is not built yet: its materials are the scene's (buildTarget()).
-  return farFieldLattice(scene.far_field, narrowestLobe(scene.materials));
+  return farFieldLattice(scene.far_field, narrowestWidthRad(scene.materials));
 }
 
 // The innermost sphere the far radius check may reach (FarFieldSpec::innermost_far_radius_m),
@@ -152,8 +152,8 @@ constexpr double kInnermostFarRadiusInLitRadii = 16.0;
 
 FarFieldSpec farFieldSpec(const Scene& scene, const FacetIntegrator& integrator) {
   const FarFieldSettings& settings = scene.far_field;
-  const std::optional<Beckmann> narrowest = integrator.target().narrowestLobe();
-  const double sigma = narrowest ? narrowest->widthRad() : std::numeric_limits<double>::infinity();
+  const std::optional<double> narrowest = integrator.target().narrowestWidthRad();
+  const double sigma = narrowest.value_or(std::numeric_limits<double>::infinity());
   FarFieldSpec f = farFieldLattice(settings, narrowest);
   // Nothing lit: any radius will do, the map is dark.
   const double lit_radius_m = std::max(litBall(integrator).radius_m, limits::kMinLengthM);

@@ -98,11 +98,11 @@ TEST(MaterialLobes, HemisphericalReflectanceIsEachLobesOwnPlusTheFloor) {
 TEST(MaterialLobes, TheNarrowestLobeIsFoundWhereverItIsListed) {
   Material m{0.2, 0.0, Beckmann{0.1}};
   m.more_lobes = {{0.3, Beckmann{0.004}}, {0.1, Beckmann{0.5}}};
-  const std::optional<Beckmann> narrowest = narrowestLobe({&m, 1});
+  const std::optional<double> narrowest = narrowestWidthRad({&m, 1});
   ASSERT_TRUE(narrowest.has_value());
-  EXPECT_EQ(narrowest->sigma, 0.004) << "the second lobe is the narrowest";
+  EXPECT_EQ(*narrowest, 0.004) << "the second lobe is the narrowest";
   m.more_lobes[0].reflectance = 0.0;
-  EXPECT_EQ(narrowestLobe({&m, 1})->sigma, 0.1) << "a lobe that reflects nothing does not count";
+  EXPECT_EQ(*narrowestWidthRad({&m, 1}), 0.1) << "a lobe that reflects nothing does not count";
   const std::vector<Material> terms = m.terms();
   ASSERT_EQ(terms.size(), 3u);
   EXPECT_EQ(terms[0].diffuse_reflectance, 0.0);

@@ -2,12 +2,16 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "pipeline/base/input_error.h"
 #include "pipeline/report/run_report.h"
 #include "pipeline/setup/target_builder.h"
+#include "support/files.h"
 #include "support/refusal.h"
 
 namespace glint {
@@ -69,6 +73,49 @@ TEST(Scene, AMaterialOfSeveralLobesListsThemInOrder) {
   j = minimal();
   EXPECT_EQ(materialsJson(parseScene(j.dump(), "scene.json")).at("polished").at("model"),
             "Beckmann lobe");
+}
+
+// ABg and a measured table beside two lobes: each read, the table from a CSV beside the scene
+// (rows in any order, comments skipped), and summary.json naming the model and its figures.
+TEST(Scene, AMaterialTakesAbgScatterAndAMeasuredTable) {
+  const std::filesystem::path dir = test::freshTestFolder("scene_table");
+  {
+    std::ofstream csv(dir / "paint.csv");
+    csv << "# a flat table: f = 0.05/sr everywhere\n"
+           "theta_i_deg, theta_o_deg, delta_phi_deg, brdf_per_sr\n";
+    for (double p : {180.0, 0.0})
+      for (double to = 0.0; to <= 90.0; to += 15.0)
+        for (double ti = 0.0; ti <= 90.0; ti += 15.0)
+          csv << ti << "," << to << "," << p << ",0.05\n";
+  }
+  json j = minimal();
+  j["materials"]["paint"] = {
+      {"lobes", {{{"reflectance", 0.05}, {"sigma", 0.01}}, {{"reflectance", 0.1}, {"sigma", 0.1}}}},
+      {"abg", {{"a_per_sr", 0.002}, {"b", 1e-3}, {"g", 2.0}}},
+      {"table", "paint.csv"},
+      {"diffuse_reflectance", 0.3}};
+  const Scene s = parseScene(j.dump(), (dir / "scene.json").string());
+  const std::size_t paint_at = static_cast<std::size_t>(
+      std::find(s.material_names.begin(), s.material_names.end(), "paint") -
+      s.material_names.begin());
+  const Material& m = s.materials.at(paint_at);
+  ASSERT_TRUE(m.abg.has_value());
+  EXPECT_EQ(m.abg->b, 1e-3);
+  ASSERT_NE(m.table, nullptr);
+  EXPECT_NEAR(m.table->brdf(30 * kPi / 180, 60 * kPi / 180, 1.0), 0.05, 1e-12) << "at a node";
+  EXPECT_EQ(m.terms().size(), 4u) << "the first lobe with the floor, the haze, ABg, the table";
+  const nlohmann::json summary = materialsJson(s);
+  const nlohmann::json& paint = summary.at("paint");
+  EXPECT_EQ(paint.at("model"), "2 Beckmann lobes + ABg + measured table + Lambertian") << paint;
+  // TIS = π A ln(1 + 1/B); a constant f reflects π f at every incidence, to the monotone
+  // cubic's error on cos θi cos θo between nodes 15° apart (its slopes are first order: ~h²/8
+  // of the curvature, 2e-3 here).
+  EXPECT_NEAR(paint.at("abg").at("total_integrated_scatter").get<double>(),
+              kPi * 0.002 * std::log1p(1e3), 1e-9);
+  EXPECT_NEAR(paint.at("table").at("max_hemispherical_reflectance").get<double>(), kPi * 0.05,
+              5e-3 * kPi * 0.05);
+  EXPECT_EQ(s.material_table_files.at(paint_at), dir / "paint.csv");
+  std::filesystem::remove_all(dir);
 }
 
 TEST(Scene, FlatNormalsWithoutASchemeSelectThePaperScheme) {
@@ -287,6 +334,17 @@ TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
        },
        "scene.json: /materials/polished: the lobes' reflectances + diffuse_reflectance must be ≤ 1 "
        "(energy conservation), not 1.05"},
+      {[](json& j) {
+         j["materials"]["polished"]["abg"] = {{"a_per_sr", 0.2}, {"b", 1e-3}, {"g", 2.0}};
+       },
+       "scene.json: /materials/polished: specular_reflectance + ABg's total integrated scatter "
+       "(4.341) + diffuse_reflectance must be ≤ 1 (energy conservation), not 5.2409"},
+      {[](json& j) {
+         j["materials"]["polished"]["abg"] = {{"a_per_sr", 0.001}, {"b", 1e-3}, {"g", 5.0}};
+       },
+       "scene.json: /materials/polished/abg/g: must be in (0, 4]"},
+      {[](json& j) { j["materials"]["polished"]["table"] = "no_such_table.csv"; },
+       "scene.json: /materials/polished/table: no_such_table.csv: cannot open the BRDF table"},
       {[](json& j) { j["laser"]["wavelength_nm"] = 355.0; },
        "scene.json: /laser/wavelength_nm: must be in 400 nm to 1 mm, the range of the MPE table"},
       {[](json& j) { j["laser"]["exposure_s"] = 1e5; },
