@@ -94,9 +94,9 @@ BrdfTable::BrdfTable(std::vector<double> theta_i_rad, std::vector<double> theta_
   const Axis ai = completedAxis(theta_i_rad, 0.5 * kPi, "theta_i");
   const Axis ao = completedAxis(theta_o_rad, 0.5 * kPi, "theta_o");
   const Axis ap = completedAxis(delta_phi_rad, kPi, "delta_phi");
-  given_nodes_[0] = theta_i_rad.size();
-  given_nodes_[1] = theta_o_rad.size();
-  given_nodes_[2] = delta_phi_rad.size();
+  given_[0] = theta_i_rad;
+  given_[1] = theta_o_rad;
+  given_[2] = delta_phi_rad;
   values_.reserve(ai.nodes.size() * ao.nodes.size() * ap.nodes.size());
   for (std::size_t ci = 0; ci < ai.nodes.size(); ++ci) {
     for (std::size_t co = 0; co < ao.nodes.size(); ++co) {
@@ -212,8 +212,10 @@ double BrdfTable::cosineWeighted(const Vec3& n, const Vec3& wi, const Vec3& wo, 
 }
 
 void BrdfTable::buildEnvelope() {
-  // Each cell: its bound of f_r cos θi cos θr and the most its half vector can be tilted.
+  // Each cell: its bound of f_r cos θi cos θr and the most its half vector can be tilted; and
+  // in the coarse envelope, at the largest θN and the least θi and θo it reaches.
   std::vector<std::pair<double, double>> cells;  // (θN_max, bound)
+  coarse_.assign(static_cast<std::size_t>(kCoarseLevels * kCoarseLevels * kCoarseLevels), 0.0);
   for (std::size_t i = 0; i + 1 < theta_i_.size(); ++i) {
     for (std::size_t o = 0; o + 1 < theta_o_.size(); ++o) {
       for (std::size_t p = 0; p + 1 < delta_phi_.size(); ++p) {
@@ -222,19 +224,35 @@ void BrdfTable::buildEnvelope() {
           corner = std::max(corner, value(i + (k & 1), o + (k >> 1 & 1), p + (k >> 2)));
         if (corner == 0.0) continue;
         const double bound = corner;
-        // cos α = cos θi cos θr + sin θi sin θr cos Δφ at its largest over the cell; then
-        // cos θN = (cos θi + cos θr) / √(2 + 2 cos α) at its least.
-        const double cos_phi = std::cos(delta_phi_[p]);
-        const double sin_sin = cos_phi >= 0.0
-                                   ? std::sin(theta_i_[i + 1]) * std::sin(theta_o_[o + 1])
-                                   : std::sin(theta_i_[i]) * std::sin(theta_o_[o]);
-        const double cos_alpha =
-            std::min(1.0, std::cos(theta_i_[i]) * std::cos(theta_o_[o]) + sin_sin * cos_phi);
-        const double denominator = std::sqrt(std::max(0.0, 2.0 + 2.0 * cos_alpha));
-        const double numerator = std::cos(theta_i_[i + 1]) + std::cos(theta_o_[o + 1]);
-        const double cos_theta_n =
-            denominator > 0.0 ? std::clamp(numerator / denominator, 0.0, 1.0) : 0.0;
-        cells.emplace_back(std::acos(cos_theta_n), bound);
+        // tan θN = |h_t| / h_z for h = ωi + ωo, h_z = cos θi + cos θo, and
+        // |h_t|² = (sin θi − sin θo)² + 2 sin θi sin θo (1 + cos Δφ): two terms ≥ 0, each at
+        // its largest over the cell on its own (sin rises and cos Δφ falls on the axes). Taken
+        // together, as a cosine of θN, they would lose the terms' correlation, and near
+        // θN = 0 acos turns a small slack in cos θN into a large one in θN.
+        const double si0 = std::sin(theta_i_[i]), si1 = std::sin(theta_i_[i + 1]);
+        const double so0 = std::sin(theta_o_[o]), so1 = std::sin(theta_o_[o + 1]);
+        const double apart = std::max(std::abs(si1 - so0), std::abs(si0 - so1));
+        const double ht2 = apart * apart + 2.0 * si1 * so1 * (1.0 + std::cos(delta_phi_[p]));
+        const double hz = std::cos(theta_i_[i + 1]) + std::cos(theta_o_[o + 1]);
+        const double theta_n_max = hz > 0.0 ? std::atan(std::sqrt(ht2) / hz) : 0.5 * kPi;
+        cells.emplace_back(theta_n_max, bound);
+        double& at = coarse_[coarseIndex(theta_n_max, theta_i_[i], theta_o_[o])];
+        at = std::max(at, bound);
+      }
+    }
+  }
+  // Each entry becomes the largest over every cell at or beyond its θN level, and at or below
+  // its θi and θo levels.
+  const auto at = [](int n, int i, int o) {
+    return static_cast<std::size_t>((n * kCoarseLevels + i) * kCoarseLevels + o);
+  };
+  for (int n = kCoarseLevels - 1; n >= 0; --n) {
+    for (int i = 0; i < kCoarseLevels; ++i) {
+      for (int o = 0; o < kCoarseLevels; ++o) {
+        double& m = coarse_[at(n, i, o)];
+        if (n + 1 < kCoarseLevels) m = std::max(m, coarse_[at(n + 1, i, o)]);
+        if (i > 0) m = std::max(m, coarse_[at(n, i - 1, o)]);
+        if (o > 0) m = std::max(m, coarse_[at(n, i, o - 1)]);
       }
     }
   }
@@ -252,7 +270,19 @@ void BrdfTable::buildEnvelope() {
   }
 }
 
-double BrdfTable::maxBeyond(double tan2_min) const {
+std::size_t BrdfTable::coarseIndex(double theta_n, double theta_i, double theta_o) {
+  const auto level = [](double x, bool nan_high) {
+    if (std::isnan(x)) return nan_high ? kCoarseLevels - 1 : 0;
+    const double l = x > 0.0 ? std::floor(x / (0.5 * kPi) * kCoarseLevels) : 0.0;
+    return static_cast<int>(std::min(l, static_cast<double>(kCoarseLevels - 1)));
+  };
+  // A NaN takes the level where every cell counts: the least θN, the largest θi and θo.
+  return static_cast<std::size_t>((level(theta_n, false) * kCoarseLevels + level(theta_i, true)) *
+                                      kCoarseLevels +
+                                  level(theta_o, true));
+}
+
+double BrdfTable::maxBeyond(double tan2_min, double theta_i_max_rad, double theta_o_max_rad) const {
   if (envelope_max_.empty()) return 0.0;
   if (!(tan2_min >= 0.0)) return envelope_max_.back();
   const double theta_n = std::atan(std::sqrt(tan2_min));
@@ -260,7 +290,11 @@ double BrdfTable::maxBeyond(double tan2_min) const {
   const auto end = std::partition_point(envelope_theta_n_.begin(), envelope_theta_n_.end(),
                                         [&](double t) { return t >= theta_n; });
   if (end == envelope_theta_n_.begin()) return 0.0;
-  return envelope_max_[static_cast<std::size_t>(end - envelope_theta_n_.begin()) - 1];
+  const double by_tilt =
+      envelope_max_[static_cast<std::size_t>(end - envelope_theta_n_.begin()) - 1];
+  // The coarse envelope rounds each angle down to its level: it takes every cell reaching the
+  // tilt and within the angles, and some a level beyond, so it too is an upper bound.
+  return std::min(by_tilt, coarse_[coarseIndex(theta_n, theta_i_max_rad, theta_o_max_rad)]);
 }
 
 template <class Brdf>

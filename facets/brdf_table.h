@@ -22,9 +22,9 @@ namespace glint {
 /// edges, out to θ = 90° (where g is 0) and over Δφ in [0°, 180°], on nodes 1° apart.
 ///
 /// What the integrator's bounds need is the largest g for half vectors tilted by at least some
-/// θN (as for a Beckmann lobe): in each cell g is at most its largest corner, and θN at most
-/// what interval arithmetic on cos θN = (cos θi + cos θr) / |ωi + ωo| allows; the envelope of
-/// those cell bounds over θN is maxBeyond().
+/// θN (as for a Beckmann lobe): in each cell g is at most its largest corner, and tan θN at most
+/// the largest tangent-plane part of ωi + ωo over its least normal part; the envelope of
+/// those cell bounds over θN, and a coarser one over θN, θi and θo together, give maxBeyond().
 class BrdfTable {
  public:
   /// @brief A table of @p values_per_sr, θi major then θo then Δφ, on the strictly increasing
@@ -47,9 +47,13 @@ class BrdfTable {
   [[nodiscard]] double cosineWeighted(const Vec3& n, const Vec3& wi, const Vec3& wo, double cos_i,
                                       double cos_r) const;
 
-  /// @brief The largest g of the interpolant over every pair of directions whose
-  /// half vector is tilted by tan²θN ≥ @p tan2_min; a NaN gives the largest of all.
-  [[nodiscard]] double maxBeyond(double tan2_min) const;
+  /// @brief The largest g of the interpolant over every pair of directions whose half vector
+  /// is tilted by tan²θN ≥ @p tan2_min, with θi ≤ @p theta_i_max_rad and θo ≤
+  /// @p theta_o_max_rad; a NaN tilt gives the largest of all. (Away from grazing, the bright
+  /// cells a table holds toward grazing forward scatter, where θN is ill-conditioned, do not
+  /// count.)
+  [[nodiscard]] double maxBeyond(double tan2_min, double theta_i_max_rad = 0.5 * kPi,
+                                 double theta_o_max_rad = 0.5 * kPi) const;
 
   /// @brief Half the finest step of the grid as given (rad): the interpolant changes on no
   /// finer scale of the directions, and the normal turns the reflected direction twice as fast.
@@ -67,7 +71,9 @@ class BrdfTable {
   [[nodiscard]] Reflectance maxHemisphericalReflectance() const;
 
   /// @brief The grid's nodes per axis, as given (before completion): θi, θo, Δφ.
-  [[nodiscard]] std::size_t givenNodes(int axis) const { return given_nodes_[axis]; }
+  [[nodiscard]] std::size_t givenNodes(int axis) const { return given_[axis].size(); }
+  /// @brief The nodes of axis @p axis as given (rad): θi, θo, Δφ.
+  [[nodiscard]] const std::vector<double>& givenAxis(int axis) const { return given_[axis]; }
 
  private:
   [[nodiscard]] double value(std::size_t i, std::size_t o, std::size_t p) const {
@@ -80,11 +86,17 @@ class BrdfTable {
 
   std::vector<double> theta_i_, theta_o_, delta_phi_;
   std::vector<double> values_;
-  std::size_t given_nodes_[3] = {0, 0, 0};
+  std::vector<double> given_[3];
   double width_rad_ = 0.0;
   // maxBeyond(): θN_max of the cells, decreasing, and the largest cell bound among them so far.
   std::vector<double> envelope_theta_n_;
   std::vector<double> envelope_max_;
+  // The same bound over θN, θi and θo at once, each on kCoarseLevels levels of [0, π/2]: the
+  // largest cell bound among the cells reaching each θN level or beyond, and starting at or
+  // below each level of θi and θo.
+  static constexpr int kCoarseLevels = 48;
+  static std::size_t coarseIndex(double theta_n, double theta_i, double theta_o);
+  std::vector<double> coarse_;
 };
 
 }  // namespace glint

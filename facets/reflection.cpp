@@ -162,7 +162,10 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
     narrowest_rad = std::min(narrowest_rad, material.abg->widthBeyondRad(theta_n_min));
   }
   if (material.table) {
-    specular += scale * material.table->maxBeyond(tan2_min);
+    // The largest angles of incidence and reflection over the piece: away from grazing, the
+    // table's grazing cells do not count.
+    specular += scale * material.table->maxBeyond(tan2_min, angle_i + g.cone_rad + eps_i,
+                                                  angle_o + g.cone_rad + eps_o);
     narrowest_rad = std::min(narrowest_rad, material.table->widthRad());
   }
   // A reflectance of 0 contributes 0 even where the scale overflowed (∞ · 0 would be NaN).

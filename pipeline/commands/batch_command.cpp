@@ -285,7 +285,7 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
 
   nlohmann::json record = {{"study_fnv1a64", study.fnv1a64},
                            {"scenario", s.index},
-                           {"parameters", scenarioParametersJson(s)},
+                           {"parameters", scenarioParametersJson(study, s)},
                            {"regions", tally.regions}};
   if (scene.far_field.enabled) {
     const FarField far = sceneFarField(target, scene, {watch, w.what + ", far field"});
@@ -673,6 +673,7 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   const std::uint64_t budget =
       args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
   const Study study = loadStudy(args.study_path, budget);
+  requireClosedFormMaterials(study.base, "glint batch");
   fs::path out_dir = args.out_dir;
   if (out_dir.empty()) out_dir = fs::path("out") / fs::path(args.study_path).stem();
 

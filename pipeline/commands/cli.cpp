@@ -16,6 +16,7 @@
 #include "pipeline/base/number_format.h"
 #include "pipeline/commands/batch_command.h"
 #include "pipeline/commands/cluster.h"
+#include "pipeline/commands/fit_command.h"
 #include "pipeline/commands/points_command.h"
 #include "pipeline/commands/run_command.h"
 
@@ -264,6 +265,21 @@ int runBatchCommand(const BatchArgs& batch, std::ostream& err) {
   return runOnCluster(cluster, err, [&] { runBatch(batch, cluster, err); });
 }
 
+void addFitCommand(CLI::App& app, CLI::App*& cmd, FitArgs& args, bool& no_abg, bool& no_diffuse) {
+  cmd = app.add_subcommand(
+      "fit",
+      "Fit Beckmann lobes, ABg scatter and a Lambertian part to a measured BRDF table (CSV), "
+      "least squares on log f; prints the material and the fit's error as JSON");
+  cmd->add_option("table", args.table_path,
+                  "The table (CSV: theta_i_deg,theta_o_deg,"
+                  "delta_phi_deg,brdf_per_sr)")
+      ->required();
+  cmd->add_option("--lobes", args.model.lobes, "Beckmann lobes to fit (0 to 4; default 2)")
+      ->check(CLI::Range(0, 4));
+  cmd->add_flag("--no-abg", no_abg, "Fit no ABg term");
+  cmd->add_flag("--no-diffuse", no_diffuse, "Fit no Lambertian part");
+}
+
 }  // namespace
 
 int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
@@ -279,6 +295,10 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
   addRunCommand(app, run);
   BatchOptions batch;
   addBatchCommand(app, batch);
+  CLI::App* fit_cmd = nullptr;
+  FitArgs fit;
+  bool no_abg = false, no_diffuse = false;
+  addFitCommand(app, fit_cmd, fit, no_abg, no_diffuse);
 
   try {
     app.parse(argc, argv);
@@ -296,6 +316,12 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
     if (app.got_subcommand(run.cmd)) return runRunCommand(runArgs(run, errorIsTerminal(err)), err);
     if (app.got_subcommand(batch.cmd)) {
       return runBatchCommand(batchArgs(batch, errorIsTerminal(err)), err);
+    }
+    if (app.got_subcommand(fit_cmd)) {
+      fit.model.abg = !no_abg;
+      fit.model.diffuse = !no_diffuse;
+      runFit(fit, out, err);
+      return kExitSuccess;
     }
     return kExitSuccess;
   } catch (const std::exception& e) {

@@ -177,6 +177,10 @@ Scene applyScenario(const Study& study, const Scenario& s, bool turn_meshes) {
   for (std::size_t i = 0; i < scene.materials.size(); ++i) {
     if (!study.material.empty() && scene.material_names[i] != study.material) continue;
     Material& m = scene.materials[i];
+    if (s.surface_state) {
+      m = study.base.materials[*s.surface_state];
+      scene.material_table_files[i] = study.base.material_table_files[*s.surface_state];
+    }
     if (s.sigma) m.lobe.sigma = *s.sigma;
     if (s.specular_reflectance) m.specular_reflectance = *s.specular_reflectance;
   }
@@ -241,6 +245,7 @@ Vec3 readPivot(ObjectReader& r, const Scene& base) {
 struct SweepAxes {
   std::vector<double> yaw{0.0}, pitch{0.0}, roll{0.0};
   std::vector<std::optional<double>> sigma{std::nullopt}, reflectance{std::nullopt};
+  std::vector<std::optional<std::size_t>> surface_state{std::nullopt};
 };
 
 std::vector<std::optional<double>> readSweptSigmas(ObjectReader& s) {
@@ -261,7 +266,25 @@ std::vector<std::optional<double>> readSweptReflectances(ObjectReader& s) {
   return out;
 }
 
-// Sets study.material, the material the σ and reflectance sweeps change.
+// The key `surface_state`: names of the base scene's materials, each in turn the swept one.
+std::vector<std::optional<std::size_t>> readSurfaceStates(ObjectReader& s, const Scene& base) {
+  const json& list = s.raw().at("surface_state");
+  if (!list.is_array() || list.empty())
+    s.fail("surface_state", "must be a list of the scene's material names");
+  std::vector<std::optional<std::size_t>> out;
+  for (const json& name : list) {
+    const auto at = name.is_string() ? std::find(base.material_names.begin(),
+                                                 base.material_names.end(), name.get<std::string>())
+                                     : base.material_names.end();
+    if (at == base.material_names.end()) {
+      s.fail("surface_state", "each must name a material of the scene, not " + name.dump());
+    }
+    out.emplace_back(static_cast<std::size_t>(at - base.material_names.begin()));
+  }
+  return out;
+}
+
+// Sets study.material, the material the σ, reflectance and surface-state sweeps change.
 SweepAxes readSweep(ObjectReader s, Study& study) {
   SweepAxes axes;
   axes.yaw = readAngles(s, "yaw_deg");
@@ -269,6 +292,7 @@ SweepAxes readSweep(ObjectReader s, Study& study) {
   axes.roll = readAngles(s, "roll_deg");
   if (s.has("sigma")) axes.sigma = readSweptSigmas(s);
   if (s.has("specular_reflectance")) axes.reflectance = readSweptReflectances(s);
+  if (s.has("surface_state")) axes.surface_state = readSurfaceStates(s, study.base);
   study.material = s.string("material", "");
   if (!study.material.empty()) {
     const std::vector<std::string>& names = study.base.material_names;
@@ -322,11 +346,11 @@ void readCoverage(ObjectReader c, Study& study) {
 // Counted in doubles, before any scenario is made: a product of sizes can overflow.
 void checkScenarioCount(const std::string& source, std::size_t poses, const SweepAxes& axes,
                         int jitter_samples) {
-  const double count = static_cast<double>(poses) * static_cast<double>(axes.yaw.size()) *
-                       static_cast<double>(axes.pitch.size()) *
-                       static_cast<double>(axes.roll.size()) *
-                       static_cast<double>(axes.sigma.size()) *
-                       static_cast<double>(axes.reflectance.size()) * std::max(1, jitter_samples);
+  const double count =
+      static_cast<double>(poses) * static_cast<double>(axes.yaw.size()) *
+      static_cast<double>(axes.pitch.size()) * static_cast<double>(axes.roll.size()) *
+      static_cast<double>(axes.surface_state.size()) * static_cast<double>(axes.sigma.size()) *
+      static_cast<double>(axes.reflectance.size()) * std::max(1, jitter_samples);
   if (count > static_cast<double>(kMaxScenarios)) {
     throw InputError(source + ": " + formatNumber("%.4g", count) +
                      " scenarios: at most 1 000 000 (split the study)");
@@ -340,16 +364,18 @@ std::vector<Scenario> sweepCombinations(const std::vector<Pose>& poses, const Sw
     for (double y : axes.yaw)
       for (double p : axes.pitch)
         for (double ro : axes.roll)
-          for (const auto& sg : axes.sigma)
-            for (const auto& re : axes.reflectance) {
-              Scenario& s = combinations.emplace_back();
-              s.pose = pose;
-              s.yaw_deg = y;
-              s.pitch_deg = p;
-              s.roll_deg = ro;
-              s.sigma = sg;
-              s.specular_reflectance = re;
-            }
+          for (const auto& state : axes.surface_state)
+            for (const auto& sg : axes.sigma)
+              for (const auto& re : axes.reflectance) {
+                Scenario& s = combinations.emplace_back();
+                s.surface_state = state;
+                s.pose = pose;
+                s.yaw_deg = y;
+                s.pitch_deg = p;
+                s.roll_deg = ro;
+                s.sigma = sg;
+                s.specular_reflectance = re;
+              }
   return combinations;
 }
 
@@ -472,10 +498,36 @@ std::string scenarioSceneJson(const Study& study, const Scenario& s) {
     scene["terrain"]["file"] =
         std::filesystem::absolute(study.base.terrain_file).lexically_normal().string();
   }
+  // A measured table's file is named absolutely, as a mesh's is.
+  const json base_materials = scene["materials"];
+  const auto absoluteTable = [&](json& m, std::size_t i) {
+    if (m.contains("table")) {
+      m["table"] =
+          std::filesystem::absolute(study.base.material_table_files[i]).lexically_normal().string();
+    }
+  };
+  const auto index = [&](const std::string& name) {
+    const auto& names = study.base.material_names;
+    return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin());
+  };
   for (auto& [name, m] : scene["materials"].items()) {
+    absoluteTable(m, index(name));
     if (!study.material.empty() && name != study.material) continue;
-    if (s.sigma) m["sigma"] = *s.sigma;
-    if (s.specular_reflectance) m["specular_reflectance"] = *s.specular_reflectance;
+    if (s.surface_state) {
+      m = base_materials.at(study.base.material_names[*s.surface_state]);
+      absoluteTable(m, *s.surface_state);
+    }
+    // σ and the reflectance are the first lobe's, wherever the material lists it; a material
+    // of ABg or a table alone gets a lobe that reflects nothing, as it has in memory.
+    json& first = m.contains("lobes") ? m["lobes"][0] : m;
+    if ((s.sigma || s.specular_reflectance) && !m.contains("lobes") &&
+        !m.contains("specular_reflectance")) {
+      m["specular_reflectance"] = 0.0;
+      m["sigma"] = study.base.materials[s.surface_state.value_or(index(name))].lobe.sigma;
+    }
+    if (s.sigma) first["sigma"] = *s.sigma;
+    if (s.specular_reflectance)
+      first[m.contains("lobes") ? "reflectance" : "specular_reflectance"] = *s.specular_reflectance;
   }
   if (s.jitter_sample >= 0) {
     scene["laser"]["direction"] = vecJson(jitteredDirection(study.base.laser.direction, s));

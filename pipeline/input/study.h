@@ -37,7 +37,10 @@ struct Scenario {
   double roll_deg = 0.0;
   std::optional<double> sigma;                 ///< swept σ; unset: as in the scene
   std::optional<double> specular_reflectance;  ///< swept; unset: as in the scene
-  int jitter_sample = -1;                      ///< −1: no jitter
+  /// Swept surface state: the base scene's material of this index stands in for the swept
+  /// material(s), lobes, ABg, table and all (before σ and reflectance); unset: as in the scene.
+  std::optional<std::size_t> surface_state;
+  int jitter_sample = -1;  ///< −1: no jitter
   /// Pointing error: the laser's direction d becomes d + tan(u) e_u + tan(v) e_v, normalised,
   /// with e_u = anyPerpendicular(d) and e_v = d × e_u.
   double jitter_u_rad = 0.0;

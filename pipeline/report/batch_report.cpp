@@ -147,7 +147,8 @@ std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
                          bool reach, bool aided) {
   std::string csv =
       "scenario,time_s,offset_x_m,offset_y_m,offset_z_m,pose_yaw_deg,pose_pitch_deg,"
-      "pose_roll_deg,yaw_deg,pitch_deg,roll_deg,sigma,specular_reflectance,jitter_sample,"
+      "pose_roll_deg,yaw_deg,pitch_deg,roll_deg,surface_state,sigma,specular_reflectance,jitter_"
+      "sample,"
       "jitter_u_rad,jitter_v_rad";
   for (const StudyLattice& r : lattices) {
     const std::string extent = r.plane ? "_hazardous_area_m2" : "_hazard_volume_m3";
@@ -176,6 +177,7 @@ std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
          {"pose_yaw_deg", "pose_pitch_deg", "pose_roll_deg", "yaw_deg", "pitch_deg", "roll_deg"})
       number(p.at(key));
     // Empty: as in the scene.
+    cell(p.contains("surface_state") ? p.at("surface_state").get<std::string>() : std::string());
     for (const char* key : {"sigma", "specular_reflectance"})
       p.contains(key) ? number(p.at(key)) : cell("");
     const int sample = p.at("jitter_sample").get<int>();
@@ -583,7 +585,8 @@ nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLatti
       {"ranks", ranks},
       {"wall_seconds", wall_s},
       {"hazard", hazardLimitsJson(h)},
-      // As the scene gives them; a sweep of sigma or specular_reflectance changes the first lobe.
+      // As the scene gives them; a sweep of sigma or specular_reflectance changes the first lobe,
+      // and a surface_state sweep puts one of them in the swept material's place.
       {"materials", materialsJson(study.base)}};
   if (study.precision_half_width) j["precision"] = precisionJson(study, lattices, n);
   // Each scenario integrated over the engagement: its regions' ratios are their worst windows'.
@@ -609,7 +612,7 @@ nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLatti
   return j;
 }
 
-nlohmann::json scenarioParametersJson(const Scenario& s) {
+nlohmann::json scenarioParametersJson(const Study& study, const Scenario& s) {
   nlohmann::json p = {{"time_s", s.pose.time_s},
                       {"offset_m", {s.pose.offset_m.x, s.pose.offset_m.y, s.pose.offset_m.z}},
                       {"pose_yaw_deg", s.pose.yaw_deg},
@@ -623,6 +626,7 @@ nlohmann::json scenarioParametersJson(const Scenario& s) {
                       {"jitter_v_rad", s.jitter_v_rad}};
   if (s.sigma) p["sigma"] = *s.sigma;
   if (s.specular_reflectance) p["specular_reflectance"] = *s.specular_reflectance;
+  if (s.surface_state) p["surface_state"] = study.base.material_names.at(*s.surface_state);
   return p;
 }
 

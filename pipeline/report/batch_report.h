@@ -22,8 +22,9 @@ namespace glint {
 
 class OutputSet;
 
-/// @brief A scenario's `parameters` in its result.json (and so its row of scenarios.csv).
-nlohmann::json scenarioParametersJson(const Scenario& s);
+/// @brief A scenario's `parameters` in its result.json (and so its row of scenarios.csv); the
+/// surface state by its material's name in @p study's scene.
+nlohmann::json scenarioParametersJson(const Study& study, const Scenario& s);
 
 /// @brief One region's entry of a scenario's result.json: its peak ratio, hazardous points and
 /// extent, counts, the per-pulse peak and the aided figures where the scene has them.

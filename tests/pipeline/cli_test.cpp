@@ -17,6 +17,7 @@
 #include <sstream>
 #include <vector>
 
+#include "facets/vec3.h"
 #include "support/cli.h"
 #include "support/files.h"
 
@@ -62,6 +63,24 @@ TEST_F(CliTest, VersionAndHelpSucceed) {
   const Outcome ph = glint({"points", "--help"});
   EXPECT_EQ(ph.status, 0);
   EXPECT_NE(ph.out.find("--tolerance"), std::string::npos) << ph.out;
+}
+
+// glint fit on a table of a constant f = 0.05 /sr: a Lambertian part alone gives it back,
+// ρd = π f, and the JSON it prints is a material a scene takes; a bad table is status 2.
+TEST_F(CliTest, FitPrintsTheMaterialAndItsErrorAsJson) {
+  const std::string table = std::string(GLINT_TEST_DATA_DIR) + "/abg_disk_table.csv";
+  const Outcome o = glint({"fit", table, "--lobes", "0", "--no-abg"});
+  ASSERT_EQ(o.status, 0) << o.err;
+  const nlohmann::json j = nlohmann::json::parse(o.out);
+  EXPECT_NEAR(j.at("material").at("diffuse_reflectance").get<double>(), kPi * 0.05, 1e-6) << o.out;
+  EXPECT_LT(j.at("fit").at("max_relative_error").get<double>(), 1e-6) << o.out;
+  EXPECT_EQ(j.at("fit").at("nodes").get<int>(), 18 * 18 * 7) << "the nodes below 89.5°";
+  EXPECT_FALSE(j.at("material").contains("abg"));
+  const Outcome bad = glint(
+      {"fit", write("bad.csv", "theta_i_deg,theta_o_deg,delta_phi_deg,brdf_per_sr\n0,0,0,-1\n")});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("bad.csv: line 2: brdf_per_sr must be ≥ 0"), std::string::npos) << bad.err;
+  EXPECT_EQ(glint({"fit", table, "--lobes", "7"}).status, 2) << "at most 4 lobes";
 }
 
 TEST_F(CliTest, UsageErrorsExitWithStatusTwo) {

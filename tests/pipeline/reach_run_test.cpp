@@ -13,7 +13,9 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "export/exr_map.h"
 #include "observers/detail/cube_faces.h"
@@ -268,6 +270,80 @@ TEST(ReachRun, TheDefaultExamplesReachIsItsBoxsHazardZoneWithinOneVoxel) {
 
 // Without a box or plane the reach is all a run computes: refusing it, or the far field it
 // ends in, leaves nothing to do, and the run says so before it starts.
+// ABg and a measured table through glint points; glint run refuses them for now. The disk of
+// reach_pencil.json, 0.1 m across under 7.96e5 W/m², cos θi = 1/|(−1, 0.6, 0.4)| = 0.811: its
+// intensity is I = E A cos θi cos θr f, f = A/B = 20 /sr along the mirror direction for ABg (40.5 m
+// to the MPE of 50 W/m²) and 0.05 /sr everywhere for the table.
+TEST(ReachRun, AbgAndATableGiveTheirClosedFormsThroughPointsAndRunRefusesThem) {
+  const fs::path data(GLINT_TEST_DATA_DIR);
+  const double e_beam = 1e5 / (kPi * 0.04), area = kPi * 0.05 * 0.05;
+  const Vec3 n = glm::normalize(Vec3(-1, 0.6, 0.4)), wi(-1, 0, 0);
+  const double cos_i = glm::dot(n, wi);
+  const Vec3 mirror = 2.0 * cos_i * n - wi;
+  const double peak_w_sr = e_beam * area * cos_i * cos_i * 0.02 / 1e-3;
+  // glint points: E r² along the mirror direction for ABg, and in three directions for the table.
+  const fs::path dir = test::freshTestFolder("glint_abg_table");
+  // The table's at 20 m, where its light (0.5 W/m²) is far above the scene's floor (8e-4 W/m²,
+  // 1e-9 of the beam), which bounds each observer's absolute error; 1/d² varies by 1e-5 over
+  // the disk there.
+  std::vector<Vec3> observers{200.0 * mirror};
+  for (const Vec3& d :
+       {mirror, glm::normalize(Vec3(-1, 0.2, 0.1)), glm::normalize(Vec3(-0.3, 1.0, 0.0))})
+    observers.push_back(20.0 * d);
+  {
+    std::ofstream csv(dir / "points.csv");
+    csv << "x,y,z\n";
+    for (const Vec3& o : observers) csv << o.x << "," << o.y << "," << o.z << "\n";
+  }
+  const auto irradiance = [&](const char* scene) {
+    const fs::path out = dir / (std::string(scene) + ".csv");
+    const test::Outcome o = test::glint({"points", (data / scene).string(), "--points",
+                                         (dir / "points.csv").string(), "--out", out.string()});
+    EXPECT_EQ(o.status, 0) << o.err;
+    std::vector<double> e;
+    std::ifstream in(out);
+    std::string line;
+    std::getline(in, line);
+    const std::size_t column = static_cast<std::size_t>(std::count(
+        line.begin(), line.begin() + static_cast<long>(line.find("irradiance_w_m2")), ','));
+    while (std::getline(in, line)) {
+      std::stringstream row(line);
+      std::string cell;
+      for (std::size_t k = 0; k <= column; ++k) std::getline(row, cell, ',');
+      e.push_back(std::stod(cell));
+    }
+    return e;
+  };
+  const std::vector<double> abg = irradiance("abg_disk.json");
+  ASSERT_EQ(abg.size(), observers.size());
+  // At 200 m the disk subtends 2.5e-4 rad: ABg's peak (√B / 2 ≈ 0.016 rad wide) is flat across
+  // it to 1e-4, and 1/d² to 5e-4.
+  const double r2 = glm::dot(observers[0], observers[0]);
+  EXPECT_NEAR(abg[0] * r2 / peak_w_sr, 1.0, 2e-3) << abg[0] * r2 << " W/sr";
+  const std::vector<double> table = irradiance("table_disk.json");
+  ASSERT_EQ(table.size(), observers.size());
+  for (std::size_t k = 1; k < observers.size(); ++k) {
+    const Vec3 wo = glm::normalize(observers[k]);
+    const double expected = e_beam * area * cos_i * glm::dot(n, wo) * 0.05;
+    // The table's cubic on cos θi cos θo between nodes 5° apart: ~1e-4.
+    EXPECT_NEAR(table[k] * glm::dot(observers[k], observers[k]) / expected, 1.0, 2e-3)
+        << "direction " << k;
+  }
+  fs::remove_all(dir);
+
+  // glint run refuses them, with the reason, before any work (its fields do not yet finish on
+  // ABg's wings: a run of this disk exhausted memory in the far field's faces).
+  const RunResult r = runScene(data / "abg_disk.json", "glint_abg_disk_run");
+  EXPECT_EQ(r.outcome.status, 2) << r.outcome.err;
+  EXPECT_NE(r.outcome.err.find("/materials/painted: ABg scatter and measured tables are taken by "
+                               "glint points only"),
+            std::string::npos)
+      << r.outcome.err;
+  EXPECT_FALSE(fs::exists(r.out / "summary.json"));
+  std::printf("[ abg ] disk: I %.4g W/sr (closed form %.4g)\n", abg[0] * r2, peak_w_sr);
+  fs::remove_all(r.out);
+}
+
 TEST(ReachRun, WithoutBoxOrPlaneTheReachAndItsFarFieldCannotBeTurnedOff) {
   nlohmann::json scene =
       nlohmann::json::parse(std::ifstream(fs::path(GLINT_TEST_DATA_DIR) / "reach_pencil.json"));

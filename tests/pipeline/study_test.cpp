@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -240,6 +241,65 @@ TEST(Study, MaterialSweepChangesOnlyTheNamedMaterial) {
   EXPECT_NE(refusal(R"("sweep": {"sigma": [0.1], "material": "matte"})")
                 .find("/sweep/material: the scene has no material \"matte\""),
             std::string::npos);
+}
+
+// A surface-state sweep puts each named material of the scene in the swept one's place, lobes,
+// ABg and measured table with it; the scenario's scene.json stands on its own (the table named
+// absolutely) and parses, from another folder, to the same material.
+TEST(Study, ASurfaceStateSweepPutsEachNamedMaterialInTheSweptOnesPlace) {
+  const std::filesystem::path dir = ::testing::TempDir() + "/surface_state";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream csv(dir / "weathered.csv");
+    csv << "theta_i_deg,theta_o_deg,delta_phi_deg,brdf_per_sr\n";
+    for (int ti : {0, 90})
+      for (int to : {0, 90})
+        for (int p : {0, 180}) csv << ti << "," << to << "," << p << ",0.02\n";
+  }
+  std::ofstream(dir / "scene.json") << R"({
+    "laser": {"position": [0, -100, 3], "direction": [0, 1, 0], "power_w": 1, "wavelength_nm": 532,
+              "beam": {"profile": "flat_top", "radius_m": 1}},
+    "materials": {"hull": {"specular_reflectance": 0.5, "sigma": 0.1},
+                  "new": {"specular_reflectance": 0.9, "sigma": 0.005},
+                  "weathered": {"lobes": [{"reflectance": 0.1, "sigma": 0.01},
+                                          {"reflectance": 0.2, "sigma": 0.1}],
+                                "abg": {"a_per_sr": 0.001, "b": 0.001, "g": 2},
+                                "table": "weathered.csv", "diffuse_reflectance": 0.2}},
+    "objects": [{"shape": "disk", "center": [0, 0, 3], "normal": [0, -1, 0], "radius": 0.2,
+                 "material": "hull"}],
+    "planes": [{"name": "p", "origin": [-5, -1, 0], "u_axis": [1, 0, 0], "v_axis": [0, 1, 0],
+                "size_m": [1, 1], "pixel_m": 0.5}]})";
+  const Study st = parseStudy(
+      R"({"scene": "scene.json", "sweep": {"surface_state": ["new", "weathered"], "sigma": [0.02, 0.03], "material": "hull"}})",
+      "study.json", dir);
+  ASSERT_EQ(st.scenarios.size(), 4u) << "two states, each with two σ";
+  const auto hull = [](const Scene& scene) {
+    const auto& names = scene.material_names;
+    return scene.materials.at(
+        static_cast<std::size_t>(std::find(names.begin(), names.end(), "hull") - names.begin()));
+  };
+  const Scene first = scenarioScene(st, st.scenarios[0]);
+  EXPECT_EQ(hull(first).specular_reflectance, 0.9) << "the state \"new\"";
+  EXPECT_EQ(hull(first).lobe.sigma, 0.02) << "σ swept on top of the state";
+  const Scene last = scenarioScene(st, st.scenarios[3]);
+  const Material& m = hull(last);
+  ASSERT_TRUE(m.abg.has_value() && m.table != nullptr) << "the state \"weathered\"";
+  EXPECT_EQ(m.more_lobes.size(), 1u);
+  EXPECT_EQ(m.lobe.sigma, 0.03);
+  // Its scene.json, read from elsewhere, holds the same material.
+  const Scene again = parseScene(scenarioSceneJson(st, st.scenarios[3]), "elsewhere/scene.json");
+  const Material& a = hull(again);
+  ASSERT_TRUE(a.abg.has_value() && a.table != nullptr);
+  EXPECT_EQ(a.abg->b, m.abg->b);
+  EXPECT_EQ(a.lobe.sigma, 0.03);
+  EXPECT_EQ(a.table->brdf(0.3, 0.4, 1.0), m.table->brdf(0.3, 0.4, 1.0));
+  EXPECT_NE(test::refusalOf([&] {
+              parseStudy(R"({"scene": "scene.json", "sweep": {"surface_state": ["rusty"]}})",
+                         "study.json", dir);
+            }).find("/sweep/surface_state: each must name a material of the scene, not \"rusty\""),
+            std::string::npos);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(Study, RefusesBadStudiesNamingThePlace) {
