@@ -12,6 +12,7 @@
 #include "facets/patch.h"
 #include "facets/reflection.h"
 #include "facets/tessellate.h"
+#include "support/brdf_quadrature.h"
 #include "support/quadrature.h"
 #include "support/scenes.h"
 
@@ -28,28 +29,10 @@ Material paint() {
   return m;
 }
 
-// ∫ f_r cos θr dω over the outgoing hemisphere for light from @p wi, brute force: Simpson on
-// the angle α from the mirror direction (where the lobes peak) and its azimuth β. Every lobe
-// here lies more than 5 of its widths (2σ after reflection) above the horizon, so the
-// integrand is smooth wherever it is not negligible.
+// The lobes here lie more than 5 of their widths (2σ after reflection) above the horizon,
+// so the brute-force integrand is smooth wherever it is not negligible.
 double hemisphericalReflectance(const Material& m, const Vec3& wi) {
-  const Vec3 n(0, 0, 1);
-  const double cos_i = glm::dot(n, wi);
-  const Vec3 r = 2.0 * cos_i * n - wi;
-  const Vec3 e1 = glm::normalize(glm::cross(r, Vec3(0, 1, 0)));
-  const Vec3 e2 = glm::cross(r, e1);
-  const auto ring = [&](double alpha) {
-    return test::simpson(
-        [&](double beta) {
-          const Vec3 wo =
-              std::cos(alpha) * r + std::sin(alpha) * (std::cos(beta) * e1 + std::sin(beta) * e2);
-          const double cos_r = glm::dot(n, wo);
-          if (!(cos_r > 0.0)) return 0.0;
-          return m.cosineWeightedBrdf(n, wi, wo, cos_i, cos_r) / cos_i;
-        },
-        0.0, 2.0 * kPi, 256);
-  };
-  return test::simpson([&](double a) { return ring(a) * std::sin(a); }, 0.0, kPi, 6000);
+  return test::hemisphericalReflectance(m, wi, 6000);
 }
 
 // The same for one lobe of reflectance 1 in slope space, where the Beckmann lobe is the

@@ -18,6 +18,7 @@
 #include "facets/patch.h"
 #include "facets/reflection.h"
 #include "facets/tessellate.h"
+#include "support/brdf_quadrature.h"
 #include "support/quadrature.h"
 #include "support/scenes.h"
 
@@ -41,26 +42,8 @@ Material tableOnly(std::shared_ptr<const BrdfTable> table) {
   return m;
 }
 
-// ∫ f_r cos θr dω over the outgoing hemisphere by brute force: Simpson in the angle α from the
-// mirror direction, where every model here peaks, and its azimuth.
-double hemisphericalReflectance(const Material& m, const Vec3& wi, int alpha_steps = 8000) {
-  const Vec3 n(0, 0, 1);
-  const double cos_i = glm::dot(n, wi);
-  const Vec3 r = 2.0 * cos_i * n - wi;
-  const Vec3 e1 = glm::normalize(glm::cross(r, Vec3(0, 1, 0)));
-  const Vec3 e2 = glm::cross(r, e1);
-  const auto ring = [&](double alpha) {
-    return test::simpson(
-        [&](double beta) {
-          const Vec3 wo =
-              std::cos(alpha) * r + std::sin(alpha) * (std::cos(beta) * e1 + std::sin(beta) * e2);
-          const double cos_r = glm::dot(n, wo);
-          if (!(cos_r > 0.0)) return 0.0;
-          return m.cosineWeightedBrdf(n, wi, wo, cos_i, cos_r) / cos_i;
-        },
-        0.0, 2.0 * kPi, 256);
-  };
-  return test::simpson([&](double a) { return ring(a) * std::sin(a); }, 0.0, kPi, alpha_steps);
+double hemisphericalReflectance(const Material& m, const Vec3& wi) {
+  return test::hemisphericalReflectance(m, wi, 8000);
 }
 
 // ∫ A / (B + |β − β₀|²) d²β over the unit disc of projected directions (g = 2), in polar
