@@ -34,18 +34,28 @@ struct AbgScatter {
   }
 
   /// @brief The largest f_r cos θi cos θr over every pair of directions whose half vector is
-  /// tilted by tan²θN ≥ @p tan2_min; a NaN gives the overall peak (a bound never proves
-  /// "nothing" from a failed computation).
+  /// tilted by tan²θN ≥ @p tan2_min, with cos θi ≤ @p cos_i_max and cos θr ≤ @p cos_r_max; a
+  /// NaN tilt gives the peak over those cosines (a bound never proves "nothing" from a failed
+  /// computation, nor does a NaN cosine).
   ///
   /// With c = cos θi + cos θr ∈ (0, 2] and t = tan θN, cos θi cos θr ≤ c²/4 and
   /// |β − β₀| = c t, so the product is at most A c² / (4 (B + cᵍ tᵍ)): increasing in c for
-  /// g ≤ 2, and for g > 2 largest at cᵍ tᵍ = 2B / (g − 2) if that c is below 2.
-  [[nodiscard]] double maxBeyond(double tan2_min) const {
+  /// g ≤ 2, and for g > 2 largest at cᵍ tᵍ = 2B / (g − 2) if that c is below the largest.
+  /// Near grazing the cosines themselves decide: f_r ≤ A/B, so the product is at most
+  /// (A/B) cos θi cos θr, which vanishes at the horizon and the terminator as the term does.
+  [[nodiscard]] double maxBeyond(double tan2_min, double cos_i_max = 1.0,
+                                 double cos_r_max = 1.0) const {
+    const auto in_range = [](double cos_max) {
+      return std::isnan(cos_max) ? 1.0 : std::fmin(1.0, std::fmax(0.0, cos_max));
+    };
+    const double ci = in_range(cos_i_max), cr = in_range(cos_r_max);
+    const double by_cosines = a_per_sr / b * ci * cr;
     const double tg = tan2_min > 0.0 ? std::pow(tan2_min, 0.5 * g) : 0.0;
     if (std::isinf(tg)) return 0.0;
-    double c = 2.0;
-    if (g > 2.0 && tg > 0.0) c = std::fmin(2.0, std::pow(2.0 * b / ((g - 2.0) * tg), 1.0 / g));
-    return a_per_sr * c * c / (4.0 * (b + std::pow(c, g) * tg));
+    const double c_max = ci + cr;
+    double c = c_max;
+    if (g > 2.0 && tg > 0.0) c = std::fmin(c_max, std::pow(2.0 * b / ((g - 2.0) * tg), 1.0 / g));
+    return std::fmin(by_cosines, a_per_sr * c * c / (4.0 * (b + std::pow(c, g) * tg)));
   }
 
   /// @brief The tilt of the half vector over which the peak changes by about an e-fold (rad):

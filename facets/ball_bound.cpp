@@ -115,8 +115,12 @@ BallBound FacetIntegrator::boundBall(const Vec3& centre_m, double radius_m,
     const TargetObject& obj = target_->objects[c.object];
     // The narrowest term of the material: its light is the narrowest the facet sends.
     const Material& material = target_->materials[obj.material];
-    const double lobe_rad = material.narrowestWidthRad().value_or(material.lobe.widthRad());
     const Vec3 x = centre_m - obj.origin_m;
+    // ABg's wings are broad: its width is taken where the region sees the facet.
+    const double theta_n_min =
+        material.abg ? minHalfVectorAngle(c.geometry, x, object_beams_[c.object], radius_m) : 0.0;
+    const double lobe_rad =
+        material.narrowestWidthRad(theta_n_min).value_or(material.lobe.widthRad());
     const double d_min =
         std::max(0.0, glm::length(x - c.geometry.centre_m) - c.fan_radius_m - radius_m);
     const double width = 2.0 * c.fan_radius_m + 4.0 * d_min * (c.fan_rad + 2.0 * lobe_rad);

@@ -55,6 +55,13 @@ class BrdfTable {
   [[nodiscard]] double maxBeyond(double tan2_min, double theta_i_max_rad = 0.5 * kPi,
                                  double theta_o_max_rad = 0.5 * kPi) const;
 
+  /// @brief A factor ≤ 1 by which maxBeyond() may be multiplied when every θi is at least
+  /// @p theta_i_min_rad and every θo at least @p theta_o_min_rad: g vanishes at grazing, and in
+  /// the last cell of an axis, of width h, the monotone cubic from g₀ to 0 stays below
+  /// 1.25 g₀ (π/2 − θ) / h (its end slopes are at most 3× the secant). Without it a flat facet
+  /// seen edge-on keeps its whole bound however finely it is split.
+  [[nodiscard]] double grazingFactor(double theta_i_min_rad, double theta_o_min_rad) const;
+
   /// @brief Half the finest step of the grid as given (rad): the interpolant changes on no
   /// finer scale of the directions, and the normal turns the reflected direction twice as fast.
   [[nodiscard]] double widthRad() const { return width_rad_; }
@@ -88,6 +95,8 @@ class BrdfTable {
   std::vector<double> values_;
   std::vector<double> given_[3];
   double width_rad_ = 0.0;
+  // The widths of the last cells of θi and θo, the ones that end at grazing.
+  double last_step_i_rad_ = 0.0, last_step_o_rad_ = 0.0;
   // maxBeyond(): θN_max of the cells, decreasing, and the largest cell bound among them so far.
   std::vector<double> envelope_theta_n_;
   std::vector<double> envelope_max_;

@@ -100,7 +100,12 @@ struct Material {
   /// @brief The narrowest angular width (rad) of the material's directional terms (a lobe's
   /// σ, ABg's peak, a table's step): how finely its light must be sampled by direction, and how
   /// far away it settles into a point source's. Nothing when it reflects only diffusely.
-  [[nodiscard]] std::optional<double> narrowestWidthRad() const {
+  ///
+  /// Given @p theta_n_min_rad, the least tilt of the half vector over the directions in
+  /// question, ABg's width is that of its wings there (AbgScatter::widthBeyondRad()): they
+  /// carry most of its light and are broad, which is what keeps an observer field from taking
+  /// them for a narrow glint. A lobe's bound already falls to nothing away from its peak.
+  [[nodiscard]] std::optional<double> narrowestWidthRad(double theta_n_min_rad = 0.0) const {
     std::optional<double> narrowest;
     const auto consider = [&](double width) {
       if (!narrowest || width < *narrowest) narrowest = width;
@@ -109,7 +114,7 @@ struct Material {
     for (const SpecularLobe& l : more_lobes) {
       if (l.reflectance > 0.0) consider(l.shape.widthRad());
     }
-    if (abg && abg->a_per_sr > 0.0) consider(abg->widthRad());
+    if (abg && abg->a_per_sr > 0.0) consider(abg->widthBeyondRad(theta_n_min_rad));
     if (table) consider(table->widthRad());
     return narrowest;
   }

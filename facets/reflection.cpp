@@ -157,15 +157,23 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
     specular += scale * 0.25 * reflectance * shape.maxXiBeyond(tan2_min);
     narrowest_rad = std::min(narrowest_rad, shape.widthRad());
   });
+  // The least angles of incidence and reflection over the piece: ABg and a table vanish at
+  // grazing, and their bounds must too, or a flat facet seen edge-on (every piece straddling
+  // the horizon) keeps its whole bound however finely it is split.
+  const double theta_i_min = std::max(0.0, angle_i - g.cone_rad - eps_i);
+  const double theta_o_min = std::max(0.0, angle_o - g.cone_rad - eps_o);
   if (material.abg && material.abg->a_per_sr > 0.0) {
-    specular += scale * material.abg->maxBeyond(tan2_min);
+    specular +=
+        scale * material.abg->maxBeyond(tan2_min, std::cos(theta_i_min), std::cos(theta_o_min));
     narrowest_rad = std::min(narrowest_rad, material.abg->widthBeyondRad(theta_n_min));
   }
   if (material.table) {
     // The largest angles of incidence and reflection over the piece: away from grazing, the
     // table's grazing cells do not count.
-    specular += scale * material.table->maxBeyond(tan2_min, angle_i + g.cone_rad + eps_i,
-                                                  angle_o + g.cone_rad + eps_o);
+    specular += scale *
+                material.table->maxBeyond(tan2_min, angle_i + g.cone_rad + eps_i,
+                                          angle_o + g.cone_rad + eps_o) *
+                material.table->grazingFactor(theta_i_min, theta_o_min);
     narrowest_rad = std::min(narrowest_rad, material.table->widthRad());
   }
   // A reflectance of 0 contributes 0 even where the scale overflowed (∞ · 0 would be NaN).
@@ -182,9 +190,10 @@ ContributionBound contributionBound(const PatchGeometry& g, const Vec3& observer
   const bool may_be_clipped = std::abs(angle_i - 0.5 * kPi) <= g.cone_rad + eps_i ||
                               std::abs(angle_o - 0.5 * kPi) <= g.cone_rad + eps_o;
   const auto flat_where_clipped = [&] {
-    // ABg and a table are not judged flat: where they are clipped they are sampled finer,
-    // unless the rule clips exactly (an infinite allowance).
-    bool flat = !material.sampledOnly() || std::isinf(limits.clipped_log_variation);
+    // ABg and a table need no flatness: f_r cos θi cos θr is bounded and vanishes at the cut,
+    // as the Lambertian term does, so the clipped kernel stays continuous for the rule (a lobe's
+    // ρ Ξ / 4 does not vanish there: the kernel jumps at the cut).
+    bool flat = true;
     const double tan2_far = tan2(theta_n + spread);
     for_each_lobe([&](double, const Beckmann& shape) {
       flat = flat && shape.logRatio(tan2_min, tan2_far) <= limits.clipped_log_variation;

@@ -156,6 +156,11 @@ class Refinement {
         if (done(totals_)) break;
       }
       if (result_.evaluations >= opt_.max_evaluations) break;
+      // Pieces proven only by their bounds cost no evaluations: were their bounds to stop
+      // shrinking under splitting, they alone would exhaust memory (4^16 pieces at the depth
+      // limit). Their number is held to a quarter of the evaluations allowed (at least 2^16);
+      // past it the observer stops unconverged, its error the bounds it still holds.
+      if (livePieces() > pieceLimit()) break;
       if (frozen_.unbounded > 0 || frozen_.magnitude() > budget()) break;
       PieceHeap* heap = nextHeap();
       if (heap == nullptr) break;  // everything left is frozen at the depth limit
@@ -229,6 +234,10 @@ class Refinement {
    private:
     CompensatedSum value_sum_, change_sum_, magnitude_sum_;
   };
+
+  [[nodiscard]] std::size_t pieceLimit() const {
+    return static_cast<std::size_t>(std::max<std::int64_t>(opt_.max_evaluations / 4, 1 << 16));
+  }
 
   [[nodiscard]] double budget(double total) const {
     return std::max(opt_.tolerance * std::abs(total), opt_.floor_w_m2);

@@ -673,7 +673,6 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   const std::uint64_t budget =
       args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
   const Study study = loadStudy(args.study_path, budget);
-  requireClosedFormMaterials(study.base, "glint batch");
   fs::path out_dir = args.out_dir;
   if (out_dir.empty()) out_dir = fs::path("out") / fs::path(args.study_path).stem();
 

@@ -427,7 +427,6 @@ void runScene(const RunArgs& requested, std::ostream& err, PointExchange* exchan
       args.memory_bytes > 0 ? args.memory_bytes : defaultMemoryBudgetBytes();
   // A mesh is refused before it is decoded, the target before it is built.
   Scene scene = loadScene(args.scene_path, budget);
-  requireClosedFormMaterials(scene, "glint run");
   overrideAccuracy(scene.accuracy, std::nullopt, args.scheme, scene.source);
   if (scene.engagement) {
     // Over an engagement glint run maps its box and planes; the far field and the reach judge

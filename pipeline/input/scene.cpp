@@ -1280,18 +1280,6 @@ std::string fnv1a64Hex(std::string_view bytes) {
   return buf;
 }
 
-void requireClosedFormMaterials(const Scene& scene, const std::string& command) {
-  for (std::size_t i = 0; i < scene.materials.size(); ++i) {
-    if (!scene.materials[i].sampledOnly()) continue;
-    throw InputError(scene.source + ": /materials/" + escapeToken(scene.material_names[i]) +
-                     ": ABg scatter and measured tables are taken by glint points only in this "
-                     "version; " +
-                     command +
-                     " refuses them (its fields do not yet finish on their wings); fit lobes "
-                     "to the table (glint fit) to run it");
-  }
-}
-
 void recheckScene(const Scene& scene) {
   // The reader's own rules (materialViolation(), positionVerdict()), so that a value made in
   // memory is refused with the words and JSON pointer the same value in a file gets.

@@ -228,13 +228,6 @@ Scene parseScene(std::string_view json_text, const std::string& source,
 /// @throw InputError naming scene.source and the JSON pointer, as parseScene() words it.
 void recheckScene(const Scene& scene);
 
-/// @brief Refuses a scene whose materials have ABg scatter or a measured table, for @p command
-/// (`glint run`, `glint batch`): their fields and far field do not yet finish on such wings
-/// (a disk of ABg exhausted memory in the far field's faces), so until they do only `glint
-/// points` takes them, rather than a run that fails after minutes.
-/// @throw InputError naming the material.
-void requireClosedFormMaterials(const Scene& scene, const std::string& command);
-
 /// @brief Applies the command line's overrides of @p accuracy (`--normals`, `--scheme`) under the
 /// scene file's rule: flat normals are the paper scheme's model only, so flat normals without a
 /// named scheme select it, and flat normals with another scheme are refused.

@@ -128,7 +128,14 @@ TEST(AbgScatter, ItsBoundHoldsEveryPairOfDirections) {
       // The bound beyond this pair's own tilt, and beyond any smaller one.
       ASSERT_LE(value, abg.maxBeyond(p.tan2) * (1.0 + 1e-12)) << "g " << g << " tan² " << p.tan2;
       ASSERT_LE(abg.maxBeyond(p.tan2), abg.maxBeyond(0.25 * p.tan2)) << "g " << g;
+      // And with the pair's own cosines as the largest: near grazing they decide.
+      ASSERT_LE(value, abg.maxBeyond(p.tan2, p.cos_i, p.cos_r) * (1.0 + 1e-12))
+          << "g " << g << " tan² " << p.tan2 << " cos " << p.cos_i << " " << p.cos_r;
     }
+    // Seen edge-on the term vanishes, and so does its bound: (A/B) cos θi cos θr.
+    EXPECT_NEAR(abg.maxBeyond(0.0, 1.0, 1e-9), abg.a_per_sr / abg.b * 1e-9,
+                1e-12 * abg.a_per_sr / abg.b * 1e-9)
+        << "g " << g;
     EXPECT_EQ(abg.maxBeyond(std::nan("")), abg.maxBeyond(0.0)) << "a NaN tilt bounds by the peak";
     EXPECT_NEAR(abg.maxBeyond(0.0), abg.a_per_sr / abg.b, 1e-12 * abg.a_per_sr / abg.b);
   }
@@ -316,9 +323,45 @@ TEST(BrdfTable, ACoarseTablesBoundIsNeverBelowWhatItReflects) {
                  theta_o = std::acos(p.cos_r) * (1.0 + 1e-9);
     ASSERT_LE(value, table->maxBeyond(p.tan2, theta_i, theta_o) * (1.0 + 1e-12))
         << "tan² " << p.tan2 << " θi " << theta_i << " θo " << theta_o;
+    // And with the pair's own angles as the least: the factor that takes g to 0 at grazing.
+    const double least_i = std::acos(p.cos_i) * (1.0 - 1e-9),
+                 least_o = std::acos(p.cos_r) * (1.0 - 1e-9);
+    ASSERT_LE(value,
+              table->maxBeyond(p.tan2) * table->grazingFactor(least_i, least_o) * (1.0 + 1e-12))
+        << "tan² " << p.tan2 << " θi " << least_i << " θo " << least_o;
     ++checked;
   }
   EXPECT_GT(checked, 100000);
+  // The table is given to 80° and completed on 1° steps, so its last cell of θo is 89° to
+  // 90°: there the factor falls linearly to 0 at grazing, 1.25 × (90° − θo) / 1°.
+  EXPECT_DOUBLE_EQ(table->grazingFactor(0.0, 0.5 * kPi), 0.0);
+  EXPECT_NEAR(table->grazingFactor(0.0, 89.9 * kDeg), 0.125, 1e-9);
+  EXPECT_DOUBLE_EQ(table->grazingFactor(0.0, 80.0 * kDeg), 1.0);
+  EXPECT_DOUBLE_EQ(table->grazingFactor(std::nan(""), std::nan("")), 1.0) << "a NaN proves nothing";
+}
+
+// Grazing pairs, where the bound must vanish with the term: θo within 0.5° of the horizon.
+TEST(BrdfTable, ItsBoundVanishesAtGrazingAndHoldsThere) {
+  const auto table = beckmannTable(0.8, 0.3, 15.0, 30.0);
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> grazing(89.5 * kDeg, 0.5 * kPi), any(0.0, 0.5 * kPi),
+      azimuth(0.0, kPi);
+  double largest_ratio = 0.0;
+  for (int k = 0; k < 100000; ++k) {
+    const double ti = any(rng), to = grazing(rng), dp = azimuth(rng);
+    const double value = table->cosineWeightedAt(ti, to, dp);
+    const Vec3 wi(std::sin(ti), 0.0, std::cos(ti));
+    const Vec3 wo(std::sin(to) * std::cos(dp), std::sin(to) * std::sin(dp), std::cos(to));
+    const Vec3 h = wi + wo;
+    const double tan2 = (h.x * h.x + h.y * h.y) / (h.z * h.z);
+    const double bound = table->maxBeyond(tan2 * (1.0 - 1e-9)) *
+                         table->grazingFactor(ti * (1.0 - 1e-9), to * (1.0 - 1e-9));
+    ASSERT_LE(value, bound * (1.0 + 1e-12) + 1e-300) << "θi " << ti << " θo " << to;
+    if (bound > 0.0) largest_ratio = std::max(largest_ratio, value / bound);
+  }
+  // At most 0.5° from grazing the factor is ≤ 0.625: the bound is the envelope's at most that.
+  EXPECT_LE(table->grazingFactor(0.0, 89.5 * kDeg), 0.625 + 1e-9);
+  std::printf("[ table ] grazing: the term reaches %.3f of its bound\n", largest_ratio);
 }
 
 // A table of a Beckmann lobe, fine enough for its width, gives the lobe's own run within the

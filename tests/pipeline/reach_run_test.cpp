@@ -268,19 +268,20 @@ TEST(ReachRun, TheDefaultExamplesReachIsItsBoxsHazardZoneWithinOneVoxel) {
   fs::remove_all(r.out);
 }
 
-// Without a box or plane the reach is all a run computes: refusing it, or the far field it
-// ends in, leaves nothing to do, and the run says so before it starts.
-// ABg and a measured table through glint points; glint run refuses them for now. The disk of
-// reach_pencil.json, 0.1 m across under 7.96e5 W/m², cos θi = 1/|(−1, 0.6, 0.4)| = 0.811: its
-// intensity is I = E A cos θi cos θr f, f = A/B = 20 /sr along the mirror direction for ABg (40.5 m
-// to the MPE of 50 W/m²) and 0.05 /sr everywhere for the table.
-TEST(ReachRun, AbgAndATableGiveTheirClosedFormsThroughPointsAndRunRefusesThem) {
+// ABg and a measured table through glint points, glint run (far field and reach) and glint
+// batch. The disk of reach_pencil.json, 0.1 m across under 7.96e5 W/m², cos θi =
+// 1/|(−1, 0.6, 0.4)| = 0.811: its intensity is I = E A cos θi cos θr f, f = A/B = 20 /sr along
+// the mirror direction for ABg (8.22e4 W/sr, 40.56 m to the MPE of 50 W/m²) and 0.05 /sr
+// everywhere for the table (253 W/sr along the normal, 2.25 m).
+TEST(ReachRun, AbgAndATableGiveTheirClosedFormsThroughPointsRunAndBatch) {
   const fs::path data(GLINT_TEST_DATA_DIR);
   const double e_beam = 1e5 / (kPi * 0.04), area = kPi * 0.05 * 0.05;
   const Vec3 n = glm::normalize(Vec3(-1, 0.6, 0.4)), wi(-1, 0, 0);
   const double cos_i = glm::dot(n, wi);
   const Vec3 mirror = 2.0 * cos_i * n - wi;
   const double peak_w_sr = e_beam * area * cos_i * cos_i * 0.02 / 1e-3;
+  const double table_peak_w_sr = e_beam * area * cos_i * 0.05;
+  const double mpe = 50.0;
   // glint points: E r² along the mirror direction for ABg, and in three directions for the table.
   const fs::path dir = test::freshTestFolder("glint_abg_table");
   // The table's at 20 m, where its light (0.5 W/m²) is far above the scene's floor (8e-4 W/m²,
@@ -290,60 +291,127 @@ TEST(ReachRun, AbgAndATableGiveTheirClosedFormsThroughPointsAndRunRefusesThem) {
   for (const Vec3& d :
        {mirror, glm::normalize(Vec3(-1, 0.2, 0.1)), glm::normalize(Vec3(-0.3, 1.0, 0.0))})
     observers.push_back(20.0 * d);
+  // And 1.7 km away in the disk's own plane, where both terms vanish. Every piece of the disk
+  // straddles the horizon there: before the bounds took cos θr into account, a run's far field
+  // split such pieces on their bounds alone until it ran out of memory.
+  observers.push_back(Vec3(1e3, 1e3, 1e3));
   {
     std::ofstream csv(dir / "points.csv");
     csv << "x,y,z\n";
     for (const Vec3& o : observers) csv << o.x << "," << o.y << "," << o.z << "\n";
   }
-  const auto irradiance = [&](const char* scene) {
+  struct Point {
+    double irradiance_w_m2, evaluations;
+    bool converged;
+  };
+  const auto points = [&](const char* scene) {
     const fs::path out = dir / (std::string(scene) + ".csv");
     const test::Outcome o = test::glint({"points", (data / scene).string(), "--points",
                                          (dir / "points.csv").string(), "--out", out.string()});
     EXPECT_EQ(o.status, 0) << o.err;
-    std::vector<double> e;
+    std::vector<Point> e;
     std::ifstream in(out);
     std::string line;
     std::getline(in, line);
-    const std::size_t column = static_cast<std::size_t>(std::count(
-        line.begin(), line.begin() + static_cast<long>(line.find("irradiance_w_m2")), ','));
+    EXPECT_EQ(line.rfind("x,y,z,irradiance_w_m2,error_estimate_w_m2,evaluations,converged", 0), 0u)
+        << line;
     while (std::getline(in, line)) {
       std::stringstream row(line);
-      std::string cell;
-      for (std::size_t k = 0; k <= column; ++k) std::getline(row, cell, ',');
-      e.push_back(std::stod(cell));
+      std::vector<std::string> cells;
+      for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+      e.push_back({std::stod(cells.at(3)), std::stod(cells.at(5)), cells.at(6) == "1"});
     }
     return e;
   };
-  const std::vector<double> abg = irradiance("abg_disk.json");
+  const std::vector<Point> abg = points("abg_disk.json");
   ASSERT_EQ(abg.size(), observers.size());
   // At 200 m the disk subtends 2.5e-4 rad: ABg's peak (√B / 2 ≈ 0.016 rad wide) is flat across
   // it to 1e-4, and 1/d² to 5e-4.
   const double r2 = glm::dot(observers[0], observers[0]);
-  EXPECT_NEAR(abg[0] * r2 / peak_w_sr, 1.0, 2e-3) << abg[0] * r2 << " W/sr";
-  const std::vector<double> table = irradiance("table_disk.json");
+  EXPECT_NEAR(abg[0].irradiance_w_m2 * r2 / peak_w_sr, 1.0, 2e-3)
+      << abg[0].irradiance_w_m2 * r2 << " W/sr";
+  const std::vector<Point> table = points("table_disk.json");
   ASSERT_EQ(table.size(), observers.size());
-  for (std::size_t k = 1; k < observers.size(); ++k) {
+  for (std::size_t k = 1; k < 4; ++k) {
     const Vec3 wo = glm::normalize(observers[k]);
     const double expected = e_beam * area * cos_i * glm::dot(n, wo) * 0.05;
     // The table's cubic on cos θi cos θo between nodes 5° apart: ~1e-4.
-    EXPECT_NEAR(table[k] * glm::dot(observers[k], observers[k]) / expected, 1.0, 2e-3)
+    EXPECT_NEAR(table[k].irradiance_w_m2 * glm::dot(observers[k], observers[k]) / expected, 1.0,
+                2e-3)
         << "direction " << k;
+  }
+  for (const auto& [name, edge_on] : {std::pair{"ABg", abg.back()}, {"table", table.back()}}) {
+    EXPECT_TRUE(edge_on.converged) << name;
+    // The scene's floor (1e-9 of the beam's 7.96e5 W/m²) is all it may hold.
+    EXPECT_LE(edge_on.irradiance_w_m2, 1e-3) << name;
+    // One rule and its check per coarse facet, 8 × 25, or little more.
+    EXPECT_LE(edge_on.evaluations, 2000.0) << name;
   }
   fs::remove_all(dir);
 
-  // glint run refuses them, with the reason, before any work (its fields do not yet finish on
-  // ABg's wings: a run of this disk exhausted memory in the far field's faces).
-  const RunResult r = runScene(data / "abg_disk.json", "glint_abg_disk_run");
-  EXPECT_EQ(r.outcome.status, 2) << r.outcome.err;
-  EXPECT_NE(r.outcome.err.find("/materials/painted: ABg scatter and measured tables are taken by "
-                               "glint points only"),
-            std::string::npos)
-      << r.outcome.err;
-  EXPECT_FALSE(fs::exists(r.out / "summary.json"));
-  std::printf("[ abg ] disk: I %.4g W/sr (closed form %.4g)\n", abg[0] * r2, peak_w_sr);
+  // glint run: the far field's peak and the reach. The reach's lattice is coarse (16 cells per
+  // face edge, the far field's 64) to keep the test short: it decides only within the far
+  // radius (9.4 m), and the far field beyond, where E = I / r².
+  nlohmann::json scene = nlohmann::json::parse(std::ifstream(data / "abg_disk.json"));
+  scene["far_field"] = {{"face_pixels", 64}};
+  scene["reach"] = {{"face_cells", 16}};
+  const RunResult r = runEdited(scene, "glint_abg_disk_run");
+  ASSERT_EQ(r.outcome.status, 0) << r.outcome.err;
+  const double peak = r.summary.at("far_field").at("peak_intensity_w_sr").get<double>();
+  // The far field's tolerance (0.01) bounds the peak's error.
+  EXPECT_NEAR(peak / peak_w_sr, 1.0, 0.01) << peak;
+  const nlohmann::json& reach = r.summary.at("hazard_reach");
+  const double abg_reach = reach.at("distance_m").get<double>();
+  const double abg_truth = std::sqrt(peak_w_sr / mpe);
+  // Never short of the truth; beyond it by at most the far field's allowance (1.1 × its
+  // tolerance of I, as for the pencil).
+  EXPECT_GE(abg_reach, abg_truth * (1.0 - 1e-3)) << reach.dump();
+  EXPECT_LE(abg_reach, abg_truth * std::sqrt(1.01 * 1.011)) << reach.dump();
+  EXPECT_TRUE(reach.at("closed").get<bool>()) << reach.dump();
+  EXPECT_EQ(reach.at("from"), "far field");
+  EXPECT_EQ(r.summary.at("materials").at("painted").at("model"), "ABg");
   fs::remove_all(r.out);
+
+  // glint batch: the same disk in two surface states, ABg and the table.
+  const fs::path study_dir = test::freshTestFolder("glint_abg_table_study");
+  scene["materials"]["measured"] = {{"table", (data / "abg_disk_table.csv").string()}};
+  // A study needs a box or a plane: a coarse plane beside the disk, as in reach_study.json.
+  scene["planes"] = nlohmann::json::array({{{"name", "beside"},
+                                            {"origin", {-2, -2, -1}},
+                                            {"u_axis", {1, 0, 0}},
+                                            {"v_axis", {0, 1, 0}},
+                                            {"size_m", {4, 4}},
+                                            {"pixel_m", 0.5}}});
+  std::ofstream(study_dir / "scene.json") << scene.dump();
+  std::ofstream(study_dir / "study.json")
+      << R"({"scene": "scene.json", "sweep": {"surface_state": ["painted", "measured"], "material": "painted"}})";
+  const fs::path out = study_dir / "out";
+  const test::Outcome batch =
+      test::glint({"batch", (study_dir / "study.json").string(), "-o", out.string()});
+  ASSERT_EQ(batch.status, 0) << batch.err;
+  std::vector<double> reaches;
+  for (const char* scenario : {"s000000", "s000001"}) {
+    const nlohmann::json result =
+        nlohmann::json::parse(std::ifstream(out / "scenarios" / scenario / "result.json"));
+    EXPECT_TRUE(result.at("hazard_reach").at("closed").get<bool>()) << scenario;
+    reaches.push_back(result.at("hazard_reach").at("distance_m").get<double>());
+  }
+  EXPECT_NEAR(reaches[0], abg_reach, 1e-6 * abg_reach) << "the ABg state, as glint run gave it";
+  // The table's hazard (2.25 m along the normal) lies within the far radius, so the reach's
+  // coarse lattice decides it: never short of the truth, and over it by at most what a lattice
+  // 5.6° between rays leaves unresolved against the table's 5° steps (measured: 2.488 m).
+  const double table_truth = std::sqrt(table_peak_w_sr / mpe);
+  EXPECT_GE(reaches[1], table_truth * (1.0 - 1e-3));
+  EXPECT_LE(reaches[1], table_truth * 1.15);
+  std::printf(
+      "[ abg ] disk: I %.4g W/sr (closed form %.4g); reach %.4g m (%.4g m); table reach "
+      "%.4g m (%.4g m)\n",
+      abg[0].irradiance_w_m2 * r2, peak_w_sr, abg_reach, abg_truth, reaches[1], table_truth);
+  fs::remove_all(study_dir);
 }
 
+// Without a box or plane the reach is all a run computes: refusing it, or the far field it
+// ends in, leaves nothing to do, and the run says so before it starts.
 TEST(ReachRun, WithoutBoxOrPlaneTheReachAndItsFarFieldCannotBeTurnedOff) {
   nlohmann::json scene =
       nlohmann::json::parse(std::ifstream(fs::path(GLINT_TEST_DATA_DIR) / "reach_pencil.json"));
