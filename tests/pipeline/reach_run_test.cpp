@@ -291,10 +291,11 @@ TEST(ReachRun, AbgAndATableGiveTheirClosedFormsThroughPointsRunAndBatch) {
   for (const Vec3& d :
        {mirror, glm::normalize(Vec3(-1, 0.2, 0.1)), glm::normalize(Vec3(-0.3, 1.0, 0.0))})
     observers.push_back(20.0 * d);
-  // And 1.7 km away in the disk's own plane, where both terms vanish. Every piece of the disk
-  // straddles the horizon there: before the bounds took cos θr into account, a run's far field
-  // split such pieces on their bounds alone until it ran out of memory.
-  observers.push_back(Vec3(1e3, 1e3, 1e3));
+  // And 10 m away in the disk's own plane, where both terms vanish. Every piece of the disk
+  // straddles the horizon there: before the bounds took cos θr into account, glint points
+  // split such pieces on their bounds alone for minutes at this observer, and a run's far field
+  // at one like it until memory ran out.
+  observers.push_back(Vec3(1, 1, 1) * (10.0 / std::sqrt(3.0)));
   {
     std::ofstream csv(dir / "points.csv");
     csv << "x,y,z\n";
