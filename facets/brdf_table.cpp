@@ -115,8 +115,6 @@ BrdfTable::BrdfTable(std::vector<double> theta_i_rad, std::vector<double> theta_
                          halfFinestStep(delta_phi_rad)});
   theta_i_ = ai.nodes;
   theta_o_ = ao.nodes;
-  last_step_i_rad_ = theta_i_.back() - theta_i_[theta_i_.size() - 2];
-  last_step_o_rad_ = theta_o_.back() - theta_o_[theta_o_.size() - 2];
   delta_phi_ = ap.nodes;
   buildEnvelope();
 }
@@ -304,12 +302,13 @@ double BrdfTable::grazingFactor(double theta_i_min_rad, double theta_o_min_rad) 
   // g₀ u [u (3 − 2u) − α u (1 − u) + (1 − u)²] for the start slope −α g₀ / h, α ∈ [0, 3]:
   // at most g₀ u (1 + u − u²) ≤ 1.25 g₀ u. Along θo it holds at each θi node, and the θi cubic
   // stays between its cell's two nodes; along θi it holds of the θi cubic itself.
-  const auto factor = [](double theta_min, double last_step) {
+  const auto factor = [](double theta_min, const std::vector<double>& axis) {
     if (!(theta_min >= 0.0)) return 1.0;  // a NaN proves nothing
+    const double last_step = axis.back() - axis[axis.size() - 2];
     const double u = (0.5 * kPi - theta_min) / last_step;
     return std::clamp(1.25 * u, 0.0, 1.0);
   };
-  return factor(theta_i_min_rad, last_step_i_rad_) * factor(theta_o_min_rad, last_step_o_rad_);
+  return factor(theta_i_min_rad, theta_i_) * factor(theta_o_min_rad, theta_o_);
 }
 
 template <class Brdf>

@@ -95,8 +95,6 @@ class BrdfTable {
   std::vector<double> values_;
   std::vector<double> given_[3];
   double width_rad_ = 0.0;
-  // The widths of the last cells of θi and θo, the ones that end at grazing.
-  double last_step_i_rad_ = 0.0, last_step_o_rad_ = 0.0;
   // maxBeyond(): θN_max of the cells, decreasing, and the largest cell bound among them so far.
   std::vector<double> envelope_theta_n_;
   std::vector<double> envelope_max_;
