@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "observers/detail/field_common.h"
 #include "observers/field_grids.h"
 
 namespace glint {
@@ -136,6 +137,28 @@ double ObserverField::irradiance(int i, int j, int k) const {
 std::vector<float> ObserverField::irradianceLattice() const {
   std::size_t outside = 0;
   return activeOnLattice(*grids_->irradiance, spec_.nodes(), outside);
+}
+std::vector<float> ObserverField::unresolvedBoundLattice() const {
+  const field::Lattice lattice{spec_.nodes()};
+  const auto& n = lattice.n;
+  std::vector<float> out(static_cast<std::size_t>(lattice.count()), 0.0f);
+  for (const FieldBlock& b : blocks_) {
+    if (b.status != VoxelStatus::Unresolved) continue;
+    // Rounded up to the next float, so that the bound stays one.
+    const float bound =
+        std::nextafter(static_cast<float>(std::min(
+                           b.bound_w_m2, static_cast<double>(std::numeric_limits<float>::max()))),
+                       std::numeric_limits<float>::infinity());
+    const openvdb::CoordBBox box = field::ownedBox(b.origin, b.size, lattice);
+    for (auto it = box.begin(); it; ++it) {
+      const openvdb::Coord& q = *it;
+      out[(static_cast<std::size_t>(q.z()) * static_cast<std::size_t>(n[1]) +
+           static_cast<std::size_t>(q.y())) *
+              static_cast<std::size_t>(n[0]) +
+          static_cast<std::size_t>(q.x())] = bound;
+    }
+  }
+  return out;
 }
 VoxelStatus ObserverField::status(int i, int j, int k) const {
   return static_cast<VoxelStatus>(

@@ -5,6 +5,7 @@
 /// (docs/architecture.md, "How it works": the observer field). OpenVDB holds the result;
 /// this header does not include it (see observers/field_grids.h for the grids themselves).
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -92,17 +93,19 @@ struct FieldSpec {
   /// resolved across itself and interpolated along itself); false halves every axis, as the
   /// octree of the first versions did (kept to measure the difference).
   bool anisotropic = true;
-  /// The least irradiance that matters (the MPE, or the aided MPE if lower): a finest block
-  /// whose bound reaches it while a glint narrower than its lattice may pass unseen marks its
-  /// points below it VoxelStatus::Unresolved. 0: every such block marks all its points.
-  double hazard_threshold_w_m2 = 0.0;
+  /// The irradiances judged (W/m², each > 0: the MPE, the aided MPE, each level's): a finest
+  /// block whose bound reaches one while a glint narrower than its lattice may pass unseen
+  /// marks VoxelStatus::Unresolved each of its points whose value lies below a threshold its
+  /// bound reaches, so that every threshold, not only the lowest, is judged with the bound
+  /// (FieldBlock::bound_w_m2). Empty: every such block marks all its points.
+  std::vector<double> hazard_thresholds_w_m2;
   /// A field that only sorts its points into hazardous and not (the hazard reach), where > 0:
-  /// a block is then also skipped where its bound is below (1 − tolerance) ×
-  /// hazard_threshold_w_m2 (none of its points can count hazardous), and accepted whole, its
+  /// a block is then also skipped where its bound is below (1 − tolerance) × the lowest
+  /// threshold (none of its points can count hazardous), and accepted whole, its
   /// points interpolated, where every one of its samples is at least this (all its points
   /// count hazardous, whatever passes between the samples, so neither its bound nor its
   /// interpolation error matters). Values below the first or between the samples of the second
-  /// are then not resolved, and values below hazard_threshold_w_m2 only to tolerance × it (each
+  /// are then not resolved, and values below the lowest threshold only to tolerance × it (each
   /// point's integration and each block's interpolation): the accuracy a point at the threshold
   /// has, which is all the sorting reads. 0: the field resolves its values.
   double classify_above_w_m2 = 0.0;
@@ -112,6 +115,12 @@ struct FieldSpec {
   /// unused): see RadialLattice.
   std::optional<RadialLattice> radial;
 
+  /// @brief The least of hazard_thresholds_w_m2 (W/m²; 0 where there is none).
+  [[nodiscard]] double lowestHazardThresholdW_m2() const {
+    double lowest = 0.0;
+    for (const double t : hazard_thresholds_w_m2) lowest = lowest == 0.0 ? t : std::min(lowest, t);
+    return lowest;
+  }
   /// @brief Lattice points per axis (voxels + 1), after extending to whole blocks.
   [[nodiscard]] std::array<int, 3> nodes() const;
   /// @brief World position of lattice point (i, j, k).
@@ -189,7 +198,7 @@ struct FieldStats {
   std::int64_t blocks_refined = 0;
   std::int64_t blocks_finest = 0;  ///< every point evaluated
   /// Finest blocks whose bound says a glint narrower than the lattice may pass between their
-  /// points above the hazard threshold (FieldSpec::hazard_threshold_w_m2), and the points
+  /// points above a hazard threshold (FieldSpec::hazard_thresholds_w_m2), and the points
   /// they mark VoxelStatus::Unresolved.
   std::int64_t unresolved_blocks = 0;
   std::int64_t unresolved_points = 0;
@@ -260,6 +269,11 @@ class ObserverField {
   /// @brief The irradiance of every lattice point (W/m²), as stored (float), 0 where not
   /// computed; indexed [(k · nodes[1] + j) · nodes[0] + i].
   [[nodiscard]] std::vector<float> irradianceLattice() const;
+  /// @brief What each lattice point of an Unresolved block may receive at most
+  /// (FieldBlock::bound_w_m2, W/m²; +∞ where unbounded), 0 at the points of every other
+  /// block; indexed as irradianceLattice(). Only the points whose status() is Unresolved need
+  /// it: the others' values say it all.
+  [[nodiscard]] std::vector<float> unresolvedBoundLattice() const;
   [[nodiscard]] VoxelStatus status(int i, int j, int k) const;
   [[nodiscard]] int level(int i, int j, int k) const;
 

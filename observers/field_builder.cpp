@@ -56,12 +56,7 @@ struct PointValue {
 
 // The voxels a block owns (see Block), as an inclusive OpenVDB box.
 openvdb::CoordBBox ownedBox(const Block& b, const Lattice& lattice) {
-  openvdb::Coord lo(b.o[0], b.o[1], b.o[2]), hi;
-  for (int a = 0; a < 3; ++a) {
-    const int end = b.o[a] + b.size[a];
-    hi[a] = lattice.n[a] == 1 ? 0 : end == lattice.n[a] - 1 ? end : end - 1;
-  }
-  return {lo, hi};
+  return field::ownedBox(b.o, b.size, lattice);
 }
 
 // The computation of one adaptive field, level by level: every block of a level is bounded,
@@ -214,7 +209,6 @@ class FieldBuilder {
     std::optional<Unresolved> unresolved = std::nullopt;
     bool unevaluated = false;  // see unevaluated()
   };
-
   // What a finest block's bound says that its samples (all its lattice points) cannot.
   [[nodiscard]] std::optional<Unresolved> unresolvedBound(const Block& b,
                                                           const BallBound& bound) const {
@@ -224,17 +218,41 @@ class FieldBuilder {
       if (!v.excluded) largest = std::max(largest, v.irradiance_w_m2);
     });
     const std::optional<double> most = field::narrowGlintBound(
-        bound, largest, spec_.tolerance, spec_.floor_w_m2, spec_.hazard_threshold_w_m2);
+        bound, largest, spec_.tolerance, spec_.floor_w_m2, spec_.lowestHazardThresholdW_m2());
     if (!most) return std::nullopt;
     return Unresolved{*most, bound.resolving_spacing_m};
   }
 
-  // Marks status Unresolved the evaluated points of the unresolved blocks that lie below the
-  // hazard threshold (all of them without one), and counts them.
+  // The samples of block @p b, as the checks read them (field::BlockSamples).
+  [[nodiscard]] field::BlockSamples samplesOf(const Block& b) const {
+    field::BlockSamples samples;
+    samples.far_from_target = farFromTarget(b);
+    field::forEachSample(b.size, [&](int di, int dj, int dk) {
+      const Index3 p = at(b, di, dj, dk);
+      const PointValue& v = values_.at(lattice_.key(p[0], p[1], p[2]));
+      const std::size_t s = samples.count++;
+      samples.excluded = samples.excluded || v.excluded;
+      samples.irradiance_w_m2[s] = v.irradiance_w_m2;
+      if (samples.far_from_target) samples.distance_m[s] = litDistance(p[0], p[1], p[2]);
+    });
+    return samples;
+  }
+
+  // Whether a point of value @p value_w_m2 in a block whose bound is @p bound_w_m2 may be judged
+  // wrongly by its value: a threshold lies above the value and within the bound (any, where
+  // there are no thresholds). Each threshold counts, not only the lowest: a point between the
+  // lowest and the MPE, beside a glint the lattice cannot see, may be above the MPE.
+  [[nodiscard]] bool boundMayCross(double value_w_m2, double bound_w_m2) const {
+    if (spec_.hazard_thresholds_w_m2.empty()) return true;
+    return std::any_of(spec_.hazard_thresholds_w_m2.begin(), spec_.hazard_thresholds_w_m2.end(),
+                       [&](double t) { return value_w_m2 < t && !(bound_w_m2 < t); });
+  }
+
+  // Marks status Unresolved the evaluated points of the unresolved blocks whose value lies below
+  // a threshold their block's bound reaches (all of them without thresholds), and counts them.
   void markUnresolved(FieldGrids& grids) {
     auto irradiance = grids.irradiance->getAccessor();
     auto status = grids.status->getAccessor();
-    const double threshold = spec_.hazard_threshold_w_m2;
     for (FinalBlock& f : final_) {
       if (!f.unresolved) continue;
       std::int64_t marked = 0;
@@ -247,7 +265,7 @@ class FieldBuilder {
         const bool filled = f.unevaluated && code == statusCode(VoxelStatus::Unresolved);
         if (!filled) {
           if (code != statusCode(VoxelStatus::Evaluated)) continue;
-          if (threshold > 0.0 && !(static_cast<double>(irradiance.getValue(p)) < threshold))
+          if (!boundMayCross(static_cast<double>(irradiance.getValue(p)), f.unresolved->bound_w_m2))
             continue;
           status.setValue(p, statusCode(VoxelStatus::Unresolved));
         }
@@ -256,7 +274,7 @@ class FieldBuilder {
         stats_.unresolved_max_m = glm::max(stats_.unresolved_max_m, x);
         ++marked;
       }
-      if (marked == 0) {  // every point already at the threshold: the samples say it all
+      if (marked == 0) {  // every point already at the thresholds: the samples say it all
         f.unresolved.reset();
         continue;
       }
@@ -377,7 +395,7 @@ class FieldBuilder {
   [[nodiscard]] bool skipped(const BallBound& bound) const {
     return bound.upper_w_m2 <= spec_.floor_w_m2 ||
            (classifying() &&
-            bound.upper_w_m2 < (1.0 - spec_.tolerance) * spec_.hazard_threshold_w_m2);
+            bound.upper_w_m2 < (1.0 - spec_.tolerance) * spec_.lowestHazardThresholdW_m2());
   }
   [[nodiscard]] bool classifying() const { return spec_.classify_above_w_m2 > 0.0; }
 
@@ -517,18 +535,8 @@ class FieldBuilder {
     if (const std::optional<Decision> d = field::decideByBound(bound, b.size, spec_.floor_w_m2)) {
       return *d;
     }
-    field::BlockSamples samples;
-    samples.far_from_target = farFromTarget(b);
-    field::forEachSample(b.size, [&](int di, int dj, int dk) {
-      const Index3 p = at(b, di, dj, dk);
-      const PointValue& v = values_.at(lattice_.key(p[0], p[1], p[2]));
-      const std::size_t s = samples.count++;
-      samples.excluded = samples.excluded || v.excluded;
-      samples.irradiance_w_m2[s] = v.irradiance_w_m2;
-      if (samples.far_from_target) samples.distance_m[s] = litDistance(p[0], p[1], p[2]);
-    });
-    return field::decideBySamples(samples, b.size, bound, spec_.tolerance, spec_.floor_w_m2,
-                                  classifying() ? spec_.hazard_threshold_w_m2 : 0.0);
+    return field::decideBySamples(samplesOf(b), b.size, bound, spec_.tolerance, spec_.floor_w_m2,
+                                  classifying() ? spec_.lowestHazardThresholdW_m2() : 0.0);
   }
 
   // Writes final block @p f's status, level and (accepted) interpolated irradiance into @p t,
@@ -692,9 +700,9 @@ class FieldBuilder {
   static std::optional<FacetIntegrator> classifyingAccuracy(const FacetIntegrator& integrator,
                                                             const FieldSpec& spec) {
     if (!(spec.classify_above_w_m2 > 0.0)) return std::nullopt;
-    return integrator.withAccuracy(
-        integrator.options().tolerance,
-        std::max(integrator.options().floor_w_m2, spec.tolerance * spec.hazard_threshold_w_m2));
+    return integrator.withAccuracy(integrator.options().tolerance,
+                                   std::max(integrator.options().floor_w_m2,
+                                            spec.tolerance * spec.lowestHazardThresholdW_m2()));
   }
 
   const std::optional<FacetIntegrator> classifying_;

@@ -56,10 +56,13 @@ void validateFieldSpec(const FieldSpec& spec) {
   const int b = spec.block_voxels;
   if (!(spec.voxel_m > 0.0) || !std::isfinite(spec.voxel_m) || b < 1 || (b & (b - 1)) != 0 ||
       !(spec.tolerance >= 0.0) || !std::isfinite(spec.tolerance) || !(spec.floor_w_m2 >= 0.0) ||
-      !std::isfinite(spec.floor_w_m2) || !(spec.hazard_threshold_w_m2 >= 0.0) ||
-      !std::isfinite(spec.hazard_threshold_w_m2) || !(spec.classify_above_w_m2 >= 0.0) ||
+      !std::isfinite(spec.floor_w_m2) || !(spec.classify_above_w_m2 >= 0.0) ||
       !std::isfinite(spec.classify_above_w_m2)) {
     throw std::invalid_argument("FieldSpec out of range");
+  }
+  for (const double t : spec.hazard_thresholds_w_m2) {
+    if (!(t > 0.0) || !std::isfinite(t))
+      throw std::invalid_argument("FieldSpec: a hazard threshold out of range");
   }
   for (std::size_t a = 0; a < 3; ++a) {
     if (!(std::abs(glm::length(spec.axes[a]) - 1.0) < 1e-9) ||

@@ -2,11 +2,16 @@
 // field beyond.
 #include "observers/reach.h"
 
+#include <tbb/concurrent_hash_map.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <vector>
 
 #include "observers/detail/cube_faces.h"
 #include "observers/far_field.h"
@@ -30,7 +35,243 @@ double farReachToward(const FarField& far, double threshold_w_m2, double extinct
   return r >= farRadiusToward(far.spec(), d) ? r : 0.0;
 }
 
+// The stretch of ray (i, j) of a face of @p n cells an edge: its distance over the layer plane's.
+double rayStretch(int i, int j, int n) {
+  const double step = 2.0 / n;
+  const double u = -1.0 + step * i, v = -1.0 + step * j;
+  return std::sqrt(1.0 + u * u + v * v);
+}
+
+void throwIfStopped(const WorkCounter* counter) {
+  if (counter != nullptr && counter->stopRequested()) throw WorkStopped();
+}
+
+// Between four rays the largest value a peak could have is taken as their largest plus
+// kRaysAllowance times the concave second differences across the rays at their corners (along
+// each of the two directions, the larger of the corners', summed). For a round Gaussian peak of
+// standard deviation s, wherever it lies among rays h apart, 1.40 is needed at s = 0.433 h (0.95
+// along one direction), less as it widens (0.22 at s = h); and the light glint's field counts
+// resolved is at least that wide (four standard deviations, its width, reach √3 h; narrower
+// light is its narrow-glint bound's, BallBound::narrow_w_m2).
+constexpr double kRaysAllowance = 2.0;
+// Where that reaches a threshold the square is sampled: its centre and its edges' midpoints,
+// and the largest value is taken as the nine samples' largest plus kPartAllowance[m − 1] times
+// their lines' concave second differences (the larger of the three lines along each
+// direction, summed), m the halvings so far; where that still reaches it, each quarter the same
+// way, down to kBetweenRaysDepth halvings. Over a square of side h, the factor needed is 0.27 at
+// s = 0.433 h, and the peak is twice as wide against each quarter: 0.153 at 0.87 h, 0.132 at
+// 1.7 h, 0.127 at 3.5 h. The factors hold 1.25 times that.
+constexpr int kBetweenRaysDepth = 4;
+constexpr std::array<double, kBetweenRaysDepth> kPartAllowance = {0.34, 0.19, 0.165, 0.16};
+
+// The squares between the rays of one face of the reach's lattice (computeNearReach()): for
+// each cell of rays, the farthest layer at which some point between its four rays counts
+// hazardous though the rays do not, for each threshold. Squares are judged from the far end
+// of a cell inward and only beyond what its rays already reach, so a cell samples between its
+// rays only about its crossings. Each cell is one task with its own samples: the result does
+// not depend on the threads.
+class BetweenRays {
+ public:
+  struct Found {
+    int i = 0, j = 0, k = 0;
+    std::size_t t = 0;
+  };
+
+  BetweenRays(const FacetIntegrator& integrator, const ReachSpec& spec, NearReach::Face& face,
+              const std::vector<float>& value, const ExcludedFn& excluded, WorkCounter* counter)
+      : integrator_(integrator),
+        spec_(spec),
+        face_(face),
+        lattice_(*face.spec.radial),
+        value_(value),
+        excluded_(excluded),
+        counter_(counter) {}
+
+  // Judges every square of cell (i, j) (called once a cell, from any thread).
+  void judgeCell(int i, int j) {
+    Task& task = tasks_.local();
+    const int n = lattice_.face_cells;
+    for (std::size_t t = 0; t < spec_.thresholds_w_m2.size(); ++t) {
+      const double hazardous_w_m2 = (1.0 - spec_.tolerance) * spec_.thresholds_w_m2[t];
+      double rays_plane_m = 0.0;  // what the cell's rays reach
+      for (int c = 0; c < 4; ++c) {
+        const int a = i + (c & 1), b = j + (c >> 1);
+        rays_plane_m =
+            std::max(rays_plane_m, static_cast<double>(face_.reach_m[t][rayIndex(a, b, n)]) /
+                                       rayStretch(a, b, n));
+      }
+      for (int k = lattice_.layers; k >= 0; --k) {
+        const double beyond_m = lattice_.layerDistance(std::min(k + 1, lattice_.layers));
+        // Nothing nearer extends the cell's reach (the rays' reach is kept as a float).
+        if (beyond_m <= rays_plane_m * (1.0 + 1e-6)) break;
+        if (!squareMayReach(task, i, j, k, hazardous_w_m2)) continue;
+        face_.between_plane_m[t][static_cast<std::size_t>(j) * static_cast<std::size_t>(n) +
+                                 static_cast<std::size_t>(i)] = static_cast<float>(beyond_m);
+        task.found.push_back({i, j, k, t});
+        break;
+      }
+    }
+  }
+
+  [[nodiscard]] std::int64_t points() const {
+    std::int64_t total = 0;
+    for (const Task& t : tasks_) total += t.points;
+    return total;
+  }
+  [[nodiscard]] std::int64_t evaluations() const {
+    std::int64_t total = 0;
+    for (const Task& t : tasks_) total += t.evaluations;
+    return total;
+  }
+  // The squares found hazardous, in the order of their cells and thresholds.
+  [[nodiscard]] std::vector<Found> found() const {
+    std::vector<Found> all;
+    for (const Task& t : tasks_) all.insert(all.end(), t.found.begin(), t.found.end());
+    const int n = lattice_.face_cells;
+    std::sort(all.begin(), all.end(), [n](const Found& a, const Found& b) {
+      const int ca = a.j * n + a.i, cb = b.j * n + b.i;
+      return ca != cb ? ca < cb : a.t < b.t;
+    });
+    return all;
+  }
+
+ private:
+  // Sample coordinates in units of 1 / 2^kBetweenRaysDepth of the rays' spacing.
+  static constexpr int kUnit = 1 << kBetweenRaysDepth;
+
+  struct Task {
+    IntegratorWorkspace workspace;
+    std::vector<Found> found;
+    std::int64_t points = 0, evaluations = 0;
+  };
+  // (k, x, y) → value (NaN: inside the target), shared by the cells: a sample on an edge
+  // between two cells is integrated once, by whichever comes first (the same value either way).
+  using Samples = tbb::concurrent_hash_map<std::uint64_t, double>;
+
+  // The value at lattice point (i, j, k): NaN inside the target.
+  [[nodiscard]] double latticeValue(int i, int j, int k) const {
+    return static_cast<double>(
+        value_[rayIndex(i, j, lattice_.face_cells) * static_cast<std::size_t>(lattice_.layers + 1) +
+               static_cast<std::size_t>(k)]);
+  }
+
+  // The value at (x, y) (in kUnit units of the rays' spacing from the face's corner ray) on
+  // layer k: the lattice's own at a ray, else integrated here (its value and error where it
+  // did not converge), NaN inside the target.
+  double sampleAt(Task& task, int x, int y, int k) {
+    if (x % kUnit == 0 && y % kUnit == 0 && x >= 0 && y >= 0 && x <= kUnit * lattice_.face_cells &&
+        y <= kUnit * lattice_.face_cells) {
+      return latticeValue(x / kUnit, y / kUnit, k);
+    }
+    constexpr std::uint64_t kOffset = 1u << 20;
+    const std::uint64_t key = (static_cast<std::uint64_t>(k) << 42) |
+                              (static_cast<std::uint64_t>(x + static_cast<int>(kOffset)) << 21) |
+                              static_cast<std::uint64_t>(y + static_cast<int>(kOffset));
+    Samples::accessor entry;
+    if (!samples_.insert(entry, key)) return entry->second;  // (others wait for a new one)
+    const double step = 2.0 / lattice_.face_cells;
+    const std::array<Vec3, 3>& e = face_.spec.axes;
+    const Vec3 p = lattice_.centre_m +
+                   lattice_.layerDistance(k) *
+                       (e[2] + (-1.0 + step * x / kUnit) * e[0] + (-1.0 + step * y / kUnit) * e[1]);
+    double v = std::numeric_limits<double>::quiet_NaN();
+    if (!(excluded_ && excluded_(p))) {
+      const ObserverResult r = integrator_.adaptive(p, task.workspace);
+      v = r.irradiance_w_m2 + (r.converged ? 0.0 : r.error_estimate_w_m2);
+      ++task.points;
+      task.evaluations += r.evaluations;
+      if (counter_ != nullptr) counter_->evaluations.fetch_add(r.evaluations);
+    }
+    entry->second = v;
+    return v;
+  }
+
+  // Square (i, j) of layer k, between four rays whose values are the lattice's.
+  bool squareMayReach(Task& task, int i, int j, int k, double hazardous_w_m2) {
+    const int n = lattice_.face_cells;
+    double largest = 0.0, bend_x = 0.0, bend_y = 0.0;
+    for (int c = 0; c < 4; ++c) {
+      const int a = i + (c & 1), b = j + (c >> 1);
+      const double v = latticeValue(a, b, k);
+      if (std::isnan(v)) return false;  // the target's surface: its own rule
+      if (v >= hazardous_w_m2) return true;
+      largest = std::max(largest, v);
+      // On a face's edge, the difference one ray in; one that meets the target's inside (NaN)
+      // counts as steep as can be.
+      const int ca = std::clamp(a, 1, n - 1), cb = std::clamp(b, 1, n - 1);
+      const double dx =
+          2.0 * latticeValue(ca, b, k) - latticeValue(ca - 1, b, k) - latticeValue(ca + 1, b, k);
+      const double dy =
+          2.0 * latticeValue(a, cb, k) - latticeValue(a, cb - 1, k) - latticeValue(a, cb + 1, k);
+      bend_x = std::isnan(dx) ? std::numeric_limits<double>::infinity() : std::max(bend_x, dx);
+      bend_y = std::isnan(dy) ? std::numeric_limits<double>::infinity() : std::max(bend_y, dy);
+    }
+    if (largest + kRaysAllowance * (bend_x + bend_y) < hazardous_w_m2) return false;
+    return partMayReach(task, kUnit * i, kUnit * j, kUnit, k, 1, hazardous_w_m2);
+  }
+
+  // The part of side s (kUnit units) at (x0, y0) of a square, @p depth halvings of the rays'
+  // spacing deep once its nine samples are taken.
+  bool partMayReach(Task& task, int x0, int y0, int s, int k, int depth, double hazardous_w_m2) {
+    const int h = s / 2;
+    std::array<double, 9> v{};  // index 3b + a, at (x0 + a h, y0 + b h)
+    double largest = std::numeric_limits<double>::quiet_NaN();
+    for (int b = 0; b < 3; ++b)
+      for (int a = 0; a < 3; ++a) {
+        const double x = sampleAt(task, x0 + a * h, y0 + b * h, k);
+        if (x >= hazardous_w_m2) return true;
+        v[static_cast<std::size_t>(3 * b + a)] = x;
+        if (!std::isnan(x)) largest = std::isnan(largest) ? x : std::max(largest, x);
+      }
+    if (std::isnan(largest)) return false;  // wholly inside the target
+    double bend_x = 0.0, bend_y = 0.0;
+    for (int l = 0; l < 3; ++l) {
+      const auto at = [&](int a, int b) { return v[static_cast<std::size_t>(3 * b + a)]; };
+      const double dx = 2.0 * at(1, l) - at(0, l) - at(2, l);
+      const double dy = 2.0 * at(l, 1) - at(l, 0) - at(l, 2);
+      bend_x = std::isnan(dx) ? std::numeric_limits<double>::infinity() : std::max(bend_x, dx);
+      bend_y = std::isnan(dy) ? std::numeric_limits<double>::infinity() : std::max(bend_y, dy);
+    }
+    const double allowance = kPartAllowance[static_cast<std::size_t>(depth - 1)];
+    if (largest + allowance * (bend_x + bend_y) < hazardous_w_m2) return false;
+    if (depth == kBetweenRaysDepth) return true;
+    for (int c = 0; c < 4; ++c) {
+      if (partMayReach(task, x0 + (c & 1) * h, y0 + (c >> 1) * h, h, k, depth + 1,
+                       hazardous_w_m2)) {
+        return true;
+      }
+    }
+    return false;
+  }
+
+  const FacetIntegrator& integrator_;
+  const ReachSpec& spec_;
+  NearReach::Face& face_;
+  const RadialLattice& lattice_;
+  const std::vector<float>& value_;
+  const ExcludedFn& excluded_;
+  WorkCounter* counter_;
+  tbb::enumerable_thread_specific<Task> tasks_;
+  Samples samples_;
+};
+
 }  // namespace
+
+double NearReach::cellPlaneM(int f, std::size_t t, int i, int j) const {
+  const int n = spec.face_cells;
+  const Face& face = faces[static_cast<std::size_t>(f)];
+  // The layers are planes: a ray's reach is a layer's plane distance times its stretch, and a
+  // point of the cell between the rays lies no farther than that plane along its own direction.
+  const std::vector<float>& r = face.reach_m[t];
+  double plane_m =
+      face.between_plane_m[t][static_cast<std::size_t>(j) * static_cast<std::size_t>(n) +
+                              static_cast<std::size_t>(i)];
+  for (int c = 0; c < 4; ++c) {
+    const int a = i + (c & 1), b = j + (c >> 1);
+    plane_m = std::max(plane_m, static_cast<double>(r[rayIndex(a, b, n)]) / rayStretch(a, b, n));
+  }
+  return plane_m;
+}
 
 double reachStartM(const ReachSpec& spec) { return spec.near_m / (spec.inner_layers + 1); }
 
@@ -42,10 +283,7 @@ FieldSpec reachFaceSpec(int face, const ReachSpec& spec) {
   s.block_voxels = spec.block_voxels;
   s.tolerance = spec.tolerance;
   s.floor_w_m2 = spec.floor_w_m2;
-  s.hazard_threshold_w_m2 =
-      spec.thresholds_w_m2.empty()
-          ? 0.0
-          : *std::min_element(spec.thresholds_w_m2.begin(), spec.thresholds_w_m2.end());
+  s.hazard_thresholds_w_m2 = spec.thresholds_w_m2;
   // Only whether points are hazardous is read (computeNearReach()): a block hazardous at
   // every sample for the highest threshold is taken whole, a hair above it so that its
   // interpolated points, rounded to float, stay so.
@@ -68,17 +306,7 @@ double NearReach::toward(const Vec3& direction, std::size_t t) const {
   const cube::FaceHit h = cube::faceHit(direction, n);
   const int i = std::clamp(static_cast<int>(std::floor(h.x)), 0, n - 1);
   const int j = std::clamp(static_cast<int>(std::floor(h.y)), 0, n - 1);
-  const std::vector<float>& r = faces[static_cast<std::size_t>(h.face)].reach_m[t];
-  // The layers are planes: a ray's reach is a layer's plane distance times its stretch, and a
-  // point of the cell between the rays lies no farther than that plane along its own direction.
-  const double step = 2.0 / n;
-  double plane_m = 0.0;
-  for (int c = 0; c < 4; ++c) {
-    const int a = i + (c & 1), b = j + (c >> 1);
-    const double u = -1.0 + step * a, v = -1.0 + step * b;
-    plane_m = std::max(plane_m,
-                       static_cast<double>(r[rayIndex(a, b, n)]) / std::sqrt(1.0 + u * u + v * v));
-  }
+  const double plane_m = cellPlaneM(h.face, t, i, j);
   const double cos_n =
       glm::dot(direction, cube::kFaceFrames[static_cast<std::size_t>(h.face)].normal);
   return plane_m / cos_n;
@@ -111,9 +339,24 @@ std::int64_t NearReach::unresolvedPoints() const {
   return n;
 }
 
+std::int64_t NearReach::betweenPoints() const {
+  std::int64_t n = 0;
+  for (const Face& f : faces) n += f.between_points;
+  return n;
+}
+
 NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& spec,
                            const ExcludedFn& excluded, WorkCounter* counter,
                            PointExchange* exchange) {
+  // The accuracy the lattice's own points have (a classifying field's): below the lowest
+  // threshold only tolerance × it.
+  const double lowest_w_m2 =
+      spec.thresholds_w_m2.empty()
+          ? 0.0
+          : *std::min_element(spec.thresholds_w_m2.begin(), spec.thresholds_w_m2.end());
+  const FacetIntegrator classifying = integrator.withAccuracy(
+      integrator.options().tolerance,
+      std::max(integrator.options().floor_w_m2, spec.tolerance * lowest_w_m2));
   NearReach near;
   near.spec = spec;
   const std::size_t thresholds = spec.thresholds_w_m2.size();
@@ -124,6 +367,7 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
     NearReach::Face& out = near.faces[static_cast<std::size_t>(f)];
     out.spec = reachFaceSpec(f, spec);
     const ObserverField field = computeField(integrator, out.spec, excluded, counter, exchange);
+    throwIfStopped(counter);
     out.stats = field.stats();
     const RadialLattice& r = *out.spec.radial;
     const int n = r.face_cells;
@@ -131,15 +375,28 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
     out.reach_m.assign(thresholds, std::vector<float>(rays, 0.0f));
     out.peak_w_m2.assign(rays, 0.0f);
     // Each lattice point read once: bit t says whether it counts as hazardous for threshold t.
-    // An Unresolved point may have a glint beside it that its lattice cannot see; an
-    // Unconverged one may be short of its value by its error, which the field keeps only as
-    // the largest value plus error of them all; the target's inside is no place.
+    // An Unresolved point may have a glint beside it that its lattice cannot see, up to its
+    // block's bound: it counts for each threshold that bound reaches (the lowest threshold's
+    // bound says nothing of the MPE's); an Unconverged one may be short of its value by its
+    // error, which the field keeps only as the largest value plus error of them all; the
+    // target's inside is no place.
     const double unconverged_upper_w_m2 = out.stats.unconverged_max_upper_w_m2;
+    const std::vector<float> unresolved_bound = field.unresolvedBoundLattice();
+    const auto boundAt = [&](int i, int j, int k) {
+      return static_cast<double>(
+          unresolved_bound[(static_cast<std::size_t>(k) * static_cast<std::size_t>(n + 1) +
+                            static_cast<std::size_t>(j)) *
+                               static_cast<std::size_t>(n + 1) +
+                           static_cast<std::size_t>(i)]);
+    };
     const int layers = r.layers + 1;
     const auto at = [&](int i, int j, int k) {
       return (rayIndex(i, j, n) * static_cast<std::size_t>(layers)) + static_cast<std::size_t>(k);
     };
     std::vector<std::uint8_t> hazard_bits(rays * static_cast<std::size_t>(layers), 0);
+    // Each point's value as the squares between the rays read it: NaN inside the target.
+    std::vector<float> value(rays * static_cast<std::size_t>(layers),
+                             std::numeric_limits<float>::quiet_NaN());
     for (int j = 0; j <= n; ++j)
       for (int i = 0; i <= n; ++i) {
         double peak = 0.0;
@@ -147,11 +404,14 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
           const VoxelStatus s = field.status(i, j, k);
           if (s == VoxelStatus::Excluded) continue;
           const double e = field.irradiance(i, j, k);
+          value[at(i, j, k)] = static_cast<float>(e);
           peak = std::max(peak, e);
+          const double bound = s == VoxelStatus::Unresolved ? boundAt(i, j, k) : 0.0;
           std::uint8_t bits = 0;
           for (std::size_t t = 0; t < thresholds; ++t) {
             const bool hazardous =
-                s == VoxelStatus::Unresolved || e >= hazardous_w_m2[t] ||
+                e >= hazardous_w_m2[t] ||
+                (s == VoxelStatus::Unresolved && !(bound < hazardous_w_m2[t])) ||
                 (s == VoxelStatus::Unconverged && unconverged_upper_w_m2 >= hazardous_w_m2[t]);
             bits = static_cast<std::uint8_t>(bits | (hazardous ? 1u << t : 0u));
           }
@@ -191,6 +451,31 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
           }
         }
       }
+    // Between the rays: each cell's squares beyond what its rays reach (see BetweenRays).
+    out.between_plane_m.assign(thresholds,
+                               std::vector<float>(static_cast<std::size_t>(n) * n, 0.0f));
+    BetweenRays between(classifying, spec, out, value, excluded, counter);
+    tbb::parallel_for(0, n * n, [&](int cell) {
+      if (counter != nullptr && counter->stopRequested()) return;
+      between.judgeCell(cell % n, cell / n);
+    });
+    if (counter != nullptr && counter->stopRequested()) throw WorkStopped();
+    out.between_points = between.points();
+    out.between_evaluations = between.evaluations();
+    out.stats.evaluated_points += out.between_points;
+    out.stats.evaluations += out.between_evaluations;
+    // A square found hazardous holds four hazardous points in the volume's reckoning: a share
+    // of the two cells either side of it.
+    for (const BetweenRays::Found& found : between.found()) {
+      for (int k = std::max(0, found.k - 1); k <= std::min(found.k, r.layers - 1); ++k) {
+        const double a = r.layerDistance(k), b = r.layerDistance(k + 1);
+        const double cell_m3 = step * step * (b * b * b - a * a * a) / 3.0;
+        int corners = 0;
+        for (int c = 0; c < 4; ++c)
+          corners += hazardous(found.i + (c & 1), found.j + (c >> 1), found.k, found.t) ? 1 : 0;
+        volume[found.t] += cell_m3 * (4 - corners) / 8.0;
+      }
+    }
     for (std::size_t t = 0; t < thresholds; ++t) near.volume_m3[t] += volume[t];
   }
   return near;
@@ -207,22 +492,19 @@ ReachSummary summarizeReach(const NearReach& near, const FarField& far, std::siz
   ReachSummary s;
   s.threshold_w_m2 = near.spec.thresholds_w_m2.at(t);
   // The farthest of what toward() gives over every direction: within a lattice cell, the
-  // farthest layer plane of its four rays taken along the cell's most oblique corner, which
-  // lies beyond every one of the four rays' own reach where the farthest plane is not that
-  // corner's.
+  // farthest layer plane of its four rays and its own bounds taken along the cell's most
+  // oblique corner, which lies beyond every one of the four rays' own reach where the farthest
+  // plane is not that corner's.
   const int n = near.spec.face_cells;
-  const double step = 2.0 / n;
   for (int f = 0; f < cube::kFaces; ++f) {
-    const std::vector<float>& r = near.faces[static_cast<std::size_t>(f)].reach_m[t];
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
-        double plane_m = 0.0, stretch = 0.0;
+        const double plane_m = near.cellPlaneM(f, t, i, j);
+        double stretch = 0.0;
         int corner_i = i, corner_j = j;
         for (int c = 0; c < 4; ++c) {
           const int a = i + (c & 1), b = j + (c >> 1);
-          const double u = -1.0 + step * a, v = -1.0 + step * b;
-          const double k = std::sqrt(1.0 + u * u + v * v);
-          plane_m = std::max(plane_m, static_cast<double>(r[rayIndex(a, b, n)]) / k);
+          const double k = rayStretch(a, b, n);
           if (k > stretch) {
             stretch = k;
             corner_i = a;
@@ -299,7 +581,20 @@ ReachSurface reachSurface(const NearReach& near, const FarField& far, double ext
         const Vec3 d = cube::planeDirection(f, i, j, n);
         const std::size_t ray = rayIndex(i, j, n);
         const double beyond = farReachToward(far, threshold, extinction_per_m, d);
-        const double r = std::max(static_cast<double>(face.reach_m[0][ray]), beyond);
+        // The ray's own reach, and the squares between it and its neighbours (drawn through the
+        // ray): the surface encloses what they count hazardous.
+        double between_plane_m = 0.0;
+        for (int c = 0; c < 4; ++c) {
+          const int a = i - (c & 1), b = j - (c >> 1);
+          if (a < 0 || b < 0 || a >= n || b >= n) continue;
+          between_plane_m =
+              std::max(between_plane_m,
+                       static_cast<double>(face.between_plane_m[0][static_cast<std::size_t>(b) *
+                                                                       static_cast<std::size_t>(n) +
+                                                                   static_cast<std::size_t>(a)]));
+        }
+        const double r = std::max({static_cast<double>(face.reach_m[0][ray]),
+                                   between_plane_m * rayStretch(i, j, n), beyond});
         // A glint the far field could not bound has no distance to draw: its point stays at
         // the lattice's end, and its distance reads as the largest float.
         s.points_m.push_back(centre + (std::isfinite(r) ? r : near.lastLayerToward(d)) * d);

@@ -28,6 +28,19 @@ struct Lattice {
   [[nodiscard]] std::int64_t count() const { return static_cast<std::int64_t>(n[0]) * n[1] * n[2]; }
 };
 
+/// @brief The voxels a block of lattice points @p o .. @p o + @p size owns, as an inclusive
+/// OpenVDB box: [o, o + size) per axis, and the last lattice point of an axis where the block
+/// touches the lattice's end; a plane's one layer along its normal.
+inline openvdb::CoordBBox ownedBox(const Index3& o, const Index3& size, const Lattice& lattice) {
+  openvdb::Coord lo(o[0], o[1], o[2]), hi;
+  for (int a = 0; a < 3; ++a) {
+    const std::size_t sa = static_cast<std::size_t>(a);
+    const int end = o[sa] + size[sa];
+    hi[a] = lattice.n[sa] == 1 ? 0 : end == lattice.n[sa] - 1 ? end : end - 1;
+  }
+  return {lo, hi};
+}
+
 /// @brief Calls fn(origin, size) for every block of the coarsest level. A plane's lattice has
 /// one layer (n[2] == 1): its blocks are squares at k = 0.
 template <class Fn>

@@ -654,12 +654,16 @@ nlohmann::json reachJson(const NearReach& near, const std::vector<ReachSummary>&
                   {"tolerance", spec.tolerance},
                   {"evaluated_points", near.evaluatedPoints()},
                   {"unresolved_points", near.unresolvedPoints()},
+                  {"between_ray_points", near.betweenPoints()},
                   {"evaluations", near.evaluations()},
                   {"seconds", seconds}};
   j["rule"] =
       "per direction from the lit centre: the lattice's farthest hazardous point (at (1 - "
-      "tolerance) x the threshold, or unresolved) one layer out; between the rays the farthest "
-      "of those layers of the four rays around a direction; beyond the far radius the far "
+      "tolerance) x the threshold, or unresolved with a bound that reaches it) one layer out; "
+      "between the rays the farthest of those layers of the four rays around a direction, or "
+      "of a layer where a peak between them may reach the threshold (their largest plus an "
+      "allowance for their concave second differences, sampled between them down to a "
+      "sixteenth of their spacing where that may reach it); beyond the far radius the far "
       "field's hazard distance with its error allowance. "
       "The lattice runs from first_layer_m (even steps to near_m, the lit ball's radius, then "
       "growing by layer_ratio) and leaves out only the target's inside: the one region not "
@@ -697,7 +701,8 @@ void printReach(std::ostream& err, const NearReach& near, const std::vector<Reac
   for (std::size_t k = 0; k < h.levels.size(); ++k) {
     line(reach.at(h.firstLevelThreshold() + k), ("  " + h.levels[k].label + ": ").c_str());
   }
-  err << "  " << near.evaluatedPoints() << " lattice points evaluated ("
+  err << "  " << near.evaluatedPoints() << " points evaluated (" << near.betweenPoints()
+      << " of them between the rays; "
       << formatNumber("%.3g", static_cast<double>(near.evaluations())) << " evaluations) in "
       << formatDuration(seconds) << ", " << near.unresolvedPoints() << " unresolved\n";
 }

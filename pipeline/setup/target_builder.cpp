@@ -107,7 +107,7 @@ FieldSpec fieldSpec(const Scene& scene) {
   f.block_voxels = static_cast<int>(std::lround(o.block_m / o.voxel_m));
   f.tolerance = o.tolerance;
   f.floor_w_m2 = o.floor_w_m2.value_or(scene.hazard.negligibleW_m2());
-  f.hazard_threshold_w_m2 = scene.hazard.lowestHazardousW_m2();
+  f.hazard_thresholds_w_m2 = scene.hazard.thresholdsW_m2();
   return f;
 }
 
@@ -115,7 +115,7 @@ FieldSpec planeFieldSpec(const Scene& scene, const PlaneSpec& plane) {
   FieldSpec f = planeLattice(plane);
   f.tolerance = plane.tolerance;
   f.floor_w_m2 = plane.floor_w_m2.value_or(scene.hazard.negligibleW_m2());
-  f.hazard_threshold_w_m2 = scene.hazard.lowestHazardousW_m2();
+  f.hazard_thresholds_w_m2 = scene.hazard.thresholdsW_m2();
   return f;
 }
 
@@ -185,7 +185,7 @@ FarFieldSpec checkedFarFieldSpec(const Scene& scene, const FacetIntegrator& inte
 FieldSpec reachAccuracy(const Scene& scene) {
   FieldSpec f;  // its default tolerance
   f.floor_w_m2 = scene.hazard.negligibleW_m2();
-  f.hazard_threshold_w_m2 = scene.hazard.lowestHazardousW_m2();
+  f.hazard_thresholds_w_m2 = scene.hazard.thresholdsW_m2();
   return f;
 }
 
