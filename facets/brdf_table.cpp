@@ -80,6 +80,29 @@ constexpr std::array<double, 4> kGaussWeight{0.3478548451374538, 0.6521451548625
 
 }  // namespace
 
+std::uint64_t BrdfTable::memoryBytes(const std::vector<double>& theta_i_rad,
+                                     const std::vector<double>& theta_o_rad,
+                                     const std::vector<double>& delta_phi_rad) {
+  // The nodes each completed axis adds: its fill up to the first node and beyond the last.
+  const auto completed = [](const std::vector<double>& given, double hi) -> std::uint64_t {
+    if (given.empty()) return 0;
+    const auto fill = [](double span) {
+      return static_cast<std::uint64_t>(std::max(0.0, std::ceil(span / kFillStepRad - 1e-9)));
+    };
+    return given.size() + fill(given.front()) + fill(hi - given.back());
+  };
+  const std::uint64_t ni = completed(theta_i_rad, 0.5 * kPi),
+                      no = completed(theta_o_rad, 0.5 * kPi), np = completed(delta_phi_rad, kPi);
+  const std::uint64_t nodes = ni * no * np;
+  const std::uint64_t cells = (ni > 0 ? ni - 1 : 0) * (no > 0 ? no - 1 : 0) * (np > 0 ? np - 1 : 0);
+  // values_; the cells' (θN, bound) pairs and the envelope made of them; the coarse envelope;
+  // the axes.
+  return nodes * sizeof(double) + cells * 4 * sizeof(double) +
+         static_cast<std::uint64_t>(kCoarseLevels) * kCoarseLevels * kCoarseLevels *
+             sizeof(double) +
+         2 * (ni + no + np) * sizeof(double);
+}
+
 BrdfTable::BrdfTable(std::vector<double> theta_i_rad, std::vector<double> theta_o_rad,
                      std::vector<double> delta_phi_rad, std::vector<double> values_per_sr) {
   const std::size_t count = theta_i_rad.size() * theta_o_rad.size() * delta_phi_rad.size();
@@ -215,6 +238,7 @@ void BrdfTable::buildEnvelope() {
   // Each cell: its bound of f_r cos θi cos θr and the most its half vector can be tilted; and
   // in the coarse envelope, at the largest θN and the least θi and θo it reaches.
   std::vector<std::pair<double, double>> cells;  // (θN_max, bound)
+  cells.reserve((theta_i_.size() - 1) * (theta_o_.size() - 1) * (delta_phi_.size() - 1));
   coarse_.assign(static_cast<std::size_t>(kCoarseLevels * kCoarseLevels * kCoarseLevels), 0.0);
   for (std::size_t i = 0; i + 1 < theta_i_.size(); ++i) {
     for (std::size_t o = 0; o + 1 < theta_o_.size(); ++o) {

@@ -4,6 +4,7 @@
 /// what it can reflect that every cell is proven under (docs/physics.md, "Measured tables").
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "facets/vec3.h"
@@ -33,6 +34,13 @@ class BrdfTable {
   /// negative or not finite, a count that does not match).
   BrdfTable(std::vector<double> theta_i_rad, std::vector<double> theta_o_rad,
             std::vector<double> delta_phi_rad, std::vector<double> values_per_sr);
+
+  /// @brief What the constructor takes in memory at its peak for these nodes, besides the
+  /// values handed to it (bytes): the completed grid's values and each cell's bound while the
+  /// envelope is built (the nodes are checked by the constructor, not here).
+  static std::uint64_t memoryBytes(const std::vector<double>& theta_i_rad,
+                                   const std::vector<double>& theta_o_rad,
+                                   const std::vector<double>& delta_phi_rad);
 
   /// @brief f_r at the given angles (clamped to the domain; Δφ taken as |Δφ|); 0 at grazing.
   [[nodiscard]] double brdf(double theta_i_rad, double theta_o_rad, double delta_phi_rad) const;

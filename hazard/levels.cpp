@@ -57,6 +57,8 @@ std::string levelNameProblem(const std::string& name) {
     return "must be lower-case letters, digits and '_', starting with a letter (it names the "
            "level's keys and channels)";
   }
+  if (name.size() > 64)
+    return "must be at most 64 characters (it names the level's keys and channels)";
   if (name == "aided" || name == "mpe" || name == "hazard") {
     return "is the name of the MPE's own entries; choose another";
   }

@@ -48,7 +48,7 @@ struct ExposureLevel {
 /// zone (50 nW/cm²). The Normal Flight Zone's limit is the MPE itself.
 std::vector<ExposureLevel> flightZoneLevels(bool visual_correction);
 
-/// @brief What a level's name may be: lower-case letters, digits and '_', starting with a
+/// @brief What a level's name may be: 1 to 64 lower-case letters, digits and '_', starting with a
 /// letter, and none of the names the outputs already use for the MPE (`aided`, `mpe`).
 /// @return why @p name is refused, or empty where it is fine.
 std::string levelNameProblem(const std::string& name);

@@ -36,6 +36,23 @@ inline std::string planeZonesKml(const std::string& plane_name) {
   return plane_name + "_zones.kml";
 }
 
+// Names built from a level's name (hazard.levels, the flight zones): every writer takes them
+// from here, and pipeline/input/output_registry.h checks at read time that none clashes.
+/// @brief A level's ratio: a column of the points table, a channel of a plane's map, an array of
+/// the volumes.
+inline std::string levelRatio(const std::string& level) { return level + "_ratio"; }
+/// @brief A level's reach: a channel of reach.exr, a column of a study's scenarios.csv.
+inline std::string levelReach(const std::string& level) { return level + "_reach_m"; }
+/// @brief A level's layer of the reach's footprint (a GeoTIFF band, a polygon's name).
+inline std::string levelFootprint(const std::string& level) { return level + "_reach"; }
+/// @brief A footprint layer @p layer drawn at a flight altitude written @p altitude.
+inline std::string footprintAtAltitude(const std::string& layer, const std::string& altitude) {
+  return layer + "_at_" + altitude + "m";
+}
+/// @brief An engagement's columns of a level: its peak ratio and the time above it.
+inline std::string levelPeakRatio(const std::string& level) { return level + "_peak_ratio"; }
+inline std::string levelTimeAbove(const std::string& level) { return "time_above_" + level + "_s"; }
+
 // glint batch: the study's folder (summary.json too) and each scenario's
 inline constexpr const char* kScenariosCsv = "scenarios.csv";
 inline constexpr const char* kStudyBoxVdb = "box.vdb";

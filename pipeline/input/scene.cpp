@@ -22,6 +22,7 @@
 #include "pipeline/input/brdf_table_file.h"
 #include "pipeline/input/gltf_loader.h"
 #include "pipeline/input/json_reader.h"
+#include "pipeline/input/output_registry.h"
 #include "pipeline/input/scene_memory.h"
 
 namespace glint {
@@ -208,7 +209,8 @@ void checkLevels(ObjectReader& r, const HazardSpec& h) {
   if (h.levels.empty()) return;
   ObjectReader hazard = r.object("hazard");
   const bool zones = hazard.has("flight_zones") && hazard.raw().at("flight_zones") != false;
-  const std::string wavelength = formatNumber("%g", h.wavelength_nm) + " nm";
+  // Enough digits that a wavelength just past a band's edge never reads as the edge itself.
+  const std::string wavelength = formatNumber("%.10g", h.wavelength_nm) + " nm";
   const bool visible = h.wavelength_nm >= kVisibleMinNm && h.wavelength_nm <= kVisibleMaxNm;
   if (zones) {
     if (!visible) {
@@ -446,12 +448,14 @@ AbgScatter readAbg(ObjectReader r) {
   return abg;
 }
 
-// A material, and the file of its measured table (empty: none), resolved against @p base.
+// A material, and the file of its measured table (empty: none), resolved against @p base and
+// read within @p memory_budget_bytes (0: none).
 std::pair<Material, std::filesystem::path> readMaterial(ObjectReader r,
-                                                        const std::filesystem::path& base) {
+                                                        const std::filesystem::path& base,
+                                                        std::uint64_t memory_budget_bytes) {
   Material m;
   std::filesystem::path table_file;
-  const bool other = r.has("abg") || r.has("table");
+  const bool other = r.has("abg") || r.has("table") || r.has("diffuse_reflectance");
   if (r.has("lobes")) {
     for (const char* single : {"specular_reflectance", "sigma"}) {
       if (r.has(single))
@@ -459,7 +463,7 @@ std::pair<Material, std::filesystem::path> readMaterial(ObjectReader r,
     }
     readLobes(r, m);
   } else if (!other || r.has("specular_reflectance") || r.has("sigma")) {
-    // A material of ABg or a table alone needs no lobe.
+    // A material of ABg, a table or a Lambertian part alone needs no lobe.
     m.specular_reflectance = r.number("specular_reflectance");
     m.lobe.sigma = r.number("sigma");
   }
@@ -467,7 +471,7 @@ std::pair<Material, std::filesystem::path> readMaterial(ObjectReader r,
   if (r.has("table")) {
     table_file = base / r.string("table");
     try {
-      m.table = readBrdfTable(table_file);
+      m.table = readBrdfTable(table_file, memory_budget_bytes);
     } catch (const InputError& e) {
       r.fail("table", e.what());
     }
@@ -1107,12 +1111,13 @@ void readLaserAndHazard(ObjectReader& r, Scene& scene) {
   completeHazard(scene.hazard);
 }
 
-void readMaterials(ObjectReader materials, Scene& scene, const std::filesystem::path& base) {
+void readMaterials(ObjectReader materials, Scene& scene, const std::filesystem::path& base,
+                   std::uint64_t memory_budget_bytes) {
   if (materials.raw().empty()) materials.failHere("must define at least one material");
   for (const auto& [name, value] : materials.raw().items()) {
     materials.has(name);
-    auto [material, table_file] =
-        readMaterial(ObjectReader(value, materials.at(name), materials.source()), base);
+    auto [material, table_file] = readMaterial(
+        ObjectReader(value, materials.at(name), materials.source()), base, memory_budget_bytes);
     scene.materials.push_back(std::move(material));
     scene.material_table_files.push_back(std::move(table_file));
     scene.material_names.push_back(name);
@@ -1217,7 +1222,7 @@ Scene parseScene(std::string_view text, const std::string& source,
   ObjectReader r(root, "", source);
   scene.description = r.string("description", "");
   readLaserAndHazard(r, scene);
-  readMaterials(r.object("materials"), scene, base);
+  readMaterials(r.object("materials"), scene, base, memory_budget_bytes);
   readAccuracyAndObjects(r, scene, base, mesh_limits, memory_budget_bytes);
 
   if (r.has("observers")) scene.observers = readObservers(r.object("observers"), scene.hazard);
@@ -1228,6 +1233,7 @@ Scene parseScene(std::string_view text, const std::string& source,
   if (r.has("site")) scene.site = readSite(r.object("site"));
   if (scene.reach.footprint && !scene.site)
     r.fail("reach", "has a footprint, which needs a site: it is drawn on the Earth");
+  requireDistinctOutputNames(scene);
   if (r.has("terrain")) readTerrain(r, scene, base, memory_budget_bytes);
   placePlanesOnTerrain(scene, source);
   r.finish();

@@ -161,7 +161,10 @@ std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
   if (reach && aided) csv += ",aided_reach_m";
   const std::vector<std::string> levels =
       reach ? reachLevelNames(records) : std::vector<std::string>{};
-  for (const std::string& name : levels) csv += "," + name + "_reach_m";
+  for (const std::string& name : levels) {
+    csv += ',';
+    csv += output_names::levelReach(name);
+  }
   csv += ",unconverged_points,evaluations,seconds\n";
   for (const auto& [index, rec] : records) {
     const nlohmann::json& p = rec.at("parameters");

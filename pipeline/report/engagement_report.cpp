@@ -106,8 +106,8 @@ std::vector<CsvColumn> engagementColumns(const EngagementResults& results,
   add("stare_hazard_ratio", [](H, V v) { return v.stare_ratio; });
   for (std::size_t k = 0; k < hazard.levels.size(); ++k) {
     const ExposureLevel& l = hazard.levels[k];
-    add(l.name + "_peak_ratio", [&](H h, V) { return l.ratio(h.peak_w_m2); });
-    add("time_above_" + l.name + "_s", [k](H, V v) { return v.time_above_level_s.at(k); });
+    add(output_names::levelPeakRatio(l.name), [&](H h, V) { return l.ratio(h.peak_w_m2); });
+    add(output_names::levelTimeAbove(l.name), [k](H, V v) { return v.time_above_level_s.at(k); });
   }
   add(
       "time_samples", [](H h, V) { return static_cast<double>(h.time_s.size()); }, true);

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "pipeline/base/number_format.h"
+#include "pipeline/base/output_names.h"
 
 namespace glint {
 
@@ -179,7 +180,7 @@ std::vector<ScaledArray> hazardArrays(const HazardSpec& h) {
                       h.aid->gain / h.mpe_w_m2});
   }
   for (const ExposureLevel& l : h.levels) {
-    arrays.push_back({l.name + "_ratio",
+    arrays.push_back({output_names::levelRatio(l.name),
                       "1 (irradiance" +
                           std::string(l.visually_corrected ? " x visual correction" : "") + " / " +
                           l.name + " level)",
@@ -212,7 +213,7 @@ PlaneMap planeMap(const ObserverField& field, const HazardSpec& h) {
   for (auto* channel : {&m.hazard_ratio, &m.level, &m.status}) channel->reserve(count);
   if (h.aid) m.aided_hazard_ratio.reserve(count);
   for (const ExposureLevel& l : h.levels) {
-    m.level_ratios.push_back({l.name + "_ratio", {}});
+    m.level_ratios.push_back({output_names::levelRatio(l.name), {}});
     m.level_ratios.back().second.reserve(count);
   }
   for (int j = 0; j < n[1]; ++j)

@@ -64,7 +64,7 @@ void writeReachExr(std::ostream& out, const ReachResults& r) {
   std::vector<std::vector<float>> maps;
   std::vector<std::string> names = {"reach_m"};
   if (h.aid) names.emplace_back("aided_reach_m");
-  for (const ExposureLevel& l : h.levels) names.push_back(l.name + "_reach_m");
+  for (const ExposureLevel& l : h.levels) names.push_back(output_names::levelReach(l.name));
   for (std::size_t t = 0; t < names.size(); ++t)
     maps.push_back(reachLatLong(r.near, r.far, t, height, mu));
   std::vector<ExrChannel> channels;
@@ -168,7 +168,8 @@ std::vector<FootprintMask> footprintMasks(const ReachResults& r) {
       {"reach", "the naked eye's hazard reach"}};
   if (h.aid) thresholds.emplace_back("aided_reach", "the hazard reach through the optical aid");
   for (const ExposureLevel& l : h.levels)
-    thresholds.emplace_back(l.name + "_reach", "where the " + l.label + " is reached");
+    thresholds.emplace_back(output_names::levelFootprint(l.name),
+                            "where the " + l.label + " is reached");
   std::vector<FootprintMask> masks;
   for (std::size_t t = 0; t < thresholds.size(); ++t) {
     masks.push_back({thresholds[t].first,
@@ -182,7 +183,7 @@ std::vector<FootprintMask> footprintMasks(const ReachResults& r) {
   for (const ReachFootprint::Altitude& a : f.altitudes) {
     const std::string at = formatNumber("%g", a.altitude_m);
     for (std::size_t t = 0; t < thresholds.size(); ++t) {
-      masks.push_back({thresholds[t].first + "_at_" + at + "m",
+      masks.push_back({output_names::footprintAtAltitude(thresholds[t].first, at),
                        thresholds[t].second + " at " + at + " m " + reference, &a.inside.at(t)});
     }
   }

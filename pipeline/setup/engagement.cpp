@@ -6,6 +6,7 @@
 #include <string_view>
 
 #include "pipeline/base/memory_budget.h"
+#include "pipeline/base/output_names.h"
 #include "pipeline/base/progress.h"
 
 namespace glint {
@@ -106,7 +107,7 @@ EngagementMaps engagementMaps(const FieldSpec& spec, std::span<const std::uint8_
   if (hazard.aid) m.aided_hazard_ratio.assign(count, 0.0f);
   for (const ExposureLevel& l : hazard.levels)
     m.time_above_level_s.push_back(
-        {"time_above_" + l.name + "_s", std::vector<float>(count, 0.0f)});
+        {output_names::levelTimeAbove(l.name), std::vector<float>(count, 0.0f)});
   m.level_reached.assign(hazard.levels.size(), 0);
   m.status.assign(count, 3.0f);  // dark over the whole span by the bound
   std::size_t row = 0;

@@ -1,16 +1,22 @@
 #include "pipeline/input/scene.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "pipeline/base/input_error.h"
+#include "pipeline/base/memory_budget.h"
 #include "pipeline/report/run_report.h"
 #include "pipeline/setup/target_builder.h"
+#include "support/cli.h"
 #include "support/files.h"
 #include "support/refusal.h"
 
@@ -115,6 +121,106 @@ TEST(Scene, AMaterialTakesAbgScatterAndAMeasuredTable) {
   EXPECT_NEAR(paint.at("table").at("max_hemispherical_reflectance").get<double>(), kPi * 0.05,
               5e-3 * kPi * 0.05);
   EXPECT_EQ(s.material_table_files.at(paint_at), dir / "paint.csv");
+  std::filesystem::remove_all(dir);
+}
+
+// tests/data/abg_disk_table.csv (f = 0.05/sr on 5° steps) with one more θi node @p extra_deg,
+// written with the disk scene that reads it into @p dir.
+std::filesystem::path tableDiskWithExtraNode(const std::filesystem::path& dir, double extra_deg) {
+  std::ifstream given(std::string(GLINT_TEST_DATA_DIR) + "/abg_disk_table.csv");
+  std::ofstream csv(dir / "table.csv");
+  csv << given.rdbuf();
+  csv.precision(12);
+  for (int to = 0; to <= 90; to += 5)
+    for (int p = 0; p <= 180; p += 30) csv << extra_deg << "," << to << "," << p << ",0.05\n";
+  json scene = json::parse(std::ifstream(std::string(GLINT_TEST_DATA_DIR) + "/table_disk.json"));
+  scene["materials"]["measured"]["table"] = "table.csv";
+  std::ofstream(dir / "scene.json") << scene.dump();
+  return dir / "scene.json";
+}
+
+// A node a hair from another (a θi of 10.001° beside 10°) once made the table's light look
+// 9e-6 rad wide: the integrator split a disk's facets on their bounds until it ran out of
+// pieces, before a single evaluation, and glint points wrote 0 W/m² where the truth is twice the
+// MPE. Such a table is refused, naming both nodes and their lines; 0.05° apart is integrated.
+TEST(BrdfTableFile, NodesCloserThanItCanResolveAreRefusedWithTheirLines) {
+  const std::filesystem::path dir = test::freshTestFolder("table_close_nodes");
+  for (const double extra : {10.001, 10.00001, 10.0000000001}) {
+    const std::filesystem::path scene = tableDiskWithExtraNode(dir, extra);
+    const std::string message = test::refusalOf([&] { loadScene(scene); });
+    EXPECT_NE(message.find("table.csv: line 2530: theta_i_deg "), std::string::npos) << message;
+    EXPECT_NE(message.find("from 10° (line "), std::string::npos) << message;
+    EXPECT_NE(message.find("closer than the 0.05° a table may resolve"), std::string::npos)
+        << message;
+  }
+  std::filesystem::remove_all(dir);
+}
+
+// Along the disk's normal the table reflects I = E A f cos θi (E = P / (π a²), A the disk's
+// area): 253.4 W/sr, twice the 50 W/m² MPE at 1.58 m. With a node 0.05° from another, glint
+// points integrates it (to its 1 %) and converges.
+TEST(BrdfTableFile, ANodeAtTheFinestStepIsIntegratedToTheClosedForm) {
+  const std::filesystem::path dir = test::freshTestFolder("table_fine_node");
+  const std::filesystem::path scene = tableDiskWithExtraNode(dir, 10.05);
+  const Vec3 n = glm::normalize(Vec3(-1.0, 0.6, 0.4));
+  std::ofstream(dir / "points.csv") << "x,y,z\n"
+                                    << 1.58 * n.x << "," << 1.58 * n.y << "," << 1.58 * n.z << "\n";
+  const test::Outcome o =
+      test::glint({"points", scene.string(), "--points", (dir / "points.csv").string(), "--out",
+                   (dir / "out.csv").string()});
+  ASSERT_EQ(o.status, 0) << o.err;
+  std::ifstream out(dir / "out.csv");
+  std::string header, row;
+  std::getline(out, header);
+  std::getline(out, row);
+  std::vector<double> v;
+  std::stringstream cells(row);
+  for (std::string cell; std::getline(cells, cell, ',');) v.push_back(std::stod(cell));
+  ASSERT_GE(v.size(), 8u) << header;
+  const double cos_i = glm::dot(n, Vec3(-1.0, 0.0, 0.0));  // toward the laser
+  const double intensity_w_sr = 1e5 / (kPi * 0.04) * kPi * 0.0025 * 0.05 * cos_i;
+  const double expected_w_m2 = intensity_w_sr / (1.58 * 1.58);
+  EXPECT_NEAR(v[3], expected_w_m2, 1.5e-2 * expected_w_m2) << row;
+  EXPECT_EQ(v[6], 1.0) << "converged: " << row;
+  EXPECT_GT(v[5], 0.0) << "evaluated: " << row;
+  std::filesystem::remove_all(dir);
+}
+
+// A table's text, rows and grid are counted against --memory before each is made (an 11.8 M
+// node table under 200 MB once peaked at 1.73 GB), and what is not a regular file, whose size
+// says nothing (a device, a pipe), is refused before it is opened (/dev/zero once read 1.09 GB).
+TEST(BrdfTableFile, ItIsCountedAgainstTheMemoryBudgetAndMustBeARegularFile) {
+  const std::filesystem::path dir = test::freshTestFolder("table_budget");
+  {
+    std::ofstream csv(dir / "fine.csv");
+    csv << "theta_i_deg,theta_o_deg,delta_phi_deg,brdf_per_sr\n";
+    for (int i = 0; i <= 180; ++i)
+      for (int o = 0; o <= 180; ++o)
+        for (int p = 0; p <= 180; p += 30)
+          csv << 0.5 * i << "," << 0.5 * o << "," << p << ",0.05\n";
+  }
+  const auto scene = [&](const std::string& table) {
+    json j = minimal();
+    j["materials"]["polished"] = {{"table", table}};
+    std::ofstream(dir / "scene.json") << j.dump();
+    return dir / "scene.json";
+  };
+  const std::uint64_t held = residentBytes();
+  const std::string refused =
+      test::refusalOf([&] { loadScene(scene("fine.csv"), held + (std::uint64_t{4} << 20)); });
+  EXPECT_NE(refused.find("/materials/polished/table: "), std::string::npos) << refused;
+  EXPECT_NE(refused.find("the BRDF table "), std::string::npos) << refused;
+  EXPECT_NE(refused.find("(--memory); resample the table coarser, or raise --memory"),
+            std::string::npos)
+      << refused;
+  EXPECT_NO_THROW(loadScene(scene("fine.csv"), held + (std::uint64_t{1} << 30)))
+      << "a budget that holds it reads it";
+
+  ASSERT_EQ(mkfifo((dir / "pipe.csv").c_str(), 0600), 0) << "a FIFO in the test's own folder";
+  const std::string pipe = test::refusalOf([&] { loadScene(scene("pipe.csv"), 0); });
+  EXPECT_NE(pipe.find("pipe.csv: is not a regular file; a BRDF table must be one"),
+            std::string::npos)
+      << pipe;
   std::filesystem::remove_all(dir);
 }
 
