@@ -80,6 +80,9 @@ std::array<std::atomic<UndoList*>, kUndoLists> g_undo{};
 // not begun. Sequentially consistent, as the argument needs.
 std::atomic<bool> g_interrupted{false};
 std::atomic<int> g_creating{0};
+// A command's outputs are all in place (an OutputSet committed): an interrupt from then on
+// finds the command's answer complete, and must not report the folder as it was.
+std::atomic<bool> g_outputs_in_place{false};
 
 // The handler is removing the temporaries and will exit: an error caused by its work (a
 // temporary gone before its rename) must not race its exit status and message with one of our
@@ -226,12 +229,14 @@ extern "C" void onInterrupt(int sig) {
   }
   int removed = 0;
   int restored = 0;
+  bool unfinished = false;  // a set of outputs not wholly in place, or a file still being written
   // The outputs moved into place go first (an earlier file comes back from aside, a new folder
   // goes into its staging folder), then the temporaries and staging folders.
   for (const std::atomic<UndoList*>& slot : g_undo) {
     const UndoList* list = slot.load();
     if (list == nullptr) continue;
     const bool complete = list->complete.load();
+    unfinished = unfinished || !complete;
     for (std::size_t i = list->count; i-- > 0;) {
       const UndoEntry& e = list->entries[i];
       if (e.state.load() != 1) continue;
@@ -245,6 +250,7 @@ extern "C" void onInterrupt(int sig) {
   int folders = 0;
   for (Slot& s : g_slots) {
     const int state = s.state.load(std::memory_order_acquire);
+    if (state == kTemporary) unfinished = true;
     if (state == kTemporary && ::unlink(s.path) == 0) ++removed;
     if (state == kTree && removeTree(AT_FDCWD, s.path, kTreeDepth)) ++removed;
     if (state == kOtherFile) ::unlink(s.path);
@@ -263,6 +269,12 @@ extern "C" void onInterrupt(int sig) {
   }
   say("\nglint: interrupted by ");
   say(sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP");
+  if (g_outputs_in_place.load() && !unfinished) {
+    // Only what was kept aside went (the staging folders hold nothing else by now).
+    say(" after its outputs were in place: they are complete; what it would have printed after "
+        "them was not printed (summary.json holds a run's warnings)\n");
+    ::_exit(0);
+  }
   say("; removed ");
   sayNumber(removed);
   say(" unfinished output file(s)");
@@ -699,6 +711,7 @@ void OutputSet::commit(const std::function<void()>& after_first) {
     // In place together: from here an interrupt only takes away what was kept aside.
     const UninterruptedStep step;
     list.complete.store(true);
+    g_outputs_in_place.store(true);
   }
   committed_ = true;
   for (std::size_t i = 0; i < list.count; ++i) {

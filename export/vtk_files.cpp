@@ -9,6 +9,7 @@
 #include <vtkCellType.h>
 #include <vtkCommand.h>
 #include <vtkDoubleArray.h>
+#include <vtkErrorCode.h>
 #include <vtkFloatArray.h>
 #include <vtkImageData.h>
 #include <vtkIntArray.h>
@@ -28,6 +29,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <map>
@@ -70,8 +72,17 @@ void runWriter(vtkXMLWriter& writer, const std::string& what) {
   writer.AddObserver(vtkCommand::ErrorEvent, observer);
   const int ok = writer.Write();
   writer.RemoveObserver(observer);
-  if (ok != 1 || writer.GetErrorCode() != 0 || !errors.empty()) {
-    throw OutputError(what + ": VTK's XML writer failed" + (errors.empty() ? "" : ": " + errors));
+  const unsigned long code = writer.GetErrorCode();
+  if (ok != 1 || code != vtkErrorCode::NoError || !errors.empty()) {
+    // The reason in the words the other writers use (a full disk reads as strerror says it);
+    // VTK's own messages, where it gave any, after it.
+    std::string reason =
+        code == vtkErrorCode::OutOfDiskSpaceError ? std::generic_category().message(ENOSPC)
+        : code != vtkErrorCode::NoError ? std::string(vtkErrorCode::GetStringFromErrorCode(code))
+                                        : std::string();
+    if (!errors.empty()) reason += (reason.empty() ? "" : "; ") + errors;
+    throw OutputError(what + ": VTK's XML writer failed: " +
+                      (reason.empty() ? std::string("it gave no reason") : reason));
   }
 }
 

@@ -3,7 +3,9 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <string>
 #include <unsupported/Eigen/NonLinearOptimization>
 #include <unsupported/Eigen/NumericalDiff>
 #include <vector>
@@ -18,13 +20,42 @@ struct Node {
   double log_f = 0.0;
 };
 
-// The parameters, each kept in its range by its form: per lobe ln ρ and ln σ, then ln A, ln B
-// and logit(g / 4), then ln ρd.
+// Each parameter's range: what a scene's reader takes (pipeline/input/scene.cpp), narrowed
+// where a table cannot tell values apart anyway, so that every fit is a material a scene takes
+// and no parameter runs off to 0 or to overflow (a constant table once gave B = 0, A = 8.75e42).
+struct Range {
+  double lo, hi;
+};
+constexpr Range kReflectance{1e-12, 1.0};  // a lobe's ρ, ρd
+constexpr Range kSigma{1e-4, 2.0};         // Beckmann σ: finer than any table's step resolves
+constexpr Range kAbgPeak{1e-12, 1e10};     // A/B (1/sr): the reader's bound
+constexpr Range kAbgWidth{1e-4, 1.0};      // B^(1/g) / (2 max(1, g)), rad
+constexpr double kAbgMinB = 1e-12, kAbgMaxA = 1e6;
+
+// A free variable onto [lo, hi], logarithmically, and back.
+double onto(double x, Range r) {
+  const double t = 1.0 / (1.0 + std::exp(-x));
+  return std::exp(std::log(r.lo) + t * (std::log(r.hi) - std::log(r.lo)));
+}
+double from(double v, Range r) {
+  const double t = (std::log(v) - std::log(r.lo)) / (std::log(r.hi) - std::log(r.lo));
+  return std::log(t / (1.0 - t));
+}
+
+// ABg from its peak A/B, its width and g: B = (2 max(1, g) w)^g, so that the width is the
+// free variable the lobes' σ is, and the peak stays where the reader's bound on A/B is.
+AbgScatter abgOf(double peak_per_sr, double width_rad, double g) {
+  const double b = std::max(kAbgMinB, std::pow(2.0 * std::max(1.0, g) * width_rad, g));
+  return AbgScatter{std::min(peak_per_sr * b, kAbgMaxA), b, g};
+}
+
+// The parameters, each kept in its range by its form: per lobe ρ and σ, then ABg's peak, width
+// and g (logit of g / 4), then ρd.
 Material materialOf(const Eigen::VectorXd& x, const MaterialFitModel& model) {
   Material m;
   int k = 0;
   for (int lobe = 0; lobe < model.lobes; ++lobe) {
-    const SpecularLobe l{std::exp(x[k]), Beckmann{std::exp(x[k + 1])}};
+    const SpecularLobe l{onto(x[k], kReflectance), Beckmann{onto(x[k + 1], kSigma)}};
     k += 2;
     if (lobe == 0) {
       m.specular_reflectance = l.reflectance;
@@ -34,11 +65,59 @@ Material materialOf(const Eigen::VectorXd& x, const MaterialFitModel& model) {
     }
   }
   if (model.abg) {
-    m.abg = AbgScatter{std::exp(x[k]), std::exp(x[k + 1]), 4.0 / (1.0 + std::exp(-x[k + 2]))};
+    m.abg =
+        abgOf(onto(x[k], kAbgPeak), onto(x[k + 1], kAbgWidth), 4.0 / (1.0 + std::exp(-x[k + 2])));
     k += 3;
   }
-  if (model.diffuse) m.diffuse_reflectance = std::exp(x[k]);
+  if (model.diffuse) m.diffuse_reflectance = onto(x[k], kReflectance);
   return m;
+}
+
+// Terms the fit drove to nothing (below this share of the light it reflects) are left out, and
+// named: a lobe of ρ 1e-12 only costs the integrator its bounds.
+constexpr double kNegligibleShare = 1e-6;
+
+// @p m without its negligible terms, each named in @p dropped.
+Material withoutNegligibleTerms(const Material& m, double energy,
+                                std::vector<std::string>& dropped) {
+  const auto negligible = [&](double share) { return share < kNegligibleShare * energy; };
+  const auto number = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.3g", v);
+    return std::string(buf);
+  };
+  std::vector<SpecularLobe> lobes;
+  if (m.specular_reflectance > 0.0) lobes.push_back({m.specular_reflectance, m.lobe});
+  lobes.insert(lobes.end(), m.more_lobes.begin(), m.more_lobes.end());
+  Material out;
+  out.diffuse_reflectance = m.diffuse_reflectance;
+  std::vector<SpecularLobe> kept;
+  for (std::size_t k = 0; k < lobes.size(); ++k) {
+    if (negligible(lobes[k].reflectance)) {
+      dropped.push_back("lobe " + std::to_string(k + 1) + " (ρ " + number(lobes[k].reflectance) +
+                        ", σ " + number(lobes[k].shape.sigma) + ")");
+    } else {
+      kept.push_back(lobes[k]);
+    }
+  }
+  if (!kept.empty()) {
+    out.specular_reflectance = kept[0].reflectance;
+    out.lobe = kept[0].shape;
+    out.more_lobes.assign(kept.begin() + 1, kept.end());
+  }
+  if (m.abg) {
+    if (negligible(m.abg->totalIntegratedScatter())) {
+      dropped.push_back("ABg (total integrated scatter " + number(m.abg->totalIntegratedScatter()) +
+                        ")");
+    } else {
+      out.abg = m.abg;
+    }
+  }
+  if (m.diffuse_reflectance > 0.0 && negligible(m.diffuse_reflectance)) {
+    dropped.push_back("the Lambertian part (ρd " + number(m.diffuse_reflectance) + ")");
+    out.diffuse_reflectance = 0.0;
+  }
+  return out;
 }
 
 double brdfOf(const Material& m, const Node& n) {
@@ -105,22 +184,25 @@ MaterialFit fitMaterial(const BrdfTable& table, const MaterialFitModel& model) {
   const int parameters = 2 * model.lobes + (model.abg ? 3 : 0) + (model.diffuse ? 1 : 0);
   MaterialFit best;
   best.rms_log_error = std::numeric_limits<double>::infinity();
-  if (parameters == 0 || nodes.empty()) return best;
+  best.parameters = parameters;
+  best.nodes = all.size();
+  // Fewer nodes than parameters settle nothing: the caller refuses such a fit.
+  if (parameters == 0 || all.size() < static_cast<std::size_t>(parameters)) return best;
   // Starting widths: the lobes spread geometrically over a decade, the whole set tried at three
   // scales, since a lobe started far from its width can settle on the wrong peak.
   for (double scale : {0.003, 0.01, 0.04}) {
     Eigen::VectorXd x(parameters);
     int k = 0;
     for (int lobe = 0; lobe < model.lobes; ++lobe) {
-      x[k++] = std::log(0.3 / model.lobes);
-      x[k++] = std::log(scale * std::pow(10.0, static_cast<double>(lobe)));
+      x[k++] = from(0.3 / model.lobes, kReflectance);
+      x[k++] = from(scale * std::pow(10.0, static_cast<double>(lobe)), kSigma);
     }
     if (model.abg) {
-      x[k++] = std::log(1e-3);
-      x[k++] = std::log(1e-3);
-      x[k++] = 0.0;  // g = 2
+      x[k++] = from(1.0, kAbgPeak);      // A = B = 1e-3
+      x[k++] = from(0.0079, kAbgWidth);  // √1e-3 / 4
+      x[k++] = 0.0;                      // g = 2
     }
-    if (model.diffuse) x[k++] = std::log(0.1);
+    if (model.diffuse) x[k++] = from(0.1, kReflectance);
     Residuals residuals{&nodes, &model, floor, parameters};
     Eigen::NumericalDiff<Residuals> diff(residuals);
     Eigen::LevenbergMarquardt<Eigen::NumericalDiff<Residuals>> lm(diff);
@@ -135,7 +217,6 @@ MaterialFit fitMaterial(const BrdfTable& table, const MaterialFitModel& model) {
     }
   }
   // Its errors over every node, not only those it was fitted on.
-  best.nodes = all.size();
   double sum2 = 0.0;
   best.max_relative_error = 0.0;
   for (const Node& n : all) {
@@ -146,9 +227,12 @@ MaterialFit fitMaterial(const BrdfTable& table, const MaterialFitModel& model) {
       best.max_relative_error = std::max(best.max_relative_error, std::abs(f / n.f - 1.0));
   }
   best.rms_log_error = std::sqrt(sum2 / static_cast<double>(all.size()));
-  const Material& m = best.material;
-  best.energy = m.totalSpecularReflectance() + m.diffuse_reflectance +
-                (m.abg ? m.abg->totalIntegratedScatter() : 0.0);
+  const auto energyOf = [](const Material& m) {
+    return m.totalSpecularReflectance() + m.diffuse_reflectance +
+           (m.abg ? m.abg->totalIntegratedScatter() : 0.0);
+  };
+  best.material = withoutNegligibleTerms(best.material, energyOf(best.material), best.dropped);
+  best.energy = energyOf(best.material);
   return best;
 }
 

@@ -31,4 +31,8 @@ void pauseForTestsAfterFirstOutput(std::ostream& err) {
   pauseIfAsked(kTestPauseAfterFirstOutput, "putting the first output in place", err);
 }
 
+void pauseForTestsAfterOutputs(std::ostream& err) {
+  pauseIfAsked(kTestPauseAfterOutputs, "putting every output in place", err);
+}
+
 }  // namespace glint

@@ -9,10 +9,12 @@
 namespace glint {
 
 /// @brief The environment variable, and its values: pause once the outputs' temporaries are
-/// created, or once the first of a command's outputs is in place and the others are not yet.
+/// created, once the first of a command's outputs is in place and the others are not yet, or
+/// once all of them are.
 inline constexpr const char* kTestPauseVariable = "GLINT_TEST_PAUSE_AFTER";
 inline constexpr const char* kTestPauseAfterTemporaries = "temporaries";
 inline constexpr const char* kTestPauseAfterFirstOutput = "first-output";
+inline constexpr const char* kTestPauseAfterOutputs = "outputs";
 
 /// @brief If GLINT_TEST_PAUSE_AFTER is `temporaries`, says so on @p err (a line starting
 /// "glint: paused") and blocks until a signal ends the process; otherwise returns at once.
@@ -23,5 +25,10 @@ void pauseForTestsAfterTemporaries(std::ostream& err);
 /// "glint: paused") and blocks until a signal ends the process; otherwise returns at once.
 /// For OutputSet::commit()'s `after_first`: one output is then in place, the others not.
 void pauseForTestsAfterFirstOutput(std::ostream& err);
+
+/// @brief If GLINT_TEST_PAUSE_AFTER is `outputs`, says so on @p err (a line starting
+/// "glint: paused") and blocks until a signal ends the process; otherwise returns at once.
+/// Call it right after OutputSet::commit() returns: every output is then in place.
+void pauseForTestsAfterOutputs(std::ostream& err);
 
 }  // namespace glint

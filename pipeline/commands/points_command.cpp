@@ -18,12 +18,14 @@
 #include "pipeline/base/input_error.h"
 #include "pipeline/base/memory_budget.h"
 #include "pipeline/base/number_format.h"
+#include "pipeline/base/output_names.h"
 #include "pipeline/base/progress.h"
 #include "pipeline/base/test_pause.h"
 #include "pipeline/input/input_files.h"
 #include "pipeline/input/points_file.h"
 #include "pipeline/input/scene.h"
 #include "pipeline/report/engagement_report.h"
+#include "pipeline/report/output_folder.h"
 #include "pipeline/report/run_report.h"
 #include "pipeline/report/unlit_warning.h"
 #include "pipeline/setup/engagement.h"
@@ -63,6 +65,7 @@ void requireFiniteResults(const std::vector<ObserverResult>& results) {
 struct EvaluationTally {
   std::int64_t total = 0, lo = 0, hi = 0;
   std::size_t unconverged = 0, depth_limited = 0;
+  double unconverged_upper_w_m2 = 0.0;  ///< the largest irradiance + error of those unconverged
 };
 
 EvaluationTally tally(std::span<const ObserverResult> results) {
@@ -73,6 +76,10 @@ EvaluationTally tally(std::span<const ObserverResult> results) {
     t.lo = std::min(t.lo, r.evaluations);
     t.hi = std::max(t.hi, r.evaluations);
     t.unconverged += r.converged ? 0 : 1;
+    if (!r.converged) {
+      t.unconverged_upper_w_m2 =
+          std::max(t.unconverged_upper_w_m2, r.irradiance_w_m2 + r.error_estimate_w_m2);
+    }
     t.depth_limited += r.depth_limited ? 1 : 0;
   }
   return t;
@@ -129,10 +136,20 @@ void printSummary(std::ostream& err, const PointsArgs& args, const Scene& scene,
     if (t.unconverged == 0) {
       err << "  accuracy: all observers within the tolerance\n";
     } else {
+      // Their values are estimates short of the tolerance: what they may reach is value plus
+      // error, and that is the hazard the analyst must read, not the peak of the estimates.
+      const HazardSpec& h = scene.hazard;
+      const double upper = t.unconverged_upper_w_m2;
       err << "  warning: " << t.unconverged << " of " << results.size()
           << " observers did not reach the tolerance (converged = 0 in the output; "
-          << t.depth_limited << " hit accuracy.max_depth); raise accuracy.max_evaluations or "
-          << "accuracy.max_depth, or loosen the tolerance\n";
+          << t.depth_limited << " hit accuracy.max_depth); at them irradiance plus its error "
+          << "estimate reaches " << formatNumber("%.3g", upper) << " W/m² ("
+          << formatNumber("%.3g", h.ratio(upper)) << " × the MPE"
+          << (h.aid ? ", aided " + formatNumber("%.3g", h.aidedRatio(upper)) : std::string())
+          << (h.ratio(upper) >= 1.0 || (h.aid && h.aidedRatio(upper) >= 1.0)
+                  ? "): they may be hazardous, whatever the peak above says; "
+                  : "); ")
+          << "raise accuracy.max_evaluations or accuracy.max_depth, or loosen the tolerance\n";
     }
   }
   if (surface_check != nullptr) printSurfaceCheck(err, scene, *surface_check);
@@ -155,7 +172,7 @@ std::vector<CsvColumn> hazardColumns(const HazardSpec& h, std::span<const Observ
     add("radiant_exposure_j_m2_per_pulse", [&](double e) { return h.pulseRadiantExposureJ_m2(e); });
   }
   for (const ExposureLevel& l : h.levels)
-    add(l.name + "_ratio", [&](double e) { return l.ratio(e); });
+    add(output_names::levelRatio(l.name), [&](double e) { return l.ratio(e); });
   return columns;
 }
 
@@ -187,6 +204,8 @@ AtomicFile* openOutputFile(OutputSet& outputs, const std::string& path, const Po
   inputs.addScene(args.scene_path, scene);
   inputs.add(args.points_path, "points file");
   inputs.requireNotAnInput(path);
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+  requireFolderNotHeld(folder.empty() ? std::filesystem::path(".") : folder);
   return &outputs.open(path);
 }
 
@@ -332,7 +351,10 @@ void runPoints(const PointsArgs& requested, std::ostream& out, std::ostream& err
     series = openTimeSeries(outputs, args, scene);
   }
   if (file != nullptr || series != nullptr) pauseForTestsAfterTemporaries(err);
-  const auto commit = [&] { outputs.commit([&] { pauseForTestsAfterFirstOutput(err); }); };
+  const auto commit = [&] {
+    outputs.commit([&] { pauseForTestsAfterFirstOutput(err); });
+    pauseForTestsAfterOutputs(err);
+  };
 
   std::unique_ptr<tbb::global_control> thread_limit;
   if (args.threads > 0) {

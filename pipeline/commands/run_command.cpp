@@ -106,8 +106,19 @@ TargetBudget checkRunMemory(const Scene& scene, const RunArgs& args, std::uint64
   if (scene.far_field.enabled) {
     const FarFieldSpec lattice = farFieldLattice(scene);
     // The reach's files are written after the far field's, while it is held.
-    far_bytes = farFieldMemoryFloorBytes(
-        lattice, std::max(writing(OutputRegion::Far).bytes, writing(OutputRegion::Reach).bytes));
+    const std::uint64_t far_writers = writing(OutputRegion::Far).bytes;
+    const std::uint64_t reach_writers = writing(OutputRegion::Reach).bytes;
+    far_bytes = farFieldMemoryFloorBytes(lattice, std::max(far_writers, reach_writers));
+    // Where the far field fits but not the reach's files beside it (a footprint of many
+    // pixels), the advice is the footprint's.
+    if (far_bytes > budget && reach_writers > far_writers &&
+        farFieldMemoryFloorBytes(lattice, far_writers) <= budget) {
+      requireWithinBudget("the reach's maps and footprint, written while " +
+                              farFieldDescription(lattice) + " is held",
+                          far_bytes, budget,
+                          "coarsen reach.footprint.pixel_m or shrink reach.footprint.radius_m, "
+                          "or raise --memory");
+    }
     requireWithinBudget(farFieldDescription(lattice), far_bytes, budget,
                         "lower far_field.face_pixels, or raise --memory");
     if (!args.quiet) {
@@ -407,6 +418,7 @@ void finishRun(const RunContext& c, const std::filesystem::path& dir,
   *c.outputs.summary() << s.j.dump(2) << "\n";
   c.watch.check("writing the outputs");  // a file written short of memory is not committed
   c.outputs.commit([&] { pauseForTestsAfterFirstOutput(c.err); });
+  pauseForTestsAfterOutputs(c.err);
   // Even when quiet: an empty result that is not a safe one must not pass unremarked.
   for (const std::string& w : s.warnings) c.err << "glint run: warning: " << w << "\n";
   if (c.args.quiet) return;

@@ -138,6 +138,18 @@ FolderLock::~FolderLock() {
   ::close(fd_);
 }
 
+void requireFolderNotHeld(const fs::path& folder) {
+  const fs::path file = folder / FolderLock::kFileName;
+  const int fd = ::open(file.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) return;  // no lock file (or none this process may read): nobody holds the folder
+  // A shared lock is refused exactly while a holder has its exclusive one; taken, it is let go
+  // at once, so that this check excludes nobody.
+  const bool held = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+  const auto holder = held ? holderOf(fd) : std::map<std::string, std::string>{};
+  ::close(fd);
+  if (held) throw OutputError(inUseMessage(folder, holder));
+}
+
 void CreatedFolders::create(const fs::path& folder) {
   fs::path target = folder.lexically_normal();
   if (!target.has_filename()) target = target.parent_path();  // "D/" → "D"

@@ -53,6 +53,13 @@ class FolderLock {
   int interrupt_slot_ = -1;  ///< the lock file goes with an interrupted run's temporaries
 };
 
+/// @brief Refuses to write into @p folder while another process holds its FolderLock (a `glint
+/// run` or `glint batch` writing there), as a command that writes single files there (`glint
+/// points --out`) must: its file would land in a folder whose contents the holder is about to
+/// replace. A folder with no lock file, or one nobody holds, passes.
+/// @throw OutputError "FOLDER is in use by glint process PID …", as FolderLock's own refusal.
+void requireFolderNotHeld(const std::filesystem::path& folder);
+
 /// @brief The folders a run made itself (`mkdir -p` that remembers which levels were missing),
 /// so that a run that fails can take them away again, and nothing else.
 class CreatedFolders {

@@ -24,6 +24,7 @@
 #include "observers/detail/field_common.h"
 #include "observers/field.h"
 #include "observers/field_grids.h"
+#include "support/small_disk.h"
 
 namespace glint {
 namespace {
@@ -218,6 +219,28 @@ TEST(VtkFiles, AmrIntoAMissingFolderThrowsOutputError) {
   const fs::path dir = freshFolder("glint-vtk-missing") / "not-there";
   EXPECT_THROW((void)writeAmr(dir / "irradiance.vthb", field, kRatios), OutputError);
   fs::remove_all(dir.parent_path());
+}
+
+// A full disk under the AMR's block files reads as the other writers' full disks do, with its
+// reason, not as "VTK's XML writer failed" alone (issue 64). The disk is a tmpfs of the test's
+// own, one page: room for the first block, not for the rest.
+TEST(VtkFiles, AmrOnAFullDiskSaysTheDiskIsFull) {
+  const ObserverField field = sampleField();
+  const fs::path dir = freshFolder("glint-vtk-full");
+  {
+    test::SmallDisk disk(dir / "disk", 1);
+    ASSERT_TRUE(disk.mounted()) << "cannot mount a tmpfs here (" << disk.why()
+                                << "): the full-disk tests need root and CAP_SYS_ADMIN";
+    std::string message;
+    try {
+      writeAmr(dir / "disk" / "irradiance.vthb", field, kRatios).commit();
+    } catch (const OutputError& e) {
+      message = e.what();
+    }
+    EXPECT_NE(message.find("No space left on device"), std::string::npos) << message;
+    EXPECT_TRUE(fs::is_empty(dir / "disk")) << "no staging folder left: " << message;
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -18,8 +18,10 @@
 #include <vector>
 
 #include "facets/vec3.h"
+#include "pipeline/input/scene.h"
 #include "support/cli.h"
 #include "support/files.h"
+#include "support/refusal.h"
 
 namespace glint {
 namespace {
@@ -81,6 +83,104 @@ TEST_F(CliTest, FitPrintsTheMaterialAndItsErrorAsJson) {
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.err.find("bad.csv: line 2: brdf_per_sr must be ≥ 0"), std::string::npos) << bad.err;
   EXPECT_EQ(glint({"fit", table, "--lobes", "7"}).status, 2) << "at most 4 lobes";
+}
+
+// Whatever the model, glint fit prints a material a scene takes, or refuses: on the constant
+// table the default model (two lobes, ABg, Lambert) once printed "b": null, A 8.75e42 and σ 0,
+// each refused by the reader (issue 64); one node was "fitted" to the starting guesses, and a
+// spike the fit cannot follow passed without a word.
+TEST_F(CliTest, FitPrintsOnlyAMaterialASceneTakesAndWarnsWhereItMissesTheTable) {
+  const std::string table = std::string(GLINT_TEST_DATA_DIR) + "/abg_disk_table.csv";
+  const auto sceneTakes = [](const nlohmann::json& material) {
+    const nlohmann::json scene = {
+        {"laser",
+         {{"position", {-10, 0, 0}},
+          {"direction", {1, 0, 0}},
+          {"power_w", 1.0},
+          {"wavelength_nm", 532},
+          {"beam", {{"profile", "flat_top"}, {"radius_m", 1.0}}}}},
+        {"materials", {{"fitted", material}}},
+        {"objects",
+         {{{"shape", "sphere"}, {"center", {0, 0, 0}}, {"radius", 0.5}, {"material", "fitted"}}}}};
+    return test::refusalOf([&] { (void)parseScene(scene.dump(), "scene.json"); });
+  };
+  for (const std::vector<std::string>& model :
+       {std::vector<std::string>{}, {"--lobes", "1"}, {"--lobes", "0", "--no-abg"}}) {
+    std::vector<std::string> args = {"fit", table};
+    args.insert(args.end(), model.begin(), model.end());
+    const Outcome o = glint(args);
+    ASSERT_EQ(o.status, 0) << args.size() << " arguments: " << o.err;
+    const nlohmann::json j = nlohmann::json::parse(o.out);
+    EXPECT_EQ(o.out.find("null"), std::string::npos) << o.out;
+    EXPECT_EQ(sceneTakes(j.at("material")), "(accepted)") << o.out;
+    // The table is a constant: any model that holds a Lambertian part matches it, and the
+    // terms it has no use for are dropped.
+    EXPECT_LT(j.at("fit").at("max_relative_error").get<double>(), 0.1) << o.out;
+    EXPECT_EQ(o.err.find("warning"), std::string::npos) << o.err;
+  }
+
+  const Outcome one = glint({"fit", write("one.csv",
+                                          "theta_i_deg,theta_o_deg,delta_phi_deg,brdf_per_sr\n"
+                                          "10,10,0,0.05\n")});
+  EXPECT_EQ(one.status, 2) << one.out;
+  EXPECT_NE(one.err.find("one.csv: 1 node(s) below 89.5° of θ cannot settle the fit's 8 "
+                         "parameters"),
+            std::string::npos)
+      << one.err;
+  EXPECT_EQ(one.out, "") << "nothing printed as a material";
+
+  // The constant table with one node 100 times brighter: no model of the fit follows a spike
+  // one node wide, and it must say so.
+  std::ifstream in(table);
+  std::string spiked, line;
+  while (std::getline(in, line)) {
+    spiked += (line == "10,10,0,0.05" ? "10,10,0,5" : line) + "\n";
+  }
+  ASSERT_NE(spiked.find("10,10,0,5\n"), std::string::npos) << "premise: the node is in the table";
+  const Outcome spike = glint({"fit", write("spiked.csv", spiked)});
+  ASSERT_EQ(spike.status, 0) << spike.err;
+  const double missed =
+      nlohmann::json::parse(spike.out).at("fit").at("max_relative_error").get<double>();
+  EXPECT_GT(missed, 0.1) << spike.out;
+  EXPECT_NE(spike.err.find("glint fit: warning: the fit is up to"), std::string::npos) << spike.err;
+}
+
+// An observer cut short by accuracy.max_evaluations is an estimate, not a value: where it may
+// be hazardous (here, in the cylinder's fan 2 m toward the laser, about 5 × the MPE) glint
+// points says so with what value plus error reaches, whatever its estimate reads (issue 64:
+// "peak hazard ratio 0" was the summary of observers never evaluated).
+TEST_F(CliTest, PointsCutShortSayWhatTheirBoundReaches) {
+  nlohmann::json scene = nlohmann::json::parse(std::ifstream(example("cylinder.json")));
+  scene.erase("observers");
+  scene.erase("reach");
+  scene["accuracy"] = {{"max_evaluations", 16}};
+  const std::string points = write("fan.csv", "x,y,z\n-2,0,0\n");
+  const Outcome o = glint({"points", write("short.json", scene.dump()), "--points", points, "--out",
+                           path("short.csv")});
+  ASSERT_EQ(o.status, 0) << o.err;
+  EXPECT_NE(o.err.find("1 of 1 observers did not reach the tolerance"), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("they may be hazardous, whatever the peak above says"), std::string::npos)
+      << o.err;
+  // The same observer converged: its truth is within what the cut-short one claimed.
+  scene.erase("accuracy");
+  const Outcome full = glint(
+      {"points", write("full.json", scene.dump()), "--points", points, "--out", path("full.csv")});
+  ASSERT_EQ(full.status, 0) << full.err;
+  const auto row = [](const std::string& csv) {
+    std::ifstream in(csv);
+    std::string header, line;
+    std::getline(in, header);
+    std::getline(in, line);
+    std::vector<double> v;
+    std::stringstream cells(line);
+    for (std::string c; std::getline(cells, c, ',');) v.push_back(std::atof(c.c_str()));
+    return v;
+  };
+  const std::vector<double> cut = row(path("short.csv")), truth = row(path("full.csv"));
+  ASSERT_GE(cut.size(), 5u);
+  EXPECT_GE(cut[3] + cut[4], truth[3] * (1.0 - 1e-3))
+      << "irradiance + error of the cut-short observer against the converged irradiance";
+  EXPECT_GT(truth[7], 1.0) << "premise: the observer is in the hazardous fan";
 }
 
 TEST_F(CliTest, UsageErrorsExitWithStatusTwo) {

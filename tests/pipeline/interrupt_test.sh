@@ -4,12 +4,15 @@
 # exit with 128 + the signal's number, and take away the folders the run made and its lock
 # file. A signal that lands between two outputs' moves into place (`glint run` over an earlier
 # run's files, `glint points` with its time series, a study's own files) must leave the folder
-# as it was. A SIGKILL cannot be caught: its temporaries are removed by the next glint that
-# writes into the same folder, and its lock (a flock) went with the process.
+# as it was. One that lands once every output is in place finds the answer complete: glint says
+# so and exits 0, since the folder is no longer as it was. A SIGKILL cannot be caught: its
+# temporaries are removed by the next glint that writes into the same folder, and its lock (a
+# flock) went with the process.
 #
 # GLINT_TEST_PAUSE_AFTER=temporaries (pipeline/base/test_pause.h) makes each glint stop once its
 # temporaries exist and say so, GLINT_TEST_PAUSE_AFTER=first-output once the first of its
-# outputs is in place: the signal lands there however fast or loaded the machine is.
+# outputs is in place, GLINT_TEST_PAUSE_AFTER=outputs once all are: the signal lands there
+# however fast or loaded the machine is.
 # No wait here is timed: a glint that ends without pausing fails the test at once, and one that
 # hangs is left to ctest's timeout.
 # Usage: interrupt_test.sh GLINT EXAMPLES_DIR WORKDIR TEST_DATA_DIR
@@ -167,3 +170,39 @@ between HUP 129 "$study/out" "$glint" batch "$study/study.json" -o "$study/out" 
 grep -q "(1 done before, 0 to run)" "$study/resumed.err" ||
   fail "the study did not take its finished scenario up: $(head -2 "$study/resumed.err")"
 echo "batch: resumed its finished scenario after the interrupt"
+
+# after SIGNAL DIR FILE... COMMAND: runs COMMAND, signals it once every output is in place, and
+# checks that it says so and exits 0 (not "as it was": the folder holds the new outputs), with
+# each FILE present and newer than the command's start.
+after() {
+  local signal=$1 dir=$2
+  shift 2
+  local files=()
+  while [ "$1" != "--" ]; do files+=("$1"); shift; done
+  shift
+  mkdir -p "$dir"
+  touch "$dir.start"
+  sleep 1  # the outputs' times must be told apart from the start's at one second's resolution
+  GLINT_TEST_PAUSE_AFTER=outputs "$@" 2> "$dir.err" &
+  local pid=$!
+  until grep -q '^glint: paused after putting every output in place' "$dir.err"; do
+    kill -0 "$pid" 2> /dev/null || fail "the run in $dir ended before it paused: $(tail -2 "$dir.err")"
+    sleep 0.05
+  done
+  kill -s "$signal" "$pid"
+  wait "$pid"
+  local got=$?
+  [ "$got" -eq 0 ] || fail "$signal after the outputs: exit status $got, expected 0 (they are complete)"
+  grep -q "interrupted by SIG$signal after its outputs were in place: they are complete" "$dir.err" ||
+    fail "$signal after the outputs: no message: $(grep -v '^$' "$dir.err" | tail -1)"
+  for f in "${files[@]}"; do
+    [ "$dir/$f" -nt "$dir.start" ] || fail "$signal after the outputs: $dir/$f is not the new output"
+  done
+  echo "$signal after the outputs: exit 0, outputs in place; $(grep interrupted "$dir.err")"
+}
+
+after TERM "$work/after_run" first.exr second.exr far_field.exr summary.json -- \
+  "$glint" run "$tiny" -o "$work/after_run" --quiet
+after INT "$work/after_points" table.csv series.csv -- "$glint" points "$data/engagement_mpi.json" \
+  --points "$data/engagement_points.csv" --out "$work/after_points/table.csv" \
+  --time-series "$work/after_points/series.csv" --quiet

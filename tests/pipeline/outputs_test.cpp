@@ -215,6 +215,26 @@ TEST_F(Outputs, RunHoldsItsFolderAndAFailedRunTakesAwayOnlyTheFoldersItMade) {
   EXPECT_EQ(entries(held), 0u) << "and holds no temporary or lock file";
 }
 
+// A folder a run holds is the run's to fill: a points table written into it meanwhile could
+// land among files the run is about to replace (issue 64: `--out DIR/summary.json`).
+TEST_F(Outputs, PointsAreNotWrittenIntoAFolderARunHolds) {
+  const fs::path held = dir_ / "held";
+  fs::create_directories(held);
+  {
+    const FolderLock lock(held, "glint run");
+    const Outcome r = points(held / "summary.json");
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find(held.string() + " is in use by glint process " +
+                         std::to_string(::getpid()) + " on host"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(entries(held), 1u) << "nothing but the holder's lock file";
+  }
+  const Outcome free = points(held / "summary.json");
+  EXPECT_EQ(free.status, 0) << "once the run let the folder go: " << free.err;
+  EXPECT_TRUE(fs::is_regular_file(held / "summary.json"));
+}
+
 // The full-disk tests fill a tmpfs of their own, mounted in the test's folder. They run as
 // root, as every test does; where no tmpfs can be mounted they fail, never skip: a claim left
 // untested is not a claim that holds.
