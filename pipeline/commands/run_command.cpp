@@ -10,6 +10,8 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "export/field_files.h"
 #include "export/geo_files.h"
@@ -405,6 +407,20 @@ void checkSurfaces(const RunContext& c, const FarResult& far, RunSummary& s) {
 }
 
 // summary.json, and every output committed together, summary.json last (rank 0).
+// What makes a run's files smaller, in the keys of the regions the scene has.
+std::string writingAdvice(const Scene& scene) {
+  std::vector<std::string> ways;
+  if (scene.observers) ways.emplace_back("coarsen observers.voxel_m or shrink the box");
+  if (!scene.planes.empty()) ways.emplace_back("coarsen the planes' pixel_m");
+  if (scene.reach.footprint) {
+    ways.emplace_back("coarsen reach.footprint.pixel_m or shrink reach.footprint.radius_m");
+  }
+  if (scene.far_field.enabled) ways.emplace_back("lower far_field.face_pixels");
+  std::string advice = "Raise --memory";
+  for (const std::string& w : ways) advice += ", or " + w;
+  return advice;
+}
+
 void finishRun(const RunContext& c, const std::filesystem::path& dir,
                const std::vector<std::string>& stale, RunSummary& s) {
   s.j["scene_path"] = sceneIdentity(c.args.scene_path);
@@ -416,7 +432,8 @@ void finishRun(const RunContext& c, const std::filesystem::path& dir,
   // Spent once per lit facet, outside every region's count (FacetIntegrator).
   s.j["diffuse_moment_evaluations"] = c.target.integrator.diffuseMomentEvaluations();
   *c.outputs.summary() << s.j.dump(2) << "\n";
-  c.watch.check("writing the outputs");  // a file written short of memory is not committed
+  // A file written short of memory is not committed.
+  c.watch.check("writing the outputs", writingAdvice(c.scene));
   c.outputs.commit([&] { pauseForTestsAfterFirstOutput(c.err); });
   pauseForTestsAfterOutputs(c.err);
   // Even when quiet: an empty result that is not a safe one must not pass unremarked.

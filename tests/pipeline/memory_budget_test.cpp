@@ -179,6 +179,34 @@ TEST(WriterMemory, APlaneWhoseMapWouldNotFitIsRefusedBeforeTheRun) {
   std::filesystem::remove_all(dir);
 }
 
+// A footprint whose maps do not fit beside the far field is blamed on the footprint, with its
+// keys (issue 64: it was "the far field (6 × 65² directions) needs … lower
+// far_field.face_pixels", a key that could not help). Refused before any work.
+TEST(WriterMemory, AFootprintThatWouldNotFitIsRefusedWithItsOwnKeys) {
+  const std::filesystem::path dir = test::freshTestFolder("glint_footprint_memory_");
+  std::ofstream(dir / "scene.json") << R"({"laser": {"position": [-100, 0, 0],
+      "direction": [1, 0, 0], "power_w": 6000.0, "wavelength_nm": 1064, "exposure_s": 10,
+      "beam": {"profile": "flat_top", "radius_m": 2.0}},
+      "materials": {"polished": {"specular_reflectance": 0.9, "sigma": 0.003}},
+      "objects": [{"shape": "cylinder", "center": [0, 0, 0], "axis": [0, 0, 1], "radius": 0.5,
+                   "length": 2.0, "material": "polished"}],
+      "site": {"latitude_deg": 32.9, "longitude_deg": -106.4},
+      "reach": {"footprint": {"radius_m": 5000, "pixel_m": 1.25}}})";
+  const test::Outcome r = test::glint({"run", (dir / "scene.json").string(), "-o",
+                                       (dir / "out").string(), "--quiet", "--memory", "300M"});
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(
+      r.err.find("glint: error: the reach's maps and footprint, written while the far field "),
+      std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("; coarsen reach.footprint.pixel_m or shrink reach.footprint.radius_m, or "
+                       "raise --memory"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out")) << "nothing is written";
+  std::filesystem::remove_all(dir);
+}
+
 // A scene of `objects` under a 1 m flat-top beam from 200 m along −z.
 Scene sceneOf(const std::string& objects) {
   return parseScene(R"({"laser": {"position": [0, 0, 200], "direction": [0, 0, -1],
