@@ -6,12 +6,22 @@
 #include <mutex>
 
 namespace glint::detail {
+namespace {
+
+// GDAL's block cache: enough for the tiles of a few rows of the largest map, whatever its size.
+constexpr GIntBig kGdalCacheBytes = 64ll << 20;
+
+}  // namespace
 
 GdalErrors::GdalErrors() {
   static std::once_flag once;
   std::call_once(once, [] {
     GDALAllRegister();
     keepGdalOffline();
+    // GDAL's block cache defaults to 5 % of the machine's memory (1.2 GB here), outside what
+    // --memory counts: a footprint's GeoTIFF of 64 M pixels filled it while written, and a run
+    // estimated at 1 GB was stopped at 1.9 GB. Blocks past this are written out, not held.
+    GDALSetCacheMax64(kGdalCacheBytes);
   });
   CPLPushErrorHandler(CPLQuietErrorHandler);
   CPLErrorReset();

@@ -48,16 +48,29 @@ std::uint64_t pointsBytes(const std::vector<Vec3>& points) {
   return points.size() * (sizeof(Vec3) + sizeof(ObserverResult));
 }
 
-// No infinity may reach the file or read as a harmless 0: within pipeline/base/limits.h none can
-// occur, so one is an internal error, reported before anything is written.
-void requireFiniteResults(const std::vector<ObserverResult>& results) {
+// No infinity may reach the file or read as a harmless 0. An unbounded error with a finite
+// value is the lobe scheme saying that a piece of the target stays unbounded from the observer,
+// as it does from a point on the target's surface or within about a micrometre of it: that is
+// the observer's position, refused with it. Anything else not finite is an internal error. Both
+// before anything is written.
+void requireFiniteResults(const std::vector<Vec3>& points,
+                          const std::vector<ObserverResult>& results) {
   for (std::size_t i = 0; i < results.size(); ++i) {
-    if (!std::isfinite(results[i].irradiance_w_m2) ||
-        !std::isfinite(results[i].error_estimate_w_m2)) {
-      throw std::runtime_error("observer " + std::to_string(i + 1) +
-                               ": the irradiance or its error is not a finite number; nothing "
-                               "was written");
+    const ObserverResult& r = results[i];
+    if (std::isfinite(r.irradiance_w_m2) && std::isfinite(r.error_estimate_w_m2)) continue;
+    const std::string which =
+        "observer " + std::to_string(i + 1) + " (" + formatNumber("%.9g", points[i].x) + ", " +
+        formatNumber("%.9g", points[i].y) + ", " + formatNumber("%.9g", points[i].z) + ")";
+    if (std::isfinite(r.irradiance_w_m2) && r.error_estimate_w_m2 > 0.0) {
+      throw InputError(which +
+                       ": its irradiance has no finite bound: a part of the target stays "
+                       "unbounded from there, as it does from a point on the target's surface or "
+                       "within about a micrometre of it; move the observer off the surface "
+                       "(nothing was written)");
     }
+    throw std::runtime_error(which +
+                             ": the irradiance or its error is not a finite number; nothing "
+                             "was written");
   }
 }
 
@@ -270,7 +283,7 @@ Evaluated evaluateObservers(const FacetIntegrator& integrator, const std::vector
   }
   watch.check("the observer points", kAdvice);
   e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  requireFiniteResults(e.results);
+  requireFiniteResults(points, e.results);
   return e;
 }
 

@@ -393,16 +393,25 @@ std::uint64_t reachVtp(const Scene& scene, const FieldSpec*) {
   return memory_model::saturated(cubeSphereBytes(scene.reach.face_cells));
 }
 
-// The footprint's masks (per threshold, at eye height and each flight altitude) as float bands
-// with the ground's height, and their rows flipped.
-std::uint64_t footprintTif(const Scene& scene, const FieldSpec*) {
-  return memory_model::saturated(2.0 * (hazardThresholds(scene) * footprintHeights(scene) + 1.0) *
-                                 kFloat * footprintPixels(scene));
+// The footprint itself (ReachFootprint: a byte per pixel of each mask, the observers' heights
+// as floats), made before its writers and held while each runs.
+double footprintHeldBytes(const Scene& scene) {
+  return (hazardThresholds(scene) * footprintHeights(scene) + kFloat) * footprintPixels(scene);
 }
 
+// The footprint's masks (per threshold, at eye height and each flight altitude) as float bands
+// beside the ground's height, all of them with their rows flipped (writeGeoTiff()).
+std::uint64_t footprintTif(const Scene& scene, const FieldSpec*) {
+  const double masks = hazardThresholds(scene) * footprintHeights(scene);
+  return memory_model::saturated(footprintHeldBytes(scene) +
+                                 (masks + (masks + 1.0)) * kFloat * footprintPixels(scene));
+}
+
+// A copy of each mask, and GDAL's in-memory raster of one, beside the footprint.
 std::uint64_t footprintZones(const Scene& scene, const FieldSpec*) {
-  return memory_model::saturated(hazardThresholds(scene) * footprintHeights(scene) *
-                                 footprintPixels(scene));
+  return memory_model::saturated(
+      footprintHeldBytes(scene) +
+      (hazardThresholds(scene) * footprintHeights(scene) + 1.0) * footprintPixels(scene));
 }
 
 }  // namespace scratch

@@ -183,6 +183,30 @@ TEST_F(CliTest, PointsCutShortSayWhatTheirBoundReaches) {
   EXPECT_GT(truth[7], 1.0) << "premise: the observer is in the hazardous fan";
 }
 
+// From a point on a disk, or a nanometre above it, a piece of the disk has no finite bound:
+// glint points once stopped there with "internal error" (status 1). The observer is refused
+// with its position, status 2, and one a millimetre up is integrated.
+TEST_F(CliTest, PointsOnTheTargetsSurfaceAreRefusedWithTheirPosition) {
+  const std::string scene = write("disk.json", R"({
+    "laser": {"position": [-100, 0, 60], "direction": [1, 0, -0.6], "power_w": 200.0,
+              "wavelength_nm": 532, "beam": {"profile": "flat_top", "radius_m": 0.3}},
+    "materials": {"m": {"specular_reflectance": 0.5, "sigma": 0.02, "diffuse_reflectance": 0.3}},
+    "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [0, 0, 1], "radius": 0.1,
+                 "segments": 8, "material": "m"}]})");
+  for (const char* on : {"0,0,0", "0,0,1e-9", "-0.1,0,1e-9"}) {
+    const Outcome o = glint({"points", scene, "--points",
+                             write("on.csv", std::string("x,y,z\n1,1,1\n") + on + "\n"), "--out",
+                             path("on_out.csv"), "--quiet"});
+    EXPECT_EQ(o.status, 2) << on << ": " << o.err;
+    EXPECT_NE(o.err.find("observer 2 ("), std::string::npos) << on << ": " << o.err;
+    EXPECT_NE(o.err.find("its irradiance has no finite bound"), std::string::npos) << o.err;
+    EXPECT_FALSE(fs::exists(path("on_out.csv"))) << "nothing written";
+  }
+  const Outcome above = glint({"points", scene, "--points", write("up.csv", "x,y,z\n0,0,1e-3\n"),
+                               "--out", path("up_out.csv"), "--quiet"});
+  EXPECT_EQ(above.status, 0) << above.err;
+}
+
 TEST_F(CliTest, UsageErrorsExitWithStatusTwo) {
   EXPECT_EQ(glint({}).status, 2) << "no command";
   EXPECT_EQ(glint({"paint"}).status, 2) << "unknown command";
