@@ -505,7 +505,11 @@ nlohmann::json farFieldJson(const FarField& field, const FarHazard& hazard,
       {"far_radius_rule", spec.far_radius_verified
                               ? "verified: the innermost of the spheres checked by direct "
                                 "integration, outside in by halves from the first-order radius, "
-                                "on which every direction held (far_radius_check)"
+                                "on which every direction held (far_radius_check): E r^2 within "
+                                "the allowance of I at the lattice's directions, and at most I "
+                                "(plus the allowance) at each located lobe top, where the near "
+                                "field may still fall short of I (a cusp narrower than the "
+                                "parallax: the far field over-states it there, never under)"
                               : "first order: lit_radius_m (1 + (3 + g / sigma) / tolerance), "
                                 "g = max(1, 0.43 / sin(psi / 2)), psi the angle from "
                                 "beam_direction: far_radius_m beyond 51 degrees, growing into "
@@ -533,8 +537,8 @@ void printFarField(std::ostream& err, const FarField& field, const FarHazard& fa
         << " of the brightest direction in reach (or of the MPE there) beyond "
         << formatNumber("%.4g", spec.far_radius_m) << " m, checked at " << check.directions
         << " directions on " << check.spheres.size() << " spheres in "
-        << formatDuration(check.seconds)
-        << " (first-order rule: " << formatNumber("%.4g", spec.first_order_far_radius_m) << " m)\n";
+        << formatDuration(check.seconds) << " (at the located lobe tops: E r² at most I; "
+        << "first-order rule: " << formatNumber("%.4g", spec.first_order_far_radius_m) << " m)\n";
   } else {
     err << "; E = I/r² within " << formatNumber("%g", spec.tolerance) << " of the peak beyond "
         << formatNumber("%.4g", spec.far_radius_m)

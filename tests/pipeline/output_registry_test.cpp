@@ -59,7 +59,7 @@ TEST(OutputRegistry, ALevelOrPlaneNameThatWouldTakeAnotherOutputsNameIsRefusedWi
   std::vector<Case> cases;
   {
     json j = aidedBall();
-    j["hazard"] = {{"levels", {{{"name", "aided_hazard"}, {"irradiance_w_m2", 1e5}}}}};
+    j["hazard"] = {{"levels", json::array({{{"name", "aided_hazard"}, {"irradiance_w_m2", 1e5}}})}};
     cases.push_back({"a level named as the aided ratio", j, "scene.json: /hazard/levels/0/name: ",
                      "the aided_hazard level's ratio and the aided hazard ratio would both be "
                      "aided_hazard_ratio in the points table's columns"});
@@ -68,13 +68,13 @@ TEST(OutputRegistry, ALevelOrPlaneNameThatWouldTakeAnotherOutputsNameIsRefusedWi
     json j = aidedBall();
     j["site"] = {{"latitude_deg", 32.9}, {"longitude_deg", -106.4}};
     j["reach"] = {{"footprint", {{"radius_m", 100}}}};
-    j["planes"] = {plane("reach_footprint")};
+    j["planes"] = json::array({plane("reach_footprint")});
     cases.push_back({"a plane named as the footprint", j, "scene.json: /planes/0/name: ",
                      "would both be reach_footprint.tif in the run's files"});
   }
   {
     json j = aidedBall();
-    j["planes"] = {plane("P"), plane("p")};
+    j["planes"] = json::array({plane("P"), plane("p")});
     cases.push_back({"two planes whose files differ in case only", j,
                      "scene.json: /planes/1/name: ",
                      "(p.exr and P.exr are one file where case is not told apart)"});
@@ -89,7 +89,8 @@ TEST(OutputRegistry, ALevelOrPlaneNameThatWouldTakeAnotherOutputsNameIsRefusedWi
   }
   {
     json j = aidedBall();
-    j["hazard"] = {{"levels", {{{"name", std::string(65, 'a')}, {"irradiance_w_m2", 1.0}}}}};
+    j["hazard"] = {
+        {"levels", json::array({{{"name", std::string(65, 'a')}, {"irradiance_w_m2", 1.0}}})}};
     cases.push_back({"a level name longer than its channels may carry", j,
                      "scene.json: /hazard/levels/0/name: ", "must be at most 64 characters"});
   }
@@ -107,9 +108,9 @@ TEST(OutputRegistry, EveryNameARunWritesIsOneTheRegistryLists) {
   const fs::path dir = test::freshTestFolder("output_registry");
   json j = aidedBall();
   j["hazard"] = {{"flight_zones", true},
-                 {"levels", {{{"name", "site_glare"}, {"irradiance_w_m2", 0.5}}}}};
+                 {"levels", json::array({{{"name", "site_glare"}, {"irradiance_w_m2", 0.5}}})}};
   j["observers"] = {{"min", {-1, -1, -1}}, {"max", {1, 1, 1}}, {"voxel_m", 0.25}};
-  j["planes"] = {plane("overhead")};
+  j["planes"] = json::array({plane("overhead")});
   j["reach"] = {{"face_cells", 16}, {"layer_ratio", 1.1}};
   j["far_field"] = {{"face_pixels", 32}};
   std::ofstream(dir / "scene.json") << j.dump();
