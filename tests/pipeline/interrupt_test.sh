@@ -100,6 +100,15 @@ snapshot() {
   done)
 }
 
+# await_line ERR PID DIR WHAT: waits until glint PID has written "glint: paused after WHAT" to
+# ERR; one that ends first fails the test.
+await_line() {
+  until grep -q "^glint: paused after $4" "$1"; do
+    kill -0 "$2" 2> /dev/null || fail "the run in $3 ended before it paused: $(tail -2 "$1")"
+    sleep 0.05
+  done
+}
+
 # between SIGNAL STATUS DIR COMMAND...: runs COMMAND, signals it once its first output is in
 # place, and checks the status, the message and that DIR is as it was.
 between() {
@@ -110,10 +119,7 @@ between() {
   before=$(snapshot "$dir")
   GLINT_TEST_PAUSE_AFTER=first-output "$@" 2> "$dir.err" &
   local pid=$!
-  until grep -q '^glint: paused after putting the first output in place' "$dir.err"; do
-    kill -0 "$pid" 2> /dev/null || fail "the run in $dir ended before it paused: $(tail -2 "$dir.err")"
-    sleep 0.05
-  done
+  await_line "$dir.err" "$pid" "$dir" 'putting the first output in place'
   kill -s "$signal" "$pid"
   wait "$pid"
   local got=$?
@@ -185,10 +191,7 @@ after() {
   sleep 1  # the outputs' times must be told apart from the start's at one second's resolution
   GLINT_TEST_PAUSE_AFTER=outputs "$@" 2> "$dir.err" &
   local pid=$!
-  until grep -q '^glint: paused after putting every output in place' "$dir.err"; do
-    kill -0 "$pid" 2> /dev/null || fail "the run in $dir ended before it paused: $(tail -2 "$dir.err")"
-    sleep 0.05
-  done
+  await_line "$dir.err" "$pid" "$dir" 'putting every output in place'
   kill -s "$signal" "$pid"
   wait "$pid"
   local got=$?
