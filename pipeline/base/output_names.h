@@ -4,6 +4,7 @@
 /// "glint run" and "Far field", and docs/batch.md describe their contents).
 
 #include <string>
+#include <vector>
 
 namespace glint::output_names {
 
@@ -60,5 +61,19 @@ inline constexpr const char* kScenariosFolder = "scenarios";
 inline constexpr const char* kScenarioScene = "scene.json";
 inline constexpr const char* kScenarioResult =
     "result.json";  ///< written last: the scenario is done
+/// The study box's name among its lattices (the planes keep their own).
+inline constexpr const char* kStudyBoxName = "box";
+/// scenarios.csv's columns of one lattice (the box, or a plane): its peak and its extent, and
+/// with an optical aid the same through it.
+inline std::vector<std::string> studyLatticeColumns(const std::string& lattice, bool plane,
+                                                    bool aided) {
+  const std::string extent = plane ? "_hazardous_area_m2" : "_hazard_volume_m3";
+  std::vector<std::string> columns = {lattice + "_peak_hazard_ratio", lattice + extent};
+  if (aided) {
+    columns.push_back(lattice + "_aided_peak_hazard_ratio");
+    columns.push_back(lattice + "_aided" + extent);
+  }
+  return columns;
+}
 
 }  // namespace glint::output_names

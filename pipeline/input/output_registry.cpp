@@ -19,6 +19,7 @@ constexpr const char* kVolumes = "the volumes' grids and arrays";
 constexpr const char* kReachMap = "reach.exr's channels";
 constexpr const char* kFootprint = "the reach footprint's layers";
 constexpr const char* kFiles = "the run's files";
+constexpr const char* kStudyColumns = "a study's scenarios.csv columns";
 
 // OpenEXR's Imf::Name holds at most this many bytes: a longer channel name is cut short.
 constexpr std::size_t kExrNameBytes = 255;
@@ -136,6 +137,22 @@ std::vector<OutputName> outputNames(const Scene& scene) {
                "the " + layer + " layer at " + at + " m",
                "/reach/footprint/flight_altitudes_m/" + std::to_string(a));
       }
+    }
+  }
+
+  // A study's scenarios.csv (report/batch_report.cpp), whose columns of each lattice carry the
+  // lattice's name: a plane named "box" beside the box, or "x_aided" beside a plane "x" with an
+  // aid, would repeat a column. Listed for every scene: any scene may be a study's.
+  if (scene.observers) {
+    for (const std::string& c :
+         output_names::studyLatticeColumns(output_names::kStudyBoxName, false, h.aid.has_value()))
+      own(kStudyColumns, c, "the study box's column " + c);
+  }
+  for (std::size_t i = 0; i < scene.planes.size(); ++i) {
+    const std::string& p = scene.planes[i].name;
+    for (const std::string& c : output_names::studyLatticeColumns(p, true, h.aid.has_value())) {
+      chosen(kStudyColumns, c, "plane \"" + p + "\"'s study column " + c,
+             "/planes/" + std::to_string(i) + "/name");
     }
   }
 

@@ -151,9 +151,8 @@ std::string scenariosCsv(const std::vector<StudyLattice>& lattices,
       "sample,"
       "jitter_u_rad,jitter_v_rad";
   for (const StudyLattice& r : lattices) {
-    const std::string extent = r.plane ? "_hazardous_area_m2" : "_hazard_volume_m3";
-    csv += "," + r.name + "_peak_hazard_ratio," + r.name + extent;
-    if (aided) csv += "," + r.name + "_aided_peak_hazard_ratio," + r.name + "_aided" + extent;
+    for (const std::string& c : output_names::studyLatticeColumns(r.name, r.plane, aided))
+      csv += "," + c;
   }
   if (far_field) csv += ",far_max_nohd_m,far_peak_intensity_w_sr";
   if (far_field && aided) csv += ",far_aided_max_nohd_m";

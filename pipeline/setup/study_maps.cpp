@@ -109,7 +109,7 @@ std::vector<StudyLattice> studyLattices(const Scene& base) {
     kind.level_thresholds_w_m2.push_back(l.thresholdW_m2());
   if (base.observers) {
     StudyLattice& box = lattices.emplace_back(kind);
-    box.name = "box";
+    box.name = output_names::kStudyBoxName;
     box.spec = fieldSpec(base);
   }
   for (std::size_t p = 0; p < base.planes.size(); ++p) {

@@ -81,6 +81,19 @@ TEST(OutputRegistry, ALevelOrPlaneNameThatWouldTakeAnotherOutputsNameIsRefusedWi
   }
   {
     json j = aidedBall();
+    j["observers"] = {{"min", {-1, -1, -1}}, {"max", {1, 1, 1}}, {"voxel_m", 0.25}};
+    j["planes"] = json::array({plane("box")});
+    cases.push_back({"a plane named as the study's box", j, "scene.json: /planes/0/name: ",
+                     "would both be box_peak_hazard_ratio in a study's scenarios.csv columns"});
+  }
+  {
+    json j = aidedBall();
+    j["planes"] = json::array({plane("x"), plane("x_aided")});
+    cases.push_back({"a plane named as another's aided columns", j, "scene.json: /planes/1/name: ",
+                     "would both be x_aided_peak_hazard_ratio in a study's scenarios.csv columns"});
+  }
+  {
+    json j = aidedBall();
     j["site"] = {{"latitude_deg", 32.9}, {"longitude_deg", -106.4}};
     j["reach"] = {{"footprint", {{"radius_m", 100}, {"flight_altitudes_m", {50, 50.0000001}}}}};
     cases.push_back({"two flight altitudes that are written alike", j,
