@@ -409,9 +409,9 @@ std::uint64_t footprintTif(const Scene& scene, const FieldSpec*) {
 
 // A copy of each mask, and GDAL's in-memory raster of one, beside the footprint.
 std::uint64_t footprintZones(const Scene& scene, const FieldSpec*) {
-  return memory_model::saturated(
-      footprintHeldBytes(scene) +
-      (hazardThresholds(scene) * footprintHeights(scene) + 1.0) * footprintPixels(scene));
+  return memory_model::saturated(footprintHeldBytes(scene) +
+                                 (hazardThresholds(scene) * footprintHeights(scene) + 1.0) *
+                                     footprintPixels(scene));
 }
 
 }  // namespace scratch
