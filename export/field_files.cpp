@@ -91,7 +91,7 @@ void writeVdb(std::ostream& out, ObserverField field, const RunInfo& info) {
   meta.insertMeta("peak_irradiance_w_m2", openvdb::DoubleMetadata(stats.peak_w_m2));
 
   FieldGrids& g = field.grids();
-  GridByGridWriter file(out, meta, 3 + static_cast<int>(info.scaled.size()));
+  GridByGridWriter file(out, meta, 4 + static_cast<int>(info.scaled.size()));
   // A shallow copy (the same tree) carries the irradiance's metadata: the grid itself goes on
   // to become each scaled grid in turn.
   {
@@ -120,6 +120,14 @@ void writeVdb(std::ostream& out, ObserverField field, const RunInfo& info) {
   openvdb::FloatGrid::Ptr status = std::move(g.status);
   status->insertMeta("meaning", openvdb::StringMetadata(voxelStatusMeanings()));
   file.append(status);
+  {
+    openvdb::FloatGrid::Ptr upper = std::move(g.upper);
+    upper->insertMeta("units", openvdb::StringMetadata("W/m^2"));
+    upper->insertMeta("meaning", openvdb::StringMetadata(
+                                     "at unconverged points (status 5) only: irradiance plus "
+                                     "its error estimate, by which the hazard zones count them"));
+    file.append(upper);
+  }
   file.finish();
 }
 

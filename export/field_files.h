@@ -38,7 +38,8 @@ struct RunInfo {
 };
 
 /// @brief The grids `irradiance_w_m2`, each of info.scaled (the hazard ratios),
-/// `refinement_level` and `status` (see VoxelStatus) with the field's transform, and as file
+/// `refinement_level`, `status` (see VoxelStatus) and `irradiance_upper_w_m2` (value plus error,
+/// at Unconverged points only) with the field's transform, and as file
 /// metadata the units, laser, exposure and MPE, tolerance, floor, counts, program version and
 /// scene hash.
 ///

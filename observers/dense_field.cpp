@@ -67,7 +67,10 @@ ObserverField computeDenseField(const FacetIntegrator& integrator, const FieldSp
       local.grids.irradiance.setValue(p, static_cast<float>(r.irradiance_w_m2));
       local.grids.status.setValue(
           p, statusCode(r.converged ? VoxelStatus::Evaluated : VoxelStatus::Unconverged));
-      if (!r.converged) noteUnconverged(local.stats, x, r.irradiance_w_m2, r.error_estimate_w_m2);
+      if (!r.converged) {
+        noteUnconverged(local.stats, local.grids.upper, p, x, r.irradiance_w_m2,
+                        r.error_estimate_w_m2);
+      }
       if (r.irradiance_w_m2 > local.stats.peak_w_m2) {
         local.stats.peak_w_m2 = r.irradiance_w_m2;
         local.stats.peak_at_m = x;

@@ -160,6 +160,9 @@ std::vector<float> ObserverField::unresolvedBoundLattice() const {
   }
   return out;
 }
+double ObserverField::unconvergedUpper(int i, int j, int k) const {
+  return static_cast<double>(grids_->upper->tree().getValue(openvdb::Coord(i, j, k)));
+}
 VoxelStatus ObserverField::status(int i, int j, int k) const {
   return static_cast<VoxelStatus>(
       std::lround(grids_->status->tree().getValue(openvdb::Coord(i, j, k))));
@@ -213,6 +216,16 @@ ObserverField::Exceedance ObserverField::exceedance(double threshold_w_m2,
                          (c & 1) != 0 ? box.max().z() : box.min().z()));
     }
     r.points += static_cast<std::int64_t>(box.volume());
+  }
+  // An Unconverged point below the threshold whose value plus error reaches it: the
+  // integration that stopped short cannot say it is safe, so it counts.
+  const auto irradiance = grids_->irradiance->getConstAccessor();
+  for (auto it = grids_->upper->cbeginValueOn(); it; ++it) {
+    if (!(static_cast<double>(*it) >= threshold_w_m2)) continue;
+    if (static_cast<double>(irradiance.getValue(it.getCoord())) >= threshold_w_m2) continue;
+    add(it.getCoord());
+    ++r.points;
+    ++r.by_error_points;
   }
   if (r.points == 0) r.min_m = r.max_m = Vec3(0.0);
   r.volume_m3 = static_cast<double>(r.points) * spec_.voxel_m * spec_.voxel_m * spec_.voxel_m;

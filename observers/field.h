@@ -274,6 +274,9 @@ class ObserverField {
   /// block; indexed as irradianceLattice(). Only the points whose status() is Unresolved need
   /// it: the others' values say it all.
   [[nodiscard]] std::vector<float> unresolvedBoundLattice() const;
+  /// @brief An Unconverged point's irradiance plus its error estimate (W/m², rounded up to a
+  /// float); 0 at every other point.
+  [[nodiscard]] double unconvergedUpper(int i, int j, int k) const;
   [[nodiscard]] VoxelStatus status(int i, int j, int k) const;
   [[nodiscard]] int level(int i, int j, int k) const;
 
@@ -281,9 +284,13 @@ class ObserverField {
   /// (each lattice point standing for one voxel_m³).
   [[nodiscard]] double volumeAbove(double threshold_w_m2) const;
 
-  /// @brief Where the irradiance is at least a threshold (at the MPE: the nominal hazard zone).
+  /// @brief Where the irradiance may be at least a threshold (at the MPE: the nominal hazard
+  /// zone): where its value is, or an Unconverged point's value plus its error estimate.
   struct Exceedance {
     std::int64_t points = 0;  ///< lattice points, each standing for one voxel_m³
+    /// Of those, the Unconverged points counted by their value plus error alone: the zone may
+    /// be smaller by them had their integration converged, never larger.
+    std::int64_t by_error_points = 0;
     double volume_m3 = 0.0;
     Vec3 min_m{0.0};  ///< box around those points (when points > 0)
     Vec3 max_m{0.0};
@@ -293,8 +300,8 @@ class ObserverField {
     /// may go on beyond the box or plane.
     bool reaches_edge = false;
   };
-  /// @brief The lattice points whose irradiance is at least @p threshold_w_m2, with their
-  /// box and the farthest of them from @p from_m.
+  /// @brief The lattice points whose irradiance, or whose value plus error where Unconverged,
+  /// is at least @p threshold_w_m2, with their box and the farthest of them from @p from_m.
   [[nodiscard]] Exceedance exceedance(double threshold_w_m2, const Vec3& from_m) const;
 
  private:

@@ -652,6 +652,7 @@ class FieldBuilder {
     // Every sample, wherever its block ended up, with its own value.
     auto irradiance = grids->irradiance->getAccessor();
     auto status = grids->status->getAccessor();
+    auto upper = grids->upper->getAccessor();
     const auto nk = static_cast<std::uint64_t>(lattice_.n[2]);
     const auto nj = static_cast<std::uint64_t>(lattice_.n[1]);
     for (const auto& [key, value] : values_) {
@@ -674,7 +675,7 @@ class FieldBuilder {
       status.setValue(
           p, statusCode(value.converged ? VoxelStatus::Evaluated : VoxelStatus::Unconverged));
       if (!value.converged) {
-        noteUnconverged(stats_, spec_.position(p[0], p[1], p[2]), value.irradiance_w_m2,
+        noteUnconverged(stats_, upper, p, spec_.position(p[0], p[1], p[2]), value.irradiance_w_m2,
                         value.error_w_m2);
       }
       irradiance.setValue(p, static_cast<float>(value.irradiance_w_m2));

@@ -1,19 +1,25 @@
 #include "observers/detail/field_common.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
 namespace glint::field {
 
-void noteUnconverged(FieldStats& stats, const Vec3& x, double irradiance_w_m2, double error_w_m2) {
+void noteUnconverged(FieldStats& stats, openvdb::FloatGrid::Accessor& upper_grid,
+                     const openvdb::Coord& p, const Vec3& x, double irradiance_w_m2,
+                     double error_w_m2) {
   ++stats.unconverged_points;
   // A NaN counts as +∞: it must never let the summary say "none of them can be hazardous".
-  const double upper = irradiance_w_m2 + error_w_m2;
-  if (!(upper <= stats.unconverged_max_upper_w_m2)) {
-    stats.unconverged_max_upper_w_m2 =
-        std::isnan(upper) ? std::numeric_limits<double>::infinity() : upper;
-  }
+  double upper = irradiance_w_m2 + error_w_m2;
+  if (std::isnan(upper)) upper = std::numeric_limits<double>::infinity();
+  stats.unconverged_max_upper_w_m2 = std::max(stats.unconverged_max_upper_w_m2, upper);
+  // Rounded up to the next float, so that the stored bound stays one.
+  upper_grid.setValue(
+      p, std::nextafter(static_cast<float>(std::min(
+                            upper, static_cast<double>(std::numeric_limits<float>::max()))),
+                        std::numeric_limits<float>::infinity()));
   stats.unconverged_min_m = glm::min(stats.unconverged_min_m, x);
   stats.unconverged_max_m = glm::max(stats.unconverged_max_m, x);
 }
@@ -32,9 +38,12 @@ std::unique_ptr<FieldGrids> makeGrids(const FieldSpec& spec) {
   g->level->setName("refinement_level");
   g->status = openvdb::FloatGrid::create(0.0f);
   g->status->setName("status");
+  g->upper = openvdb::FloatGrid::create(0.0f);
+  g->upper->setName("irradiance_upper_w_m2");
   for (openvdb::GridBase* grid : {static_cast<openvdb::GridBase*>(g->irradiance.get()),
                                   static_cast<openvdb::GridBase*>(g->level.get()),
-                                  static_cast<openvdb::GridBase*>(g->status.get())}) {
+                                  static_cast<openvdb::GridBase*>(g->status.get()),
+                                  static_cast<openvdb::GridBase*>(g->upper.get())}) {
     grid->setTransform(transform->copy());
   }
   return g;
@@ -44,12 +53,13 @@ void mergeInto(FieldGrids& into, FieldGrids& from) {
   into.irradiance->tree().merge(from.irradiance->tree());
   into.level->tree().merge(from.level->tree());
   into.status->tree().merge(from.status->tree());
+  into.upper->tree().merge(from.upper->tree());
 }
 
 void finishStats(const FieldGrids& grids, FieldStats& stats) {
   stats.active_voxels = static_cast<std::int64_t>(grids.irradiance->activeVoxelCount());
-  stats.grid_bytes =
-      grids.irradiance->memUsage() + grids.level->memUsage() + grids.status->memUsage();
+  stats.grid_bytes = grids.irradiance->memUsage() + grids.level->memUsage() +
+                     grids.status->memUsage() + grids.upper->memUsage();
 }
 
 void validateFieldSpec(const FieldSpec& spec) {

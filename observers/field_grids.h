@@ -29,6 +29,9 @@ struct FieldGrids {
   // other readers) handle only float, vector and bool grids.
   openvdb::FloatGrid::Ptr level;   ///< `refinement_level`: 0 = coarsest block
   openvdb::FloatGrid::Ptr status;  ///< `status`: a VoxelStatus, background Outside
+  /// `irradiance_upper_w_m2`: at Unconverged points only, their irradiance plus its error
+  /// estimate (+∞ where that is not a number), what the hazard zones count them by.
+  openvdb::FloatGrid::Ptr upper;
 };
 
 }  // namespace glint

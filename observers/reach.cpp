@@ -378,9 +378,7 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
     // An Unresolved point may have a glint beside it that its lattice cannot see, up to its
     // block's bound: it counts for each threshold that bound reaches (the lowest threshold's
     // bound says nothing of the MPE's); an Unconverged one may be short of its value by its
-    // error, which the field keeps only as the largest value plus error of them all; the
-    // target's inside is no place.
-    const double unconverged_upper_w_m2 = out.stats.unconverged_max_upper_w_m2;
+    // error (ObserverField::unconvergedUpper); the target's inside is no place.
     const std::vector<float> unresolved_bound = field.unresolvedBoundLattice();
     const auto boundAt = [&](int i, int j, int k) {
       return static_cast<double>(
@@ -407,12 +405,12 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
           value[at(i, j, k)] = static_cast<float>(e);
           peak = std::max(peak, e);
           const double bound = s == VoxelStatus::Unresolved ? boundAt(i, j, k) : 0.0;
+          const double upper = field.unconvergedUpper(i, j, k);
           std::uint8_t bits = 0;
           for (std::size_t t = 0; t < thresholds; ++t) {
-            const bool hazardous =
-                e >= hazardous_w_m2[t] ||
-                (s == VoxelStatus::Unresolved && !(bound < hazardous_w_m2[t])) ||
-                (s == VoxelStatus::Unconverged && unconverged_upper_w_m2 >= hazardous_w_m2[t]);
+            const bool hazardous = e >= hazardous_w_m2[t] ||
+                                   (s == VoxelStatus::Unresolved && !(bound < hazardous_w_m2[t])) ||
+                                   upper >= hazardous_w_m2[t];
             bits = static_cast<std::uint8_t>(bits | (hazardous ? 1u << t : 0u));
           }
           hazard_bits[at(i, j, k)] = bits;

@@ -54,8 +54,11 @@ void forEachCoarseBlock(const Lattice& lattice, int size, Fn&& fn) {
 /// @brief A VoxelStatus as the float the status grid stores.
 inline float statusCode(VoxelStatus s) { return static_cast<float>(static_cast<int>(s)); }
 
-/// @brief Counts an unconverged point at @p x in @p stats (a NaN upper bound counts as +∞).
-void noteUnconverged(FieldStats& stats, const Vec3& x, double irradiance_w_m2, double error_w_m2);
+/// @brief Counts an unconverged point at @p x in @p stats and keeps its irradiance plus error
+/// at lattice point @p p of @p upper (FieldGrids::upper; a NaN counts as +∞).
+void noteUnconverged(FieldStats& stats, openvdb::FloatGrid::Accessor& upper,
+                     const openvdb::Coord& p, const Vec3& x, double irradiance_w_m2,
+                     double error_w_m2);
 
 /// @brief Counts a point whose irradiance is not finite, remembering the first.
 void noteNonFinite(FieldStats& stats, const Vec3& x);
@@ -73,12 +76,14 @@ struct ThreadGrids {
   openvdb::FloatGrid::Accessor irradiance;
   openvdb::FloatGrid::Accessor level;
   openvdb::FloatGrid::Accessor status;
+  openvdb::FloatGrid::Accessor upper;
 
   explicit ThreadGrids(const FieldSpec& spec)
       : grids(makeGrids(spec)),
         irradiance(grids->irradiance->getAccessor()),
         level(grids->level->getAccessor()),
-        status(grids->status->getAccessor()) {}
+        status(grids->status->getAccessor()),
+        upper(grids->upper->getAccessor()) {}
 };
 
 /// @brief Fills in the statistics read off the finished grids (active voxels, their memory).

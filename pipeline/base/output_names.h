@@ -50,6 +50,11 @@ inline std::string levelFootprint(const std::string& level) { return level + "_r
 inline std::string footprintAtAltitude(const std::string& layer, const std::string& altitude) {
   return layer + "_at_" + altitude + "m";
 }
+/// @brief A level's channel of a study's coverage map: @p what is "probability", "lower" or
+/// "upper" (the fraction of scenarios reaching it and its Clopper-Pearson bounds).
+inline std::string levelCoverage(const std::string& level, const char* what) {
+  return level + "_coverage_" + what;
+}
 /// @brief An engagement's columns of a level: its peak ratio and the time above it.
 inline std::string levelPeakRatio(const std::string& level) { return level + "_peak_ratio"; }
 inline std::string levelTimeAbove(const std::string& level) { return "time_above_" + level + "_s"; }

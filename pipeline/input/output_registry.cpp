@@ -20,6 +20,7 @@ constexpr const char* kReachMap = "reach.exr's channels";
 constexpr const char* kFootprint = "the reach footprint's layers";
 constexpr const char* kFiles = "the run's files";
 constexpr const char* kStudyColumns = "a study's scenarios.csv columns";
+constexpr const char* kStudyMaps = "a study's coverage map's channels";
 
 // OpenEXR's Imf::Name holds at most this many bytes: a longer channel name is cut short.
 constexpr std::size_t kExrNameBytes = 255;
@@ -110,8 +111,8 @@ std::vector<OutputName> outputNames(const Scene& scene) {
     own(kPlaneMaps, c, std::string("glint's own channel ") + c);
   }
   levels(kPlaneMaps, output_names::levelRatio, "ratio");
-  for (const char* c :
-       {"irradiance_w_m2", "refinement_level", "status", "hazard_ratio", "aided_hazard_ratio"}) {
+  for (const char* c : {"irradiance_w_m2", "refinement_level", "status", "irradiance_upper_w_m2",
+                        "hazard_ratio", "aided_hazard_ratio"}) {
     own(kVolumes, c, std::string("glint's own grid ") + c);
   }
   levels(kVolumes, output_names::levelRatio, "ratio");
@@ -154,6 +155,24 @@ std::vector<OutputName> outputNames(const Scene& scene) {
       chosen(kStudyColumns, c, "plane \"" + p + "\"'s study column " + c,
              "/planes/" + std::to_string(i) + "/name");
     }
+  }
+
+  // A study's coverage maps, of its box and of each plane (report/batch_report.cpp): EXR
+  // channels, GeoTIFF bands and VDB grids of one set of names. Listed for every scene.
+  for (const char* c : {"max_irradiance_w_m2", "max_hazard_ratio", "coverage_probability",
+                        "coverage_lower", "coverage_upper"}) {
+    own(kStudyMaps, c, std::string("glint's own coverage channel ") + c);
+  }
+  if (h.aid) {
+    for (const char* c : {"aided_max_hazard_ratio", "aided_coverage_probability",
+                          "aided_coverage_lower", "aided_coverage_upper"}) {
+      own(kStudyMaps, c, std::string("glint's own coverage channel ") + c);
+    }
+  }
+  for (const char* what : {"probability", "lower", "upper"}) {
+    levels(
+        kStudyMaps, [&](const std::string& l) { return output_names::levelCoverage(l, what); },
+        (std::string("coverage ") + what).c_str());
   }
 
   // The run's folder (base/output_names.h).

@@ -344,13 +344,13 @@ std::vector<LatticeChannel> studyMapChannels(const StudyLattice& r, const Hazard
   for (std::size_t k = 0; k < h.levels.size(); ++k) {
     const std::string& name = h.levels[k].name;
     c.push_back(
-        {name + "_coverage_probability",
+        {output_names::levelCoverage(name, "probability"),
          "1 (fraction of scenarios whose irradiance reaches the " + name + " level's threshold)",
          &a.level_cover[k]});
-    c.push_back(
-        {name + "_coverage_lower", "1 (Clopper-Pearson lower bound)", &a.level_bounds[k].lower});
-    c.push_back(
-        {name + "_coverage_upper", "1 (Clopper-Pearson upper bound)", &a.level_bounds[k].upper});
+    c.push_back({output_names::levelCoverage(name, "lower"), "1 (Clopper-Pearson lower bound)",
+                 &a.level_bounds[k].lower});
+    c.push_back({output_names::levelCoverage(name, "upper"), "1 (Clopper-Pearson upper bound)",
+                 &a.level_bounds[k].upper});
   }
   return c;
 }

@@ -134,8 +134,10 @@ nlohmann::json farHazardJson(const FarHazard& hazard, const HazardSpec& h) {
 
 namespace {
 nlohmann::json zoneJson(const ObserverField::Exceedance& r, const Vec3& target_centre_m) {
-  nlohmann::json nhz = {
-      {"points", r.points}, {"volume_m3", r.volume_m3}, {"reaches_box_edge", r.reaches_edge}};
+  nlohmann::json nhz = {{"points", r.points},
+                        {"unconverged_points_counted", r.by_error_points},
+                        {"volume_m3", r.volume_m3},
+                        {"reaches_box_edge", r.reaches_edge}};
   if (r.points > 0) {
     nhz["box"] = {{"min_m", {r.min_m.x, r.min_m.y, r.min_m.z}},
                   {"max_m", {r.max_m.x, r.max_m.y, r.max_m.z}}};

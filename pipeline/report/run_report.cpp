@@ -15,13 +15,21 @@ namespace {
 // What the summary says of the points whose integration stopped short of its tolerance: where
 // they are (status 5 marks each) and whether any could be hazardous.
 nlohmann::json unconvergedJson(const FieldStats& s, const HazardZone& zone) {
-  return {{"points", s.unconverged_points},
-          {"box",
-           {{"min_m", {s.unconverged_min_m.x, s.unconverged_min_m.y, s.unconverged_min_m.z}},
-            {"max_m", {s.unconverged_max_m.x, s.unconverged_max_m.y, s.unconverged_max_m.z}}}},
-          {"max_irradiance_plus_error_w_m2", s.unconverged_max_upper_w_m2},
-          {"max_hazard_ratio_plus_error", zone.unconverged_ratio_upper},
-          {"may_be_hazardous", zone.unconvergedMayBeHazardous()}};
+  nlohmann::json j = {
+      {"points", s.unconverged_points},
+      // Counted in the hazard zone by their value plus error alone (ObserverField::Exceedance).
+      {"counted_hazardous_points", zone.above_mpe.by_error_points}};
+  if (zone.aided_above_mpe) {
+    j["counted_aided_hazardous_points"] = zone.aided_above_mpe->by_error_points;
+  }
+  j.update(nlohmann::json{
+      {"box",
+       {{"min_m", {s.unconverged_min_m.x, s.unconverged_min_m.y, s.unconverged_min_m.z}},
+        {"max_m", {s.unconverged_max_m.x, s.unconverged_max_m.y, s.unconverged_max_m.z}}}},
+      {"max_irradiance_plus_error_w_m2", s.unconverged_max_upper_w_m2},
+      {"max_hazard_ratio_plus_error", zone.unconverged_ratio_upper},
+      {"may_be_hazardous", zone.unconvergedMayBeHazardous()}});
+  return j;
 }
 
 // One line on the points that did not converge: a note where none of them can reach the MPE,
@@ -38,8 +46,12 @@ void printUnconverged(std::ostream& err, const FieldStats& s, const HazardZone& 
       << formatNumber("%.3g", s.unconverged_max_upper_w_m2) << " W/m² ("
       << formatNumber("%.3g", zone.unconverged_ratio_upper) << " × the MPE)"
       << (may ? ": some may be hazardous; raise accuracy.max_depth or accuracy.max_evaluations"
-              : ", so none of them can be hazardous")
-      << "\n";
+              : ", so none of them can be hazardous");
+  if (zone.above_mpe.by_error_points > 0) {
+    err << "; " << zone.above_mpe.by_error_points
+        << " of them are counted hazardous by their value plus error";
+  }
+  err << "\n";
 }
 
 // What the summary says of the points a glint narrower than the lattice may pass unseen:
@@ -430,6 +442,7 @@ nlohmann::json planeJson(const PlaneSpec& plane, const ObserverField& field, con
     nlohmann::json level = {{"peak_ratio", l.peak_ratio},
                             {"area_m2", hazardousArea(field, l.above)},
                             {"unconverged_may_reach", l.unconverged_may_reach},
+                            {"unconverged_counted_points", l.above.by_error_points},
                             {"narrow_glint_may_reach", l.narrow_glint_may_reach}};
     if (l.above.points > 0) {
       level["farthest_from_target_m"] = l.above.farthest_m;

@@ -9,7 +9,8 @@ out = sys.argv[1]
 summary = json.load(open(f"{out}/summary.json"))
 grids, meta = vdb.readAll(f"{out}/irradiance.vdb")
 by_name = {g.name: g for g in grids}
-assert set(by_name) == {"irradiance_w_m2", "hazard_ratio", "refinement_level", "status"}, (
+assert set(by_name) == {"irradiance_w_m2", "hazard_ratio", "refinement_level", "status",
+                        "irradiance_upper_w_m2"}, (
     by_name.keys())
 voxel = summary["box"]["voxel_m"]
 for g in grids:

@@ -77,7 +77,7 @@ TEST(VdbFile, GridByGridIsByteForByteWhatOpenVdbWritesOfTheSameGrids) {
   openvdb::io::Stream reader(in);
   const openvdb::GridPtrVecPtr grids = reader.getGrids();
   const openvdb::MetaMap::Ptr meta = reader.getMetadata();
-  ASSERT_EQ(grids->size(), 4u) << "irradiance, hazard ratio, level and status";
+  ASSERT_EQ(grids->size(), 5u) << "irradiance, hazard ratio, level, status and upper bound";
 
   std::ostringstream theirs;
   openvdb::io::Stream(theirs).write(*grids, *meta);
@@ -90,7 +90,7 @@ TEST(VdbFile, HazardRatioIsTheIrradianceOverTheMpeAndTheOtherGridsAreKept) {
   const ObserverField reference = sampleField();
   const RunInfo info = sampleInfo();
   const openvdb::GridPtrVecPtr grids = writtenGrids(info);
-  ASSERT_EQ(grids->size(), 4u);
+  ASSERT_EQ(grids->size(), 5u);
   auto grid = [&](const std::string& name) {
     const openvdb::GridBase::Ptr g = openvdb::findGridByName(*grids, name);
     EXPECT_TRUE(g) << name << " is missing";
@@ -124,7 +124,7 @@ TEST(VdbFile, WithoutScaledArraysOnlyTheFieldsGridsAreWritten) {
   info.mpe_w_m2 = 0.0;
   info.scaled.clear();
   const openvdb::GridPtrVecPtr grids = writtenGrids(info);
-  EXPECT_EQ(grids->size(), 3u);
+  EXPECT_EQ(grids->size(), 4u) << "irradiance, level, status and upper bound";
   EXPECT_FALSE(openvdb::findGridByName(*grids, "hazard_ratio")) << "written without an MPE";
 }
 
@@ -135,7 +135,7 @@ TEST(VdbFile, EachScaledGridIsTheIrradianceTimesItsFactorWithinTwoFloatRoundings
   info.scaled.push_back({"aided_hazard_ratio", "1 (aided)", 34.3 / 50.0});
   const ObserverField reference = sampleField();
   const openvdb::GridPtrVecPtr grids = writtenGrids(info);
-  ASSERT_EQ(grids->size(), 5u) << "irradiance, two scaled grids, level and status";
+  ASSERT_EQ(grids->size(), 6u) << "irradiance, two scaled grids, level, status and upper bound";
   const auto aided = openvdb::gridPtrCast<openvdb::FloatGrid>(
       openvdb::findGridByName(*grids, "aided_hazard_ratio"));
   ASSERT_TRUE(aided);

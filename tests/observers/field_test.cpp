@@ -318,6 +318,46 @@ TEST(ObserverField, RegionAboveAThresholdIsEveryLatticePointReachingIt) {
   EXPECT_EQ(none.volume_m3, 0.0);
 }
 
+// An observer whose integration stopped at accuracy.max_evaluations is an estimate: the zone
+// must count it where its value plus error reaches the threshold, so that a point hazardous in
+// the converged field is never outside the cut-short field's zone (issue 64: a plane of such
+// points read "hazardous area 0 m²"). Both fields dense, so that they share every point.
+TEST(ObserverField, AnUnconvergedPointCountsInTheZoneByItsValuePlusError) {
+  const std::string converged_json = cylinderScene(0.003);
+  std::string cut_json = converged_json;
+  cut_json.insert(cut_json.rfind('}'), R"(, "accuracy": {"max_evaluations": 16})");
+  const auto dense = [](const std::string& json) {
+    const Scene scene = parseScene(json, "test.json");
+    const FieldSpec spec = fieldSpec(scene);
+    const FieldProblem p = fieldProblem(scene, spec);
+    return computeDenseField(p.integrator, spec, p.excluded);
+  };
+  const ObserverField truth = dense(converged_json);
+  const ObserverField cut = dense(cut_json);
+  ASSERT_GT(cut.stats().unconverged_points, 0) << "the premise: points cut short";
+  const double threshold = 0.2 * truth.stats().peak_w_m2;
+  const auto n = truth.spec().nodes();
+  std::int64_t counted = 0, missed_by_value = 0, missed = 0;
+  for (int i = 0; i < n[0]; ++i)
+    for (int j = 0; j < n[1]; ++j)
+      for (int k = 0; k < n[2]; ++k) {
+        const bool in_cut =
+            cut.irradiance(i, j, k) >= threshold || cut.unconvergedUpper(i, j, k) >= threshold;
+        counted += in_cut ? 1 : 0;
+        if (!(truth.irradiance(i, j, k) >= threshold)) continue;
+        missed_by_value += cut.irradiance(i, j, k) >= threshold ? 0 : 1;
+        missed += in_cut ? 0 : 1;
+      }
+  ASSERT_GT(missed_by_value, 0) << "the premise: values alone leave hazardous points out";
+  EXPECT_EQ(missed, 0) << "of " << missed_by_value
+                       << " hazardous points whose cut-short value is below the threshold";
+  const ObserverField::Exceedance zone = cut.exceedance(threshold, Vec3(0.0));
+  EXPECT_EQ(zone.points, counted) << "the zone is every point whose value or bound reaches it";
+  EXPECT_GE(zone.by_error_points, missed_by_value) << "counted by their value plus error";
+  EXPECT_GE(zone.points, truth.exceedance(threshold, Vec3(0.0)).points)
+      << "the cut-short zone is never smaller than the converged one";
+}
+
 // A scene with one plane instead of an observer box.
 std::string planeScene(const std::string& beam, const std::string& material,
                        const std::string& objects, const std::string& plane) {

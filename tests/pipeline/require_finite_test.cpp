@@ -24,6 +24,7 @@ ObserverField fieldWith(const FieldStats& stats) {
   grids->irradiance = openvdb::FloatGrid::create(0.0f);
   grids->level = openvdb::FloatGrid::create(-1.0f);
   grids->status = openvdb::FloatGrid::create(0.0f);
+  grids->upper = openvdb::FloatGrid::create(0.0f);
   return ObserverField(spec, stats, std::move(grids), {});
 }
 
