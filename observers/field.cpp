@@ -144,11 +144,7 @@ std::vector<float> ObserverField::unresolvedBoundLattice() const {
   std::vector<float> out(static_cast<std::size_t>(lattice.count()), 0.0f);
   for (const FieldBlock& b : blocks_) {
     if (b.status != VoxelStatus::Unresolved) continue;
-    // Rounded up to the next float, so that the bound stays one.
-    const float bound =
-        std::nextafter(static_cast<float>(std::min(
-                           b.bound_w_m2, static_cast<double>(std::numeric_limits<float>::max()))),
-                       std::numeric_limits<float>::infinity());
+    const float bound = field::boundAsFloat(b.bound_w_m2);
     const openvdb::CoordBBox box = field::ownedBox(b.origin, b.size, lattice);
     for (auto it = box.begin(); it; ++it) {
       const openvdb::Coord& q = *it;

@@ -1,6 +1,5 @@
 #include "observers/detail/field_common.h"
 
-#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -15,11 +14,7 @@ void noteUnconverged(FieldStats& stats, openvdb::FloatGrid::Accessor& upper_grid
   double upper = irradiance_w_m2 + error_w_m2;
   if (std::isnan(upper)) upper = std::numeric_limits<double>::infinity();
   stats.unconverged_max_upper_w_m2 = std::max(stats.unconverged_max_upper_w_m2, upper);
-  // Rounded up to the next float, so that the stored bound stays one.
-  upper_grid.setValue(
-      p, std::nextafter(static_cast<float>(std::min(
-                            upper, static_cast<double>(std::numeric_limits<float>::max()))),
-                        std::numeric_limits<float>::infinity()));
+  upper_grid.setValue(p, boundAsFloat(upper));
   stats.unconverged_min_m = glm::min(stats.unconverged_min_m, x);
   stats.unconverged_max_m = glm::max(stats.unconverged_max_m, x);
 }

@@ -4,8 +4,11 @@
 /// (observers/dense_field.cpp) share: the observer lattice, the per-thread grids they write, and
 /// the bookkeeping of their statistics. Internal to observers/; brings in OpenVDB.
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <memory>
 
 #include "observers/field.h"
@@ -53,6 +56,14 @@ void forEachCoarseBlock(const Lattice& lattice, int size, Fn&& fn) {
 
 /// @brief A VoxelStatus as the float the status grid stores.
 inline float statusCode(VoxelStatus s) { return static_cast<float>(static_cast<int>(s)); }
+
+/// @brief @p bound_w_m2 as the least float not below it (the largest finite float for +∞ or
+/// beyond), so that a bound stored in a float grid stays a bound.
+inline float boundAsFloat(double bound_w_m2) {
+  return std::nextafter(static_cast<float>(std::min(
+                            bound_w_m2, static_cast<double>(std::numeric_limits<float>::max()))),
+                        std::numeric_limits<float>::infinity());
+}
 
 /// @brief Counts an unconverged point at @p x in @p stats and keeps its irradiance plus error
 /// at lattice point @p p of @p upper (FieldGrids::upper; a NaN counts as +∞).

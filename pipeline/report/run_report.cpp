@@ -17,18 +17,17 @@ namespace {
 nlohmann::json unconvergedJson(const FieldStats& s, const HazardZone& zone) {
   nlohmann::json j = {
       {"points", s.unconverged_points},
-      // Counted in the hazard zone by their value plus error alone (ObserverField::Exceedance).
-      {"counted_hazardous_points", zone.above_mpe.by_error_points}};
-  if (zone.aided_above_mpe) {
-    j["counted_aided_hazardous_points"] = zone.aided_above_mpe->by_error_points;
-  }
-  j.update(nlohmann::json{
       {"box",
        {{"min_m", {s.unconverged_min_m.x, s.unconverged_min_m.y, s.unconverged_min_m.z}},
         {"max_m", {s.unconverged_max_m.x, s.unconverged_max_m.y, s.unconverged_max_m.z}}}},
       {"max_irradiance_plus_error_w_m2", s.unconverged_max_upper_w_m2},
       {"max_hazard_ratio_plus_error", zone.unconverged_ratio_upper},
-      {"may_be_hazardous", zone.unconvergedMayBeHazardous()}});
+      {"may_be_hazardous", zone.unconvergedMayBeHazardous()},
+      // Counted in the hazard zone by their value plus error alone (ObserverField::Exceedance).
+      {"counted_hazardous_points", zone.above_mpe.by_error_points}};
+  if (zone.aided_above_mpe) {
+    j["counted_aided_hazardous_points"] = zone.aided_above_mpe->by_error_points;
+  }
   return j;
 }
 
