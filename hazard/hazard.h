@@ -250,6 +250,13 @@ struct FarHazard {
   [[nodiscard]] const FarReach& farthest() const {
     return aided && aided->nohd_m > unaided.nohd_m ? *aided : unaided;
   }
+  /// @brief Each threshold's, in HazardSpec::thresholdsW_m2()'s order.
+  [[nodiscard]] std::vector<FarReach> byThreshold() const {
+    std::vector<FarReach> all{unaided};
+    if (aided) all.push_back(*aided);
+    all.insert(all.end(), levels.begin(), levels.end());
+    return all;
+  }
 };
 FarHazard farHazard(const FarField& field, const HazardSpec& h);
 

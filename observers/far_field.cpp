@@ -118,10 +118,25 @@ FarReach farReach(const FarField& field, double mpe_w_m2, double extinction_per_
   // not take its place.
   for (const FarField::Peak& p : field.located()) consider(p.direction, p.intensity_w_sr);
   for (const FarField::Peak& p : field.narrowGlints()) consider(p.direction, p.intensity_w_sr);
-  for (int f = 0; f < FarField::kFaces; ++f) {
-    field.forEachDirectionOfFace(f, [&](int i, int j, const Vec3& d, double) {
-      consider(d, field.latticeUpperIntensity(f, i, j));
-    });
+  // The lattice's directions, each face's rows in parallel: a row's farthest, then the rows'
+  // in order, each replacing only a strictly farther one, as one pass in order would.
+  const int n = field.spec().face_pixels;
+  std::vector<FarReach> rows(static_cast<std::size_t>(FarField::kFaces) * (n + 1));
+  tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t r) {
+    const int f = static_cast<int>(r / static_cast<std::size_t>(n + 1));
+    const int j = static_cast<int>(r % static_cast<std::size_t>(n + 1));
+    FarReach& row = rows[r];
+    for (int i = 0; i <= n; ++i) {
+      const Vec3 d = field.latticeDirection(f, i, j);
+      const double nohd = field.hazardDistanceToward(d, field.latticeUpperIntensity(f, i, j),
+                                                     mpe_w_m2, extinction_per_m);
+      if (!(nohd > row.nohd_m)) continue;
+      const double far_m = farRadiusToward(field.spec(), d);
+      if (nohd >= far_m) row = {nohd, d, far_m};
+    }
+  });
+  for (const FarReach& row : rows) {
+    if (row.nohd_m > reach.nohd_m) reach = row;
   }
   return reach;
 }
@@ -256,6 +271,7 @@ FarField::FarField(LitBall ball, FarFieldSpec spec, double map_distance_m, std::
   // Nothing was found above the floor: the floor is all the map knows of the peak.
   if (peak_.intensity_w_sr < spec_.floor_w_sr)
     peak_ = {spec_.floor_w_sr, peak_.direction, Basis::Floor};
+  prepareHazardWindow();
 }
 
 const char* FarField::basisName(Basis b) {
@@ -387,6 +403,78 @@ double FarField::brightestWithin(int face, int i, int j, int steps) const {
   return brightest;
 }
 
+namespace {
+
+// out[k] = the largest of in[k − s .. k + s] (clipped to 0 .. count − 1), elements @p stride
+// apart in both: a running maximum that keeps the window's falling sequence of candidates.
+void runningMaximum(const float* in, float* out, int count, std::size_t stride, int s,
+                    std::vector<int>& candidates) {
+  candidates.clear();
+  std::size_t front = 0;
+  int next = 0;  // the first element not yet taken in
+  for (int k = 0; k < count; ++k) {
+    for (; next <= std::min(count - 1, k + s); ++next) {
+      const float v = in[static_cast<std::size_t>(next) * stride];
+      while (candidates.size() > front &&
+             !(in[static_cast<std::size_t>(candidates.back()) * stride] > v)) {
+        candidates.pop_back();
+      }
+      candidates.push_back(next);
+    }
+    while (candidates[front] < k - s) ++front;
+    out[static_cast<std::size_t>(k) * stride] =
+        in[static_cast<std::size_t>(candidates[front]) * stride];
+  }
+}
+
+}  // namespace
+
+FarField::BrightestWindow::BrightestWindow(const FarField& map, int steps)
+    : steps_(std::max(0, steps)), row_(static_cast<std::size_t>(map.spec().face_pixels) + 1) {
+  const int count = static_cast<int>(row_);
+  const std::size_t points = row_ * row_;
+  std::vector<float> along_rows(points);
+  std::vector<int> candidates;
+  for (int f = 0; f < kFaces; ++f) {
+    // What brightestWithin() compares: NaN as +∞, nothing below 0.
+    std::vector<float>& out = brightest_[static_cast<std::size_t>(f)];
+    out.resize(points);
+    for (std::size_t p = 0; p < points; ++p) {
+      out[p] = static_cast<float>(
+          std::max(0.0, hazardSafe(static_cast<double>(
+                            map.faces_[static_cast<std::size_t>(f)].intensity_w_sr[p]))));
+    }
+    for (int j = 0; j < count; ++j) {
+      const std::size_t first = static_cast<std::size_t>(j) * row_;
+      runningMaximum(&out[first], &along_rows[first], count, 1, steps_, candidates);
+    }
+    for (int i = 0; i < count; ++i) {
+      runningMaximum(&along_rows[static_cast<std::size_t>(i)], &out[static_cast<std::size_t>(i)],
+                     count, row_, steps_, candidates);
+    }
+  }
+}
+
+std::uint64_t FarField::BrightestWindow::bytes(int face_pixels) {
+  const auto row = static_cast<std::uint64_t>(face_pixels) + 1;
+  // The six faces' maxima and one face's pass along the rows.
+  return (kFaces + 1) * row * row * sizeof(float);
+}
+
+int FarField::hazardSteps(double far_m) const {
+  const int n = spec_.face_pixels;
+  const double parallax_rad = ball_.radius_m / std::max(far_m - ball_.radius_m, 1e-300);
+  return std::min(kFarRadiusReferenceSteps,
+                  static_cast<int>(std::min(parallax_rad * n / 2.0, static_cast<double>(n))) + 1) +
+         1;
+}
+
+void FarField::prepareHazardWindow() {
+  hazard_window_.reset();
+  if (!spec_.far_radius_verified) return;
+  hazard_window_ = std::make_shared<const BrightestWindow>(*this, hazardSteps(spec_.far_radius_m));
+}
+
 double FarField::latticeUpperIntensity(int face, int i, int j) const {
   const int n = spec_.face_pixels;
   if (dark(face, std::max(0, i - 1), std::max(0, j - 1), std::min(i, n - 1), std::min(j, n - 1))) {
@@ -492,19 +580,18 @@ double FarField::hazardDistanceToward(const Vec3& direction, double upper_w_sr,
   // The brightest lattice direction in the parallax cone at the far radius (where the cone is
   // widest), as the check sought it, one step wider for a direction between lattice points.
   const int n = spec_.face_pixels;
-  const double far_m = farRadiusToward(spec_, direction);
-  const double parallax_rad = a / std::max(far_m - a, 1e-300);
-  const int steps =
-      std::min(kFarRadiusReferenceSteps,
-               static_cast<int>(std::min(parallax_rad * n / 2.0, static_cast<double>(n))) + 1) +
-      1;
+  const int steps = hazardSteps(farRadiusToward(spec_, direction));
   const FaceHit h = faceHit(direction, n);
   const int i = static_cast<int>(std::lround(h.x)), j = static_cast<int>(std::lround(h.y));
   // The tiles' maxima bound the square's from above: where that is no more than the upper
   // estimate itself (the dark sky, above all), the lattice is not read point by point.
   double brightest = upper;
-  if (tileBrightest(h.face, i - steps, j - steps, i + steps, j + steps) > upper)
-    brightest = std::max(upper, brightestWithin(h.face, i, j, steps));
+  if (tileBrightest(h.face, i - steps, j - steps, i + steps, j + steps) > upper) {
+    const double within = hazard_window_ && hazard_window_->steps() == steps
+                              ? hazard_window_->at(h.face, i, j)
+                              : brightestWithin(h.face, i, j, steps);
+    brightest = std::max(upper, within);
+  }
   // E r² ≤ I + share × (tolerance × max(brightest, threshold × r²) + floor): the threshold is
   // reached either where the brightest term rules or where its own share does.
   const double share = 1.0 + kFarRadiusReadShare;
@@ -676,14 +763,20 @@ std::uint64_t farFieldMemoryFloorBytes(const FarFieldSpec& spec, std::uint64_t a
   // The faces are computed one at a time; their planes differ only in where they lie.
   const double face =
       static_cast<double>(fieldMemoryFloorBytes(cubeFaceSpec(0, Vec3(0.0), 1.0, spec), false));
+  // After the faces, the brightest direction in each one's parallax square (BrightestWindow:
+  // as many bytes again, held by the far radius's check and then by the map) stays beside
+  // the writers' scratch.
+  const double window = static_cast<double>(FarField::BrightestWindow::bytes(spec.face_pixels));
   const double bytes = FarField::kFaces * directions * sizeof(float) +
-                       std::max(face, static_cast<double>(after_faces_bytes));
+                       std::max(face, window + static_cast<double>(after_faces_bytes));
   return bytes >= 1.8e19 ? std::numeric_limits<std::uint64_t>::max()
                          : static_cast<std::uint64_t>(bytes);
 }
 
-std::uint64_t latLongMapBytes(int height) {
-  return static_cast<std::uint64_t>(3.0 * sizeof(double) * 2.0 * height * height);
+std::uint64_t latLongMapBytes(int height, int face_pixels) {
+  const double face = (face_pixels + 1.0) * (face_pixels + 1.0);
+  return static_cast<std::uint64_t>(3.0 * sizeof(double) * 2.0 * height * height +
+                                    (sizeof(std::uint32_t) + sizeof(double)) * face);
 }
 
 FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& spec,
@@ -694,6 +787,7 @@ FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& 
   std::vector<FarField::Face> faces;
   faces.reserve(FarField::kFaces);
   for (int f = 0; f < FarField::kFaces; ++f) {
+    if (counter != nullptr) counter->beginStage("face", f + 1, FarField::kFaces);
     const FieldSpec face = cubeFaceSpec(f, ball.centre_m, distance_m, spec);
     // A quarter of the map's tolerance and floor, as for every observer field
     // (fieldIntegratorOptions()). Intensity is read unattenuated along the reflected paths:
@@ -710,17 +804,18 @@ FarField computeFarField(const FacetIntegrator& integrator, const FarFieldSpec& 
   std::vector<FarField::Peak> tops = locateLobeTops(lattice, integrator, &search_evaluations);
   FarField far(ball, spec, distance_m, std::move(lattice.faces_), std::move(tops));
   far.stats_.evaluations += search_evaluations;
+  if (counter != nullptr) counter->endStages();
   far.radius_check_ = verifyFarRadius(far, integrator, counter, exchange);
   if (far.radius_check_.radius_m > 0.0) {
     far.spec_.far_radius_m = far.radius_check_.radius_m;
     far.spec_.far_radius_verified = true;
+    far.prepareHazardWindow();
   }
   return far;
 }
 
-LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2, double extinction_per_m,
-                      double aided_mpe_w_m2) {
-  LatLongMap m;
+LatLongIntensity latLongIntensity(const FarField& field, int height) {
+  LatLongIntensity m;
   m.height = height;
   m.width = 2 * height;
   const auto w = static_cast<std::size_t>(m.width);
@@ -749,12 +844,14 @@ LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2, double
         along_meridian[j * w + i] = field.upperIntensityAlong(corner(i, j), corner(i, j + 1));
     }
   });
-  std::vector<double> cell(w * h, 0.0);
-  for (std::size_t j = 0; j < h; ++j)
+  std::vector<double>& cell = m.upper_w_sr;
+  cell.assign(w * h, 0.0);
+  tbb::parallel_for(std::size_t{0}, h, [&](std::size_t j) {
     for (std::size_t i = 0; i < w; ++i) {
       cell[j * w + i] = std::max({along_parallel[j * w + i], along_parallel[(j + 1) * w + i],
                                   along_meridian[j * w + i], along_meridian[j * w + (i + 1) % w]});
     }
+  });
   // Inside a cell, the estimate is largest at a lattice direction or a located top.
   const auto pixelOf = [&](const Vec3& d) {
     const double azimuth = std::atan2(d.y, d.x);
@@ -763,36 +860,64 @@ LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2, double
         std::clamp(static_cast<int>((azimuth + kPi) / (2.0 * kPi) * m.width), 0, m.width - 1);
     const int j =
         std::clamp(static_cast<int>((elevation + 0.5 * kPi) / kPi * height), 0, height - 1);
-    return static_cast<std::size_t>(j) * w + static_cast<std::size_t>(i);
+    return static_cast<std::uint32_t>(static_cast<std::size_t>(j) * w +
+                                      static_cast<std::size_t>(i));
   };
+  // A face's lattice directions, their pixels and upper intensities found in parallel, then
+  // taken into the cells in order (a face's worth of scratch, not a lock per pixel).
+  const int n = field.spec().face_pixels;
+  const auto row = static_cast<std::size_t>(n) + 1;
+  std::vector<std::uint32_t> pixel(row * row);
+  std::vector<double> upper(row * row);
   for (int f = 0; f < FarField::kFaces; ++f) {
-    const int n = field.spec().face_pixels;
-    for (int j = 0; j <= n; ++j)
+    tbb::parallel_for(0, n + 1, [&](int j) {
       for (int i = 0; i <= n; ++i) {
-        const double upper = field.latticeUpperIntensity(f, i, j);
-        if (!(upper > 0.0)) continue;
-        double& c = cell[pixelOf(field.latticeDirection(f, i, j))];
-        c = std::max(c, upper);
+        const std::size_t k = static_cast<std::size_t>(j) * row + static_cast<std::size_t>(i);
+        upper[k] = field.latticeUpperIntensity(f, i, j);
+        if (upper[k] > 0.0) pixel[k] = pixelOf(field.latticeDirection(f, i, j));
       }
+    });
+    for (std::size_t k = 0; k < row * row; ++k) {
+      if (!(upper[k] > 0.0)) continue;
+      double& c = cell[pixel[k]];
+      c = std::max(c, upper[k]);
+    }
   }
   for (const FarField::Peak& top : field.located()) {
     double& c = cell[pixelOf(top.direction)];
     c = std::max(c, std::min(hazardSafe(top.intensity_w_sr), field.peak().intensity_w_sr));
   }
-  // The hazard distance toward the pixel where it lies beyond the far radius there, else 0.
-  auto reach = [&](double intensity, double threshold_w_m2, const Vec3& d) {
-    const double nohd = field.hazardDistanceToward(d, intensity, threshold_w_m2, extinction_per_m);
-    return nohd >= farRadiusToward(field.spec(), d) ? static_cast<float>(std::min(nohd, kFloatMax))
-                                                    : 0.0f;
-  };
-  m.intensity_w_sr.resize(cell.size());
-  m.nohd_m.resize(cell.size());
-  if (aided_mpe_w_m2 > 0.0) m.aided_nohd_m.resize(cell.size());
-  for (std::size_t p = 0; p < cell.size(); ++p) {
-    const Vec3 d = latLongDirection(p, m.width, height);
-    m.intensity_w_sr[p] = static_cast<float>(std::min(cell[p], kFloatMax));
-    m.nohd_m[p] = reach(cell[p], mpe_w_m2, d);
-    if (aided_mpe_w_m2 > 0.0) m.aided_nohd_m[p] = reach(cell[p], aided_mpe_w_m2, d);
+  return m;
+}
+
+std::vector<float> latLongHazardDistance(const FarField& field, const LatLongIntensity& map,
+                                         double threshold_w_m2, double extinction_per_m) {
+  std::vector<float> distance_m(map.upper_w_sr.size());
+  tbb::parallel_for(std::size_t{0}, distance_m.size(), [&](std::size_t p) {
+    // The hazard distance toward the pixel where it lies beyond the far radius there, else 0.
+    const Vec3 d = latLongDirection(p, map.width, map.height);
+    const double nohd =
+        field.hazardDistanceToward(d, map.upper_w_sr[p], threshold_w_m2, extinction_per_m);
+    distance_m[p] = nohd >= farRadiusToward(field.spec(), d)
+                        ? static_cast<float>(std::min(nohd, kFloatMax))
+                        : 0.0f;
+  });
+  return distance_m;
+}
+
+LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2, double extinction_per_m,
+                      double aided_mpe_w_m2) {
+  const LatLongIntensity cells = latLongIntensity(field, height);
+  LatLongMap m;
+  m.width = cells.width;
+  m.height = cells.height;
+  m.intensity_w_sr.resize(cells.upper_w_sr.size());
+  for (std::size_t p = 0; p < cells.upper_w_sr.size(); ++p) {
+    m.intensity_w_sr[p] = static_cast<float>(std::min(cells.upper_w_sr[p], kFloatMax));
+  }
+  m.nohd_m = latLongHazardDistance(field, cells, mpe_w_m2, extinction_per_m);
+  if (aided_mpe_w_m2 > 0.0) {
+    m.aided_nohd_m = latLongHazardDistance(field, cells, aided_mpe_w_m2, extinction_per_m);
   }
   return m;
 }

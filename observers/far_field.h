@@ -20,6 +20,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -153,6 +154,8 @@ class FarField {
     /// The lattice points integrated (the samples of every block not proven below the floor),
     /// as j (face_pixels + 1) + i, ascending: where verifyFarRadius() reads the near field.
     std::vector<std::uint32_t> integrated;
+    /// @brief An empty face whose lattice is set by hand (a map built without integration).
+    Face() = default;
     /// @brief From the face's field, the cube's centre at @p centre.
     Face(const ObserverField& field, const Vec3& centre);
   };
@@ -250,6 +253,28 @@ class FarField {
   /// @brief The largest lattice intensity within @p steps lattice points of (i, j) along
   /// either axis on face @p face (the square clipped to the face), W/sr.
   [[nodiscard]] double brightestWithin(int face, int i, int j, int steps) const;
+
+  /// @brief brightestWithin() for one @p steps at every lattice point at once: two running
+  /// maxima per face (along rows, then columns), O(directions) to build, one read a query.
+  /// The far field's readers ask it at every direction (the hazard reach, the maps, the far
+  /// radius's check), where a scan of the (2 steps + 1)² square each would cost them minutes.
+  class BrightestWindow {
+   public:
+    BrightestWindow(const FarField& map, int steps);
+    [[nodiscard]] int steps() const { return steps_; }
+    /// @brief brightestWithin(face, i, j, steps()), exactly (W/sr).
+    [[nodiscard]] double at(int face, int i, int j) const {
+      return static_cast<double>(brightest_[static_cast<std::size_t>(
+          face)][static_cast<std::size_t>(j) * row_ + static_cast<std::size_t>(i)]);
+    }
+    /// @brief What one holds for a map of @p face_pixels (bytes).
+    static std::uint64_t bytes(int face_pixels);
+
+   private:
+    int steps_ = 0;
+    std::size_t row_ = 0;
+    std::array<std::vector<float>, kFaces> brightest_;
+  };
   /// @brief upperIntensity() at lattice point (i, j): its own intensity plus the largest
   /// interpolation allowance of the lattice cells around it, capped as upperIntensity() is.
   [[nodiscard]] double latticeUpperIntensity(int face, int i, int j) const;
@@ -290,6 +315,12 @@ class FarField {
   // At least the largest lattice intensity of points (i0 .. i1, j0 .. j1) of a face (clipped to
   // it): the largest of the tiles that hold them.
   [[nodiscard]] double tileBrightest(int face, int i0, int j0, int i1, int j1) const;
+  // The square's half-width (lattice steps) hazardDistanceToward() reads the brightest
+  // direction in, toward a direction whose far radius is @p far_m.
+  [[nodiscard]] int hazardSteps(double far_m) const;
+  // Once the far radius is verified (one radius, so one half-width for every direction), the
+  // window hazardDistanceToward() reads.
+  void prepareHazardWindow();
   // The interpolation allowance of lattice cell (i, j) .. (i + 1, j + 1) of a face.
   [[nodiscard]] double cellAllowance(int face, int i, int j) const;
   // The largest bound of a narrow glint's block whose closed square holds (x, y); 0 if none.
@@ -312,6 +343,7 @@ class FarField {
   // lattice points around it (what the cells' estimates read), row-major by tile.
   static constexpr int kTile = 8;
   std::array<std::vector<float>, kFaces> tile_max_;
+  std::shared_ptr<const BrightestWindow> hazard_window_;  // (null before the radius is verified)
 };
 
 /// @brief Locates the top of each bright lobe of @p map between its lattice directions: from
@@ -331,8 +363,10 @@ FieldSpec cubeFaceSpec(int face, const Vec3& centre_m, double distance_m, const 
 /// @brief A floor under the memory computeFarField() takes for @p spec (bytes), known before
 /// anything is allocated: the six faces' lattices of intensity, 4 bytes a direction, all kept,
 /// and the field of the face being computed (fieldMemoryFloorBytes() of its plane: the grids'
-/// leaves, 64 bytes a direction), or @p after_faces_bytes made once the last face's field is
-/// gone (the writers' scratch: latLongMapBytes() and its channels), where that is more.
+/// leaves, 64 bytes a direction), or, once the last face's field is gone, the brightest
+/// direction about each (FarField::BrightestWindow, 4⅔ bytes a direction) and
+/// @p after_faces_bytes (the writers' scratch: latLongMapBytes() and its channels), where that
+/// is more.
 /// Measured (glint run, a dark far field, peak resident memory less the run without it; MB =
 /// 2²⁰ bytes): 1 549 MB at face_pixels 4096 (this: 1 412 MB), 487 MB at 2048 (354 MB); one
 /// face's grids at 4096, 1 174 MB (1 028 MB); the lat-long map at height 2048, 192 to 224 MB
@@ -340,9 +374,10 @@ FieldSpec cubeFaceSpec(int face, const Vec3& centre_m, double distance_m, const 
 std::uint64_t farFieldMemoryFloorBytes(const FarFieldSpec& spec,
                                        std::uint64_t after_faces_bytes = 0);
 
-/// @brief What latLongMap() of @p height holds while it is made (bytes): the upper intensities
-/// along both edges of every cell and the cells' own, three doubles a pixel.
-std::uint64_t latLongMapBytes(int height);
+/// @brief What latLongIntensity() of @p height holds while it is made, for a map of
+/// @p face_pixels (bytes): the upper intensities along both edges of every cell and the cells'
+/// own, three doubles a pixel, and a face's lattice directions' pixels and upper intensities.
+std::uint64_t latLongMapBytes(int height, int face_pixels);
 
 /// @brief Checks the far radius of @p map with @p integrator (see FarRadiusCheck).
 FarRadiusCheck verifyFarRadius(const FarField& map, const FacetIntegrator& integrator,
@@ -382,6 +417,20 @@ struct LatLongMap {
 };
 LatLongMap latLongMap(const FarField& field, int height, double mpe_w_m2,
                       double extinction_per_m = 0.0, double aided_mpe_w_m2 = 0.0);
+
+/// @brief What a LatLongMap's pixels hold before any threshold: the largest upperIntensity()
+/// over each cell (W/sr, [j × width + i]), found once for the maps of every threshold.
+struct LatLongIntensity {
+  int width = 0;
+  int height = 0;
+  std::vector<double> upper_w_sr;
+};
+LatLongIntensity latLongIntensity(const FarField& field, int height);
+
+/// @brief LatLongMap::nohd_m of @p map's pixels for @p threshold_w_m2: hazardDistanceToward()
+/// where it is at least the far radius toward the pixel's centre, else 0 (m).
+std::vector<float> latLongHazardDistance(const FarField& field, const LatLongIntensity& map,
+                                         double threshold_w_m2, double extinction_per_m);
 
 /// @brief The hazard boundary as a closed surface about the lit centre: a cube-sphere of
 /// cells_per_face² quads per face, each vertex at the distance √(I/MPE) of its direction where

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <limits>
 #include <numbers>
+#include <optional>
 
 #include "observers/far_field.h"
 
@@ -88,6 +89,14 @@ Worst checkSphere(const FarField& map, const FacetIntegrator& at,
   const bool capped = steps == kFarRadiusReferenceSteps;
   const double hazard_w_sr = hazardAt(spec, radius_m);
   const std::size_t count = dirs.size() > first ? (dirs.size() - first + stride - 1) / stride : 0;
+  // Every direction reads the brightest lattice point in its square: scanned, (2 steps + 1)²
+  // reads each; from a window of the sphere's half-width, one read each once its two running
+  // maxima (a few passes over every direction) are built. The cheaper of the two.
+  const double side = 2.0 * steps + 1.0, lattice = spec.face_pixels + 1.0;
+  std::optional<FarField::BrightestWindow> window;
+  if (static_cast<double>(count) * side * side > 4.0 * FarField::kFaces * lattice * lattice) {
+    window.emplace(map, steps);
+  }
   tbb::enumerable_thread_specific<IntegratorWorkspace> workspaces;
   tbb::enumerable_thread_specific<Worst> worst;
   const double r2 = radius_m * radius_m;
@@ -95,8 +104,9 @@ Worst checkSphere(const FarField& map, const FacetIntegrator& at,
     if (stoppable && counter->stopRequested()) return;
     if (counter != nullptr) counter->items_done.fetch_add(1, std::memory_order_relaxed);
     const Direction& d = dirs[first + k * stride];
-    const double brightest_w_sr =
-        d.i < 0 ? d.intensity_w_sr : map.brightestWithin(d.face, d.i, d.j, steps);
+    const double brightest_w_sr = d.i < 0  ? d.intensity_w_sr
+                                  : window ? window->at(d.face, d.i, d.j)
+                                           : map.brightestWithin(d.face, d.i, d.j, steps);
     // Dark within its whole parallax cone: every ray that reaches this observer leaves the
     // target in a direction where the intensity is at most the floor. Each lit point's own
     // light is part of the intensity in its direction, so only a focusing target gathers more,
@@ -190,8 +200,16 @@ FarRadiusCheck verifyFarRadius(const FarField& map, const FacetIntegrator& integ
   check.directions = static_cast<std::int64_t>(dirs.size());
   const std::size_t first = exchange != nullptr ? static_cast<std::size_t>(exchange->rank()) : 0;
   const std::size_t stride = exchange != nullptr ? static_cast<std::size_t>(exchange->size()) : 1;
+  // Halving from the first radius to the innermost, and one between at the end.
+  const int spheres_at_most = static_cast<int>(std::floor(std::log2(first_m / innermost_m))) + 2;
   const auto sphere = [&](double r) {
-    if (counter != nullptr) counter->items_scheduled.fetch_add(dirs.size() / stride);
+    if (counter != nullptr) {
+      const std::size_t mine =
+          dirs.size() > first ? (dirs.size() - first + stride - 1) / stride : 0;
+      counter->items_scheduled.fetch_add(mine);
+      counter->beginStep("sphere", static_cast<int>(check.spheres.size()) + 1, spheres_at_most,
+                         mine);
+    }
     const Worst w = gatherWorst(
         checkSphere(map, checkIntegrator(map, integrator, r), dirs, r, first, stride, counter),
         exchange);

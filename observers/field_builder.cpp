@@ -451,7 +451,10 @@ class FieldBuilder {
     const std::span<const Candidate> lit = integrator_.candidates();
     // The points of @p indices (into wanted), integrated in parallel.
     const auto integrate = [&](std::span<const std::size_t> indices) {
-      if (counter_ != nullptr) counter_->items_scheduled.fetch_add(indices.size());
+      if (counter_ != nullptr) {
+        counter_->items_scheduled.fetch_add(indices.size());
+        counter_->beginStep("level", stats_.levels + 1, 0, indices.size());
+      }
       tbb::parallel_for(std::size_t{0}, indices.size(), [&](std::size_t m) {
         if (stopRequested()) return;
         const std::size_t w = indices[m];

@@ -3,6 +3,7 @@
 /// @brief Irradiance at a list of observer points, computed in parallel over the points.
 
 #include <atomic>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -25,6 +26,50 @@ struct WorkCounter {
   /// Raised by whoever watches the run (pipeline/base/memory_budget.h); the work then stops at its
   /// next item and throws WorkStopped from outside its parallel loops.
   const std::atomic<bool>* stop = nullptr;
+
+  /// Work done in steps whose items are known only as each begins (a field's levels, the far
+  /// radius's spheres): the step under way (from 1; 0: none), at most how many there are (0:
+  /// not known), its items, and items_done when it began. A reporter shows the step's own
+  /// count, whose total does not grow.
+  std::atomic<int> step{0};
+  std::atomic<int> steps_at_most{0};
+  std::atomic<std::size_t> step_items{0};
+  std::atomic<std::size_t> step_done_before{0};
+  std::atomic<std::int64_t> step_began_ns{0};  ///< steady_clock, since its epoch
+  std::atomic<const char*> step_noun{"step"};  ///< what a step is ("level", "sphere")
+
+  /// Steps within stages (a face of six, each computed level by level): the stage under way
+  /// (from 1; 0: none) and how many there are.
+  std::atomic<int> stage{0};
+  std::atomic<int> stages{0};
+  std::atomic<const char*> stage_noun{"stage"};
+
+  /// @brief Stage @p k (from 1) of @p count, a @p noun, begins; its steps count from 1 again.
+  void beginStage(const char* noun, int k, int count) {
+    stage_noun.store(noun);
+    stages.store(count);
+    stage.store(k);
+    step.store(0);
+  }
+
+  /// @brief No stage or step is under way any more: the items count as one whole again.
+  void endStages() {
+    stage.store(0);
+    step.store(0);
+  }
+
+  /// @brief Step @p k (from 1) of at most @p at_most (0: not known), a @p noun, begins with
+  /// @p items items.
+  void beginStep(const char* noun, int k, int at_most, std::size_t items) {
+    step_noun.store(noun);
+    step_began_ns.store(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                            std::chrono::steady_clock::now().time_since_epoch())
+                            .count());
+    step_done_before.store(items_done.load());
+    step_items.store(items);
+    steps_at_most.store(at_most);
+    step.store(k);
+  }
 
   [[nodiscard]] bool stopRequested() const {
     return stop != nullptr && stop->load(std::memory_order_relaxed);

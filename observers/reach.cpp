@@ -364,6 +364,7 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
   std::vector<double> hazardous_w_m2;
   for (const double t : spec.thresholds_w_m2) hazardous_w_m2.push_back((1.0 - spec.tolerance) * t);
   for (int f = 0; f < cube::kFaces; ++f) {
+    if (counter != nullptr) counter->beginStage("face", f + 1, cube::kFaces);
     NearReach::Face& out = near.faces[static_cast<std::size_t>(f)];
     out.spec = reachFaceSpec(f, spec);
     const ObserverField field = computeField(integrator, out.spec, excluded, counter, exchange);
@@ -486,7 +487,7 @@ double reachToward(const NearReach& near, const FarField& far, std::size_t t, co
 }
 
 ReachSummary summarizeReach(const NearReach& near, const FarField& far, std::size_t t,
-                            double extinction_per_m) {
+                            const FarReach& beyond, double extinction_per_m) {
   ReachSummary s;
   s.threshold_w_m2 = near.spec.thresholds_w_m2.at(t);
   // The farthest of what toward() gives over every direction: within a lattice cell, the
@@ -516,7 +517,6 @@ ReachSummary summarizeReach(const NearReach& near, const FarField& far, std::siz
         }
       }
   }
-  const FarReach beyond = farReach(far, s.threshold_w_m2, extinction_per_m);
   if (beyond.nohd_m > s.distance_m) {
     s.distance_m = beyond.nohd_m;
     s.direction = beyond.direction;
@@ -524,21 +524,27 @@ ReachSummary summarizeReach(const NearReach& near, const FarField& far, std::siz
   }
   // Beyond each direction's last layer, the shell out to the far field's hazard distance,
   // over the map's lattice directions (their solid angles by the trapezoid rule on each face).
+  // Row by row in parallel, the rows' sums added in order: the same sum on any threads.
   const int m = far.spec().face_pixels;
   const double h = 2.0 / m;
-  double shell_m3 = 0.0;
-  for (int f = 0; f < FarField::kFaces; ++f) {
-    far.forEachDirectionOfFace(f, [&](int i, int j, const Vec3& d, double intensity_w_sr) {
-      const double r =
-          far.hazardDistanceToward(d, intensity_w_sr, s.threshold_w_m2, extinction_per_m);
+  std::vector<double> row_m3(static_cast<std::size_t>(FarField::kFaces) * (m + 1), 0.0);
+  tbb::parallel_for(std::size_t{0}, row_m3.size(), [&](std::size_t row) {
+    const int f = static_cast<int>(row / static_cast<std::size_t>(m + 1));
+    const int j = static_cast<int>(row % static_cast<std::size_t>(m + 1));
+    for (int i = 0; i <= m; ++i) {
+      const Vec3 d = far.latticeDirection(f, i, j);
+      const double r = far.hazardDistanceToward(d, far.latticeIntensity(f, i, j), s.threshold_w_m2,
+                                                extinction_per_m);
       const double last = near.lastLayerToward(d);
-      if (!(r > last) || !std::isfinite(r)) return;
+      if (!(r > last) || !std::isfinite(r)) continue;
       const double u = -1.0 + h * i, v = -1.0 + h * j;
       const double weight = (i == 0 || i == m ? 0.5 : 1.0) * (j == 0 || j == m ? 0.5 : 1.0);
       const double solid_angle = weight * h * h / std::pow(1.0 + u * u + v * v, 1.5);
-      shell_m3 += solid_angle * (r * r * r - last * last * last) / 3.0;
-    });
-  }
+      row_m3[row] += solid_angle * (r * r * r - last * last * last) / 3.0;
+    }
+  });
+  double shell_m3 = 0.0;
+  for (const double v : row_m3) shell_m3 += v;
   s.unclassified_half_edge_m = reachStartM(near.spec);
   s.unclassified_m3 = 8.0 * std::pow(s.unclassified_half_edge_m, 3);
   s.volume_m3 = near.volume_m3.at(t) + shell_m3 + s.unclassified_m3;
@@ -551,15 +557,16 @@ ReachSummary summarizeReach(const NearReach& near, const FarField& far, std::siz
   return s;
 }
 
-std::vector<float> reachLatLong(const NearReach& near, const FarField& far, std::size_t t,
-                                int height, double extinction_per_m) {
+std::vector<float> reachLatLong(const NearReach& near, const FarField& far,
+                                const LatLongIntensity& beyond, std::size_t t,
+                                double extinction_per_m) {
   const double threshold = near.spec.thresholds_w_m2.at(t);
   // The far field's largest hazard distance over each pixel (0 where it ends inside r_far).
-  const LatLongMap beyond = latLongMap(far, height, threshold, extinction_per_m);
-  std::vector<float> reach(beyond.nohd_m.size());
+  const std::vector<float> far_m = latLongHazardDistance(far, beyond, threshold, extinction_per_m);
+  std::vector<float> reach(far_m.size());
   tbb::parallel_for(std::size_t{0}, reach.size(), [&](std::size_t p) {
     const Vec3 d = cube::latLongDirection(p, beyond.width, beyond.height);
-    const double r = std::max(near.toward(d, t), static_cast<double>(beyond.nohd_m[p]));
+    const double r = std::max(near.toward(d, t), static_cast<double>(far_m[p]));
     reach[p] = static_cast<float>(std::min(r, kFloatMax));
   });
   return reach;

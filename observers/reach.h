@@ -30,6 +30,8 @@
 namespace glint {
 
 class FarField;
+struct FarReach;
+struct LatLongIntensity;
 
 /// @brief What the reach is computed for (scene key `reach`).
 struct ReachSpec {
@@ -152,15 +154,19 @@ struct ReachSummary {
 double reachToward(const NearReach& near, const FarField& far, std::size_t t, const Vec3& direction,
                    double extinction_per_m);
 
-/// @brief The reach for threshold @p t over every direction.
+/// @brief The reach for threshold @p t over every direction; @p beyond is the far field's
+/// farReach() for that threshold and @p extinction_per_m (which the far field's hazard
+/// distances have found already).
 ReachSummary summarizeReach(const NearReach& near, const FarField& far, std::size_t t,
-                            double extinction_per_m);
+                            const FarReach& beyond, double extinction_per_m);
 
-/// @brief The reach per direction on a width × height map in longitude and latitude (LatLongMap's
-/// layout), for threshold @p t: reachToward() at each pixel's centre, and the far field's
-/// largest hazard distance over the pixel (0 where nothing along a direction is hazardous).
-std::vector<float> reachLatLong(const NearReach& near, const FarField& far, std::size_t t,
-                                int height, double extinction_per_m);
+/// @brief The reach per direction on the map in longitude and latitude of @p beyond (the far
+/// field's latLongIntensity(), LatLongMap's layout), for threshold @p t: reachToward() at each
+/// pixel's centre, and the far field's largest hazard distance over the pixel (0 where nothing
+/// along a direction is hazardous).
+std::vector<float> reachLatLong(const NearReach& near, const FarField& far,
+                                const LatLongIntensity& beyond, std::size_t t,
+                                double extinction_per_m);
 
 /// @brief The reach's boundary as a closed surface about the lit centre: per cube face a quad
 /// mesh through the lattice's rays, each vertex at its ray's reach for threshold 0 (the far

@@ -1,5 +1,6 @@
 #include "pipeline/base/progress.h"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "pipeline/base/number_format.h"
@@ -39,20 +40,54 @@ void ProgressReporter::run() {
   } while (!wake_.wait_for(lock, period, [this] { return stopping_; }));
 }
 
+std::string progressLine(const WorkCounter& counter, const std::string& noun, std::size_t total,
+                         double elapsed_s) {
+  const int step = counter.step.load();
+  const char* step_noun = "step";
+  std::size_t done = counter.items_done.load();
+  if (total == 0) total = counter.items_scheduled.load();
+  std::string line = "glint: ";
+  char buf[256];
+  if (const int stage = counter.stage.load(); stage > 0) {
+    std::snprintf(buf, sizeof buf, "%s %d of %d, ", counter.stage_noun.load(), stage,
+                  counter.stages.load());
+    line += buf;
+  }
+  if (step > 0) {
+    // Work in steps: the step's own count (its total is known when it begins), and the time
+    // left in it only, since the later steps' items are not known yet.
+    const int at_most = counter.steps_at_most.load();
+    step_noun = counter.step_noun.load();
+    if (at_most > 0) {
+      std::snprintf(buf, sizeof buf, "%s %d of at most %d: ", step_noun, step, at_most);
+    } else {
+      std::snprintf(buf, sizeof buf, "%s %d: ", step_noun, step);
+    }
+    line += buf;
+    total = counter.step_items.load();
+    done = std::min(total, done - std::min(done, counter.step_done_before.load()));
+  }
+  const double fraction = total > 0 ? static_cast<double>(done) / static_cast<double>(total) : 0.0;
+  std::snprintf(buf, sizeof buf, "%zu/%zu %s (%.0f%%), %.3g evaluations, %s elapsed", done, total,
+                noun.c_str(), 100.0 * fraction, static_cast<double>(counter.evaluations.load()),
+                formatDuration(elapsed_s).c_str());
+  line += buf;
+  if (fraction > 0.0 && fraction < 1.0) {
+    const auto began = std::chrono::steady_clock::time_point(
+        std::chrono::nanoseconds(counter.step_began_ns.load()));
+    const double in_step =
+        step > 0 ? std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count()
+                 : elapsed_s;
+    line += ", about " + formatDuration(in_step * (1.0 - fraction) / fraction) + " left" +
+            (step > 0 ? " in this " + std::string(step_noun) : std::string());
+  }
+  return line;
+}
+
 void ProgressReporter::print() {
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  const std::size_t done = counter_.items_done.load();
-  const std::size_t total = total_ > 0 ? total_ : counter_.items_scheduled.load();
-  const double fraction = total > 0 ? static_cast<double>(done) / static_cast<double>(total) : 0.0;
-  char buf[256];
-  std::snprintf(buf, sizeof buf, "glint: %zu/%zu %s (%.0f%%), %.3g evaluations, %s elapsed", done,
-                total, noun_.c_str(), 100.0 * fraction,
-                static_cast<double>(counter_.evaluations.load()), formatDuration(elapsed).c_str());
-  std::string line = buf;
-  if (fraction > 0.0 && fraction < 1.0) {
-    line += ", about " + formatDuration(elapsed * (1.0 - fraction) / fraction) + " left";
-  }
+  const std::string line = progressLine(counter_, noun_, total_, elapsed);
   if (terminal_) {
     err_ << "\r\033[K" << line << std::flush;
   } else {

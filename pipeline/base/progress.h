@@ -13,9 +13,17 @@
 
 namespace glint {
 
+/// @brief The line a ProgressReporter prints for @p counter after @p elapsed_s: items done of
+/// @p total (0: as many as scheduled so far) @p noun, or where the work goes in stages and steps
+/// ("face 2 of 6, level 3: 40/100 reach points"), the step's own items, whose total does not
+/// grow; evaluations, the time elapsed and the time left (in the step under way).
+std::string progressLine(const WorkCounter& counter, const std::string& noun, std::size_t total,
+                         double elapsed_s);
+
 /// @brief Reports a WorkCounter from a background thread: nothing for the first second, then
 /// every half second (one self-overwriting line on a terminal; a line every 10 s otherwise):
-/// items done, evaluations, elapsed time and the estimated time left.
+/// items done, evaluations, elapsed time and the estimated time left (of the step under way,
+/// where the work goes in steps: WorkCounter::beginStep()).
 class ProgressReporter {
  public:
   /// @param total items in all; 0: as many as the counter has scheduled so far.

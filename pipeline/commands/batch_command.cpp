@@ -289,10 +289,12 @@ std::string runScenario(const Study& study, const Scenario& s, std::vector<Study
                            {"regions", tally.regions}};
   if (scene.far_field.enabled) {
     const FarField far = sceneFarField(target, scene, {watch, w.what + ", far field"});
-    record["far_field"] = scenarioFarFieldJson(far, scene.hazard);
+    const FarHazard far_hazard = farHazard(far, scene.hazard);
+    record["far_field"] = scenarioFarFieldJson(far, far_hazard, scene.hazard);
     tally.evaluations += far.stats().evaluations;
     if (scene.wantsReach()) {
-      const SceneReach reach = sceneReach(target, scene, far, {watch, w.what + ", hazard reach"});
+      const SceneReach reach =
+          sceneReach(target, scene, far, far_hazard, {watch, w.what + ", hazard reach"});
       record["hazard_reach"] = reachSummaryJson(reach.summaries, scene.hazard);
       tally.evaluations += reach.near.evaluations();
     }

@@ -21,6 +21,7 @@
 #include "pipeline/base/memory_budget.h"
 #include "pipeline/base/number_format.h"
 #include "pipeline/base/output_names.h"
+#include "pipeline/base/phase_clock.h"
 #include "pipeline/base/progress.h"
 #include "pipeline/base/test_pause.h"
 #include "pipeline/input/input_files.h"
@@ -192,6 +193,7 @@ struct RunContext {
   RunOutputs& outputs;
   std::ostream& err;
   PointExchange* exchange;
+  PhaseClock& clock;  // summary.json's `timing`
 
   // How the run watches and shows the computation named @p what.
   [[nodiscard]] WorkWatch work(std::string what) const {
@@ -222,6 +224,7 @@ struct FarResult {
 
 void runBox(const RunContext& c, const FarResult& far, RunSummary& s) {
   const FieldSpec spec = fieldSpec(c.scene);
+  PhaseClock::Scope computing = c.clock.phase("the observer box");
   const FieldProblem problem = fieldProblem(c.target, c.scene, spec);
   ObserverField field =
       sceneField(problem, spec, c.args.uniform, c.work("the observer box"), "points");
@@ -236,6 +239,8 @@ void runBox(const RunContext& c, const FarResult& far, RunSummary& s) {
     printVolume(c.err, field, c.scene, zone, c.info, c.args.uniform,
                 far.far ? beyondTheBox(*far.far, far.hazard) : std::string());
   }
+  computing.stop();
+  const PhaseClock::Scope writing = c.clock.phase("writing the observer box's files");
   BoxResults results{field, integrator, c.info};
   c.outputs.writeBox(results);  // last: the VDB takes the field's grids
 }
@@ -275,6 +280,7 @@ nlohmann::json siteJson(const SiteFrame& site) {
 }
 
 void runPlanes(const RunContext& c, RunSummary& s) {
+  const PhaseClock::Scope phase = c.clock.phase("the planes and their files");
   nlohmann::json planes = nlohmann::json::array();
   const std::unique_ptr<SiteFrame> site =
       c.scene.site ? std::make_unique<SiteFrame>(*c.scene.site) : nullptr;
@@ -359,11 +365,15 @@ nlohmann::json footprintAltitudesJson(const ReachFootprint& f, const FootprintSp
 
 // The hazard reach, its files, its entry in the summary and its line on the terminal.
 void runReach(const RunContext& c, const FarResult& far, RunSummary& s) {
-  const SceneReach reach = sceneReach(c.target, c.scene, *far.far, c.work("the hazard reach"));
+  const SceneReach reach =
+      sceneReach(c.target, c.scene, *far.far, far.hazard, c.work("the hazard reach"));
+  c.clock.add("the hazard reach: its lattice", reach.seconds);
+  c.clock.add("the hazard reach: each threshold's distance and volume", reach.summary_seconds);
   s.j["hazard_reach"] = reachJson(reach.near, reach.summaries, reach.seconds, c.scene.hazard);
   if (!c.args.quiet) printReach(c.err, reach.near, reach.summaries, reach.seconds, c.scene.hazard);
   std::optional<ReachFootprint> footprint;
   if (const std::optional<FootprintSpec>& spec = c.scene.reach.footprint) {
+    const PhaseClock::Scope phase = c.clock.phase("the hazard reach: its footprint on the ground");
     const SiteFrame site(*c.scene.site);
     try {
       footprint = reachFootprint(reach.near, *far.far, c.scene.hazard.atmosphere.extinction_per_m,
@@ -388,6 +398,7 @@ void runReach(const RunContext& c, const FarResult& far, RunSummary& s) {
     f["altitudes"] = footprintAltitudesJson(*footprint, *spec, h);
     s.j["hazard_reach"]["footprint"] = f;
   }
+  const PhaseClock::Scope writing = c.clock.phase("writing the hazard reach's files");
   c.outputs.writeReach(
       {reach.near, *far.far, c.scene.hazard, c.info, footprint ? &*footprint : nullptr, nullptr,
        c.scene.reach.footprint && c.scene.reach.footprint->altitudes_above_ellipsoid});
@@ -401,6 +412,7 @@ void checkSurfaces(const RunContext& c, const FarResult& far, RunSummary& s) {
         "the far field's peak",
         far.far->ball().centre_m + far.far->mapDistance() * far.far->peak().direction);
   }
+  const PhaseClock::Scope phase = c.clock.phase("the meshes' surface model checked");
   const SurfaceModelCheck check = checkSurfaceModel(c.scene, c.target.integrator, s.probes);
   s.j["surface_check"] = surfaceCheckJson(c.scene, check);
   if (!c.args.quiet) printSurfaceCheck(c.err, c.scene, check);
@@ -431,6 +443,7 @@ void finishRun(const RunContext& c, const std::filesystem::path& dir,
   s.j["warnings"] = s.warnings;
   // Spent once per lit facet, outside every region's count (FacetIntegrator).
   s.j["diffuse_moment_evaluations"] = c.target.integrator.diffuseMomentEvaluations();
+  s.j["timing"] = timingJson(c.clock);
   *c.outputs.summary() << s.j.dump(2) << "\n";
   // A file written short of memory is not committed.
   c.watch.check("writing the outputs", writingAdvice(c.scene));
@@ -450,6 +463,8 @@ void runScene(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   // Under MPI every rank computes the same field, sharing the points; rank 0 alone reports
   // and writes.
   const bool writer = exchange == nullptr || exchange->rank() == 0;
+  PhaseClock clock;
+  PhaseClock::Scope reading = clock.phase("reading the scene and checking its memory");
   RunArgs args = requested;
   if (!writer) args.quiet = true;
   const std::uint64_t budget =
@@ -504,15 +519,21 @@ void runScene(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   const TargetBudget target_budget = checkRunMemory(scene, args, budget, writer, err);
   MemoryWatch watch(budget);
   noteTerrain(watch, scene);
+  reading.stop();
 
   // Built and culled once, shared by the box and the planes.
+  PhaseClock::Scope building = clock.phase("building the target");
   const SceneTarget target = sceneTarget(scene, firstRegion(scene), target_budget);
   watch.check("building the target",
               "Raise --memory, or lower the objects' segments, or decimate the meshes");
-  const RunContext c{args, scene, info, target, watch, outputs, err, exchange};
+  building.stop();
+  const RunContext c{args, scene, info, target, watch, outputs, err, exchange, clock};
   FarResult far;
   if (scene.far_field.enabled) {
+    PhaseClock::Scope map = clock.phase("the far field and its far radius");
     far.far.emplace(sceneFarField(target, scene, c.work("the far field")));
+    map.stop();
+    const PhaseClock::Scope distances = clock.phase("the far field's hazard distances");
     far.hazard = farHazard(*far.far, scene.hazard);
   }
   RunSummary summary;
@@ -525,7 +546,9 @@ void runScene(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   if (scene.engagement) {
     summary.j = runJson(info);
     summary.j["hazard"] = hazardJson(scene.hazard, nullptr);
+    PhaseClock::Scope engagement = clock.phase("the engagement");
     runEngagement(c, summary);
+    engagement.stop();
     if (writer) finishRun(c, dir, stale, summary);
     return;
   }
@@ -537,6 +560,7 @@ void runScene(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   }
   if (!scene.planes.empty()) runPlanes(c, summary);
   if (far.far && writer) {
+    const PhaseClock::Scope writing = clock.phase("writing the far field's files");
     outputs.writeFar({*far.far, scene.hazard, info});
     summary.j["far_field"] = farFieldJson(*far.far, far.hazard, outputs.farNames(), scene.hazard);
     if (!args.quiet) printFarField(err, *far.far, far.hazard, scene.hazard);

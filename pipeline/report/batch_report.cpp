@@ -708,7 +708,8 @@ RegionValues engagementValues(const EngagementRegion& region, const HazardSpec& 
           h.aid ? region.maps.aided_hazard_ratio : std::vector<float>{}};
 }
 
-nlohmann::json scenarioFarFieldJson(const FarField& far, const HazardSpec& h) {
+nlohmann::json scenarioFarFieldJson(const FarField& far, const FarHazard& hazard,
+                                    const HazardSpec& h) {
   const Vec3& peak = far.peak().direction;
   nlohmann::json j = {{"far_radius_m", far.spec().far_radius_m},
                       {"peak_intensity_w_sr", far.peak().intensity_w_sr},
@@ -716,7 +717,7 @@ nlohmann::json scenarioFarFieldJson(const FarField& far, const HazardSpec& h) {
                       {"peak_direction", {peak.x, peak.y, peak.z}},
                       {"evaluations", far.stats().evaluations},
                       {"unconverged_directions", far.stats().unconverged_points}};
-  j.update(farHazardJson(farHazard(far, h), h));
+  j.update(farHazardJson(hazard, h));
   if (far.stats().unconverged_points > 0) {
     j["unconverged_max_intensity_plus_error_w_sr"] = far.stats().unconverged_max_upper_w_m2;
   }

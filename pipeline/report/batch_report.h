@@ -45,7 +45,8 @@ nlohmann::json scenarioEngagementRegionJson(const StudyLattice& r, const Engagem
 RegionValues engagementValues(const EngagementRegion& region, const HazardSpec& h);
 
 /// @brief The far field's entry of a scenario's result.json (with farHazardJson()).
-nlohmann::json scenarioFarFieldJson(const FarField& far, const HazardSpec& h);
+nlohmann::json scenarioFarFieldJson(const FarField& far, const FarHazard& hazard,
+                                    const HazardSpec& h);
 
 /// @brief scenarios.csv: one row per scenario record, in index order (docs/batch.md lists the
 /// columns).

@@ -61,12 +61,17 @@ void writeReachExr(std::ostream& out, const ReachResults& r) {
   const double mu = r.hazard.atmosphere.extinction_per_m;
   const int height = std::max(farMapHeight(r.far.spec().face_pixels), 2 * r.near.spec.face_cells);
   const HazardSpec& h = r.hazard;
-  std::vector<std::vector<float>> maps;
   std::vector<std::string> names = {"reach_m"};
   if (h.aid) names.emplace_back("aided_reach_m");
   for (const ExposureLevel& l : h.levels) names.push_back(output_names::levelReach(l.name));
-  for (std::size_t t = 0; t < names.size(); ++t)
-    maps.push_back(reachLatLong(r.near, r.far, t, height, mu));
+  // The far field's pixels found once for every threshold, and let go before the file is made.
+  const std::vector<std::vector<float>> maps = [&] {
+    const LatLongIntensity beyond = latLongIntensity(r.far, height);
+    std::vector<std::vector<float>> all;
+    for (std::size_t t = 0; t < names.size(); ++t)
+      all.push_back(reachLatLong(r.near, r.far, beyond, t, mu));
+    return all;
+  }();
   std::vector<ExrChannel> channels;
   for (std::size_t t = 0; t < names.size(); ++t) channels.push_back({names[t], &maps[t]});
   writeLatLongExr(out, {2 * height, height, r.near.spec.centre_m, r.far.spec().far_radius_m},
@@ -372,9 +377,10 @@ std::uint64_t engagementVdb(const Scene& scene, const FieldSpec* box) {
 
 // latLongMap() while it is made, then its two or three channels and their rows flipped.
 std::uint64_t farExr(const Scene& scene, const FieldSpec*) {
-  const int h = farMapHeight(farFieldLattice(scene).face_pixels);
+  const int n = farFieldLattice(scene).face_pixels;
+  const int h = farMapHeight(n);
   const double channels = 1.0 + (scene.hazard.aid ? 2.0 : 1.0);  // the levels have none
-  return std::max(latLongMapBytes(h),
+  return std::max(latLongMapBytes(h, n),
                   memory_model::saturated(2.0 * h * h * 2.0 * channels * kFloat));
 }
 
@@ -383,10 +389,15 @@ std::uint64_t farVtp(const Scene& scene, const FieldSpec*) {
       cubeSphereBytes(std::min(farFieldLattice(scene).face_pixels, 128)));
 }
 
-// reachLatLong() of each threshold and the rows flipped.
+// The far field's latLongIntensity() while it is made; then held (a double a pixel) while
+// reachLatLong() makes each threshold's map (and one threshold's far-field distances); then
+// the maps and their rows flipped.
 std::uint64_t reachExr(const Scene& scene, const FieldSpec*) {
-  const double h = reachMapHeight(scene);
-  return memory_model::saturated(2.0 * h * h * 2.0 * hazardThresholds(scene) * kFloat);
+  const int h = reachMapHeight(scene);
+  const double pixels = 2.0 * h * h, thresholds = hazardThresholds(scene);
+  return std::max({latLongMapBytes(h, farFieldLattice(scene).face_pixels),
+                   memory_model::saturated(pixels * (sizeof(double) + (thresholds + 1.0) * kFloat)),
+                   memory_model::saturated(pixels * 2.0 * thresholds * kFloat)});
 }
 
 std::uint64_t reachVtp(const Scene& scene, const FieldSpec*) {

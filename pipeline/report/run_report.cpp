@@ -742,4 +742,17 @@ RunInfo runInfo(const Scene& scene, const std::string& scene_file, std::string_v
   return info;
 }
 
+nlohmann::json timingJson(const PhaseClock& clock) {
+  const double wall_s = clock.elapsedSeconds();
+  nlohmann::json phases = nlohmann::json::array();
+  double within_s = 0.0;
+  for (const auto& [name, seconds] : clock.phases()) {
+    phases.push_back({{"phase", name}, {"seconds", seconds}});
+    within_s += seconds;
+  }
+  return {{"wall_seconds", wall_s},
+          {"phases", phases},
+          {"outside_phases_seconds", std::max(0.0, wall_s - within_s)}};
+}
+
 }  // namespace glint

@@ -14,6 +14,7 @@
 #include "observers/far_field.h"
 #include "observers/field.h"
 #include "observers/reach.h"
+#include "pipeline/base/phase_clock.h"
 #include "pipeline/input/scene.h"
 #include "pipeline/report/hazard_report.h"
 #include "pipeline/setup/surface_check.h"
@@ -85,6 +86,10 @@ nlohmann::json reachJson(const NearReach& near, const std::vector<ReachSummary>&
 /// @brief The reach's line on the terminal (and the aided reach's and each level's).
 void printReach(std::ostream& err, const NearReach& near, const std::vector<ReachSummary>& reach,
                 double seconds, const HazardSpec& h);
+
+/// @brief summary.json's `timing`: the run's wall time until summary.json is written, each
+/// phase's seconds in order, and what no phase holds.
+nlohmann::json timingJson(const PhaseClock& clock);
 
 /// @brief What the files of a run of @p scene record about it: the program, the scene file and
 /// the hash of its text @p scene_text, the scheme ("adaptive" or "uniform"), the laser and MPE.

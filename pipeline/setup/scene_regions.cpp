@@ -104,7 +104,7 @@ FarField sceneFarField(const SceneTarget& target, const Scene& scene, const Work
 }
 
 SceneReach sceneReach(const SceneTarget& target, const Scene& scene, const FarField& far,
-                      const WorkWatch& w) {
+                      const FarHazard& beyond, const WorkWatch& w) {
   const ReachSpec spec = reachSpec(scene, far);
   const FieldSpec face = reachFaceSpec(0, spec);
   const std::uint64_t far_bytes = farFieldMemoryFloorBytes(far.spec());
@@ -144,9 +144,13 @@ SceneReach sceneReach(const SceneTarget& target, const Scene& scene, const FarFi
                    0.0};
   if (progress) progress->stop();
   reach.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto summaries_start = std::chrono::steady_clock::now();
   const double mu = scene.hazard.atmosphere.extinction_per_m;
+  const std::vector<FarReach> far_reach = beyond.byThreshold();
   for (std::size_t t = 0; t < spec.thresholds_w_m2.size(); ++t)
-    reach.summaries.push_back(summarizeReach(reach.near, far, t, mu));
+    reach.summaries.push_back(summarizeReach(reach.near, far, t, far_reach.at(t), mu));
+  reach.summary_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - summaries_start).count();
   return reach;
 }
 

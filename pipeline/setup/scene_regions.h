@@ -48,7 +48,8 @@ FarField sceneFarField(const SceneTarget& target, const Scene& scene, const Work
 struct SceneReach {
   NearReach near;
   std::vector<ReachSummary> summaries;
-  double seconds = 0.0;
+  double seconds = 0.0;          ///< the lattice's
+  double summary_seconds = 0.0;  ///< the summaries' (each threshold's reach and volume)
 };
 
 /// @brief Computes the scene's hazard reach beside its far field @p far (sceneFarField()):
@@ -56,6 +57,6 @@ struct SceneReach {
 /// pass the budget; with progress ("reach points") where the watch shows it.
 /// @throw InputError (the memory budget).
 SceneReach sceneReach(const SceneTarget& target, const Scene& scene, const FarField& far,
-                      const WorkWatch& w);
+                      const FarHazard& beyond, const WorkWatch& w);
 
 }  // namespace glint

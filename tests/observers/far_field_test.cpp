@@ -601,7 +601,7 @@ TEST(FarField, AFacesFloorIsTheGridsEvenADarkFaceKeeps) {
   spec.face_pixels = 8192;
   spec.block_pixels = 512;
   const double floor_8192 =
-      static_cast<double>(farFieldMemoryFloorBytes(spec, latLongMapBytes(2048)));
+      static_cast<double>(farFieldMemoryFloorBytes(spec, latLongMapBytes(2048, spec.face_pixels)));
   EXPECT_GE(floor_8192, 6.0 * 8193.0 * 8193.0 * 4.0 + 1025.0 * 1025.0 * 2 * 2048.0);
   EXPECT_GT(floor_8192, 2.0 * 1073741824.0) << "more than the issue's 2 GB budget";
 }
@@ -670,6 +670,45 @@ TEST(FarField, NoObserverBeyondTheHazardDistanceIsAboveTheThreshold) {
       "(%.5f at sqrt(I/threshold)); the distance exceeds sqrt(I/threshold) by at most "
       "%.3f %%\n",
       checked, worst_now, worst_before, 100.0 * widest_margin);
+}
+
+// The window the hazard reach and the far radius's check read is brightestWithin() at every
+// lattice point, built by running maxima: the same float at every point, whatever the
+// half-width (past the face's edges too), with NaN read as +∞ and nothing below 0, as
+// brightestWithin() reads them.
+TEST(FarField, TheBrightestWindowIsTheSquaresScanAtEveryLatticePoint) {
+  constexpr int kPixels = 20;
+  FarFieldSpec spec;
+  spec.face_pixels = kPixels;
+  spec.block_pixels = 4;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 10.0);
+  std::vector<FarField::Face> faces(FarField::kFaces);
+  for (FarField::Face& face : faces) {
+    face.intensity_w_sr.resize((kPixels + 1) * (kPixels + 1));
+    for (float& v : face.intensity_w_sr) v = static_cast<float>(u(rng));
+  }
+  faces[2].intensity_w_sr[7 * (kPixels + 1) + 3] = std::numeric_limits<float>::quiet_NaN();
+  faces[4].intensity_w_sr.assign(faces[4].intensity_w_sr.size(), -2.0f);  // all below 0
+  const FarField field(LitBall{Vec3(0.0), 1.0}, spec, 100.0, std::move(faces));
+  int compared = 0;
+  for (const int steps : {0, 1, 2, 3, 7, kPixels - 1, kPixels, 3 * kPixels}) {
+    const FarField::BrightestWindow window(field, steps);
+    ASSERT_EQ(window.steps(), steps);
+    for (int f = 0; f < FarField::kFaces; ++f)
+      for (int j = 0; j <= kPixels; ++j)
+        for (int i = 0; i <= kPixels; ++i) {
+          const double scan = field.brightestWithin(f, i, j, steps);
+          ASSERT_EQ(window.at(f, i, j), scan)
+              << "face " << f << ", point (" << i << ", " << j << "), half-width " << steps;
+          ++compared;
+        }
+  }
+  EXPECT_EQ(compared, 8 * FarField::kFaces * (kPixels + 1) * (kPixels + 1));
+  EXPECT_EQ(FarField::BrightestWindow(field, 2).at(2, 4, 8),
+            std::numeric_limits<double>::infinity())
+      << "a NaN two steps away reads as +inf";
+  EXPECT_EQ(FarField::BrightestWindow(field, 5).at(4, 10, 10), 0.0) << "nothing below 0";
 }
 
 }  // namespace

@@ -40,7 +40,8 @@ Reach reachOf(const std::string& json) {
   const ReachSpec spec = reachSpec(scene, far);
   const FieldProblem problem = fieldProblem(target, scene, reachFaceSpec(0, spec));
   NearReach near = computeNearReach(problem.integrator, spec, problem.excluded);
-  const ReachSummary summary = summarizeReach(near, far, 0, 0.0);
+  const ReachSummary summary =
+      summarizeReach(near, far, 0, farReach(far, spec.thresholds_w_m2.at(0)), 0.0);
   return {std::move(scene), std::move(target), std::move(far), std::move(near), summary};
 }
 
