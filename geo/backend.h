@@ -65,6 +65,11 @@ struct GeoZones {
   std::vector<std::pair<std::string, std::string>> properties;  ///< of every polygon
 };
 
+/// @brief GDAL's block cache while a map is written (bytes): enough for the tiles of a few rows
+/// of the largest map, whatever its size (GDAL's own default, 5 % of the machine's memory, lies
+/// outside what --memory counts).
+inline constexpr std::int64_t kGdalBlockCacheBytes = std::int64_t{64} << 20;
+
 /// @brief What the module does.
 class GeoBackend {
  public:

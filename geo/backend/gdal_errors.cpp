@@ -5,13 +5,10 @@
 
 #include <mutex>
 
+#include "geo/backend.h"
+
 namespace glint::detail {
-namespace {
-
-// GDAL's block cache: enough for the tiles of a few rows of the largest map, whatever its size.
-constexpr GIntBig kGdalCacheBytes = 64ll << 20;
-
-}  // namespace
+namespace {}  // namespace
 
 GdalErrors::GdalErrors() {
   static std::once_flag once;
@@ -21,7 +18,7 @@ GdalErrors::GdalErrors() {
     // GDAL's block cache defaults to 5 % of the machine's memory (1.2 GB here), outside what
     // --memory counts: a footprint's GeoTIFF of 64 M pixels filled it while written, and a run
     // estimated at 1 GB was stopped at 1.9 GB. Blocks past this are written out, not held.
-    GDALSetCacheMax64(kGdalCacheBytes);
+    GDALSetCacheMax64(kGdalBlockCacheBytes);
   });
   CPLPushErrorHandler(CPLQuietErrorHandler);
   CPLErrorReset();

@@ -1,6 +1,7 @@
 #include "pipeline/base/progress.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 
 #include "pipeline/base/number_format.h"
@@ -68,10 +69,15 @@ std::string progressLine(const WorkCounter& counter, const std::string& noun, st
     done = std::min(total, done - std::min(done, counter.step_done_before.load()));
   }
   const double fraction = total > 0 ? static_cast<double>(done) / static_cast<double>(total) : 0.0;
-  std::snprintf(buf, sizeof buf, "%zu/%zu %s (%.0f%%), %.3g evaluations, %s elapsed", done, total,
-                noun.c_str(), 100.0 * fraction, static_cast<double>(counter.evaluations.load()),
-                formatDuration(elapsed_s).c_str());
+  std::snprintf(buf, sizeof buf, "%zu/%zu %s (%.0f%%), ", done, total, noun.c_str(),
+                100.0 * fraction);
   line += buf;
+  // Work without integrations (a footprint's rows) says nothing of them.
+  if (const std::int64_t evaluations = counter.evaluations.load(); evaluations > 0) {
+    std::snprintf(buf, sizeof buf, "%.3g evaluations, ", static_cast<double>(evaluations));
+    line += buf;
+  }
+  line += formatDuration(elapsed_s) + " elapsed";
   if (fraction > 0.0 && fraction < 1.0) {
     const auto began = std::chrono::steady_clock::time_point(
         std::chrono::nanoseconds(counter.step_began_ns.load()));

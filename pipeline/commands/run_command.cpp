@@ -376,8 +376,14 @@ void runReach(const RunContext& c, const FarResult& far, RunSummary& s) {
     const PhaseClock::Scope phase = c.clock.phase("the hazard reach: its footprint on the ground");
     const SiteFrame site(*c.scene.site);
     try {
+      WorkCounter counter;
+      std::optional<ProgressReporter> progress;
+      if (!c.args.quiet) {
+        progress.emplace(c.err, c.args.terminal, "rows of the footprint", footprintRows(*spec),
+                         counter);
+      }
       footprint = reachFootprint(reach.near, *far.far, c.scene.hazard.atmosphere.extinction_per_m,
-                                 site, c.scene.terrain.get(), *spec);
+                                 site, c.scene.terrain.get(), *spec, &counter);
     } catch (const std::invalid_argument& e) {
       throw InputError(c.scene.source + ": /reach/footprint: " + e.what());
     }

@@ -11,6 +11,7 @@
 #include "geo/site.h"
 #include "geo/terrain.h"
 #include "observers/far_field.h"
+#include "observers/point_set.h"
 #include "observers/reach.h"
 #include "pipeline/input/scene.h"
 
@@ -39,9 +40,15 @@ struct ReachFootprint {
 
 /// @brief The footprint of @p near and @p far (thresholds as the lattice's) on the ground of
 /// @p site, over @p terrain where there is one.
+/// @p counter, where given, counts the rows done: the footprint's rows at eye height and at
+/// each altitude (footprintRows()).
 /// @throw std::invalid_argument where the terrain does not reach a pixel.
 ReachFootprint reachFootprint(const NearReach& near, const FarField& far, double extinction_per_m,
                               const SiteFrame& site, const Terrain* terrain,
-                              const FootprintSpec& spec);
+                              const FootprintSpec& spec, WorkCounter* counter = nullptr);
+
+/// @brief The rows reachFootprint() covers for @p spec: a side's pixels at eye height and at
+/// each flight altitude.
+std::size_t footprintRows(const FootprintSpec& spec);
 
 }  // namespace glint

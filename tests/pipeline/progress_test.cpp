@@ -46,6 +46,8 @@ TEST(Progress, AStepOfABoundedCountSaysAtMostHowManyThereAre) {
   EXPECT_NE(line.find("glint: sphere 4 of at most 13: 727/1454 directions (50%)"),
             std::string::npos)
       << line;
+  EXPECT_EQ(line.find("evaluations"), std::string::npos)
+      << "work that integrates nothing does not count evaluations: " << line;
   counter.endStages();
   EXPECT_NE(progressLine(counter, "directions", 2000, 1.0).find("glint: 727/2000 directions"),
             std::string::npos)
