@@ -9,11 +9,13 @@
 namespace glint {
 
 ProgressReporter::ProgressReporter(std::ostream& err, bool terminal, std::string noun,
-                                   std::size_t total, const WorkCounter& counter)
+                                   std::size_t total, const WorkCounter& counter,
+                                   bool without_time_left)
     : err_(err),
       terminal_(terminal),
       noun_(std::move(noun)),
       total_(total),
+      without_time_left_(without_time_left),
       counter_(counter),
       start_(std::chrono::steady_clock::now()),
       thread_([this] { run(); }) {}
@@ -42,7 +44,7 @@ void ProgressReporter::run() {
 }
 
 std::string progressLine(const WorkCounter& counter, const std::string& noun, std::size_t total,
-                         double elapsed_s) {
+                         double elapsed_s, bool without_time_left) {
   const int step = counter.step.load();
   const char* step_noun = "step";
   std::size_t done = counter.items_done.load();
@@ -78,7 +80,7 @@ std::string progressLine(const WorkCounter& counter, const std::string& noun, st
     line += buf;
   }
   line += formatDuration(elapsed_s) + " elapsed";
-  if (fraction > 0.0 && fraction < 1.0) {
+  if (fraction > 0.0 && fraction < 1.0 && !without_time_left) {
     const auto began = std::chrono::steady_clock::time_point(
         std::chrono::nanoseconds(counter.step_began_ns.load()));
     const double in_step =
@@ -93,7 +95,7 @@ std::string progressLine(const WorkCounter& counter, const std::string& noun, st
 void ProgressReporter::print() {
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  const std::string line = progressLine(counter_, noun_, total_, elapsed);
+  const std::string line = progressLine(counter_, noun_, total_, elapsed, without_time_left_);
   if (terminal_) {
     err_ << "\r\033[K" << line << std::flush;
   } else {

@@ -512,6 +512,7 @@ void runScene(const RunArgs& requested, std::ostream& err, PointExchange* exchan
     requireSameScene(dir, earlier, args.scene_path);
   }
   RunOutputs outputs(scene, dir, inputs, writer);
+  if (!args.quiet) outputs.showProgress(&err, args.terminal);
   const std::vector<std::string> stale = noteEarlierFiles(dir, earlier, outputs, args.quiet, err);
   if (writer) pauseForTestsAfterTemporaries(err);
 

@@ -746,8 +746,22 @@ std::ostream* RunOutputs::summary() {
   return writer_ && files_.at(0) ? &files_[0]->stream() : nullptr;
 }
 
+std::unique_ptr<ProgressReporter> RunOutputs::fileProgress(OutputRegion region, std::size_t plane,
+                                                           const std::string& noun,
+                                                           const WorkCounter& counter) const {
+  if (progress_to_ == nullptr) return nullptr;
+  std::size_t files = 0;
+  for (const Declared* d : writingOrder(region)) {
+    if (slotOf(*d, plane)) ++files;
+  }
+  // A map's file may take a hundred times another's: no time left is estimated.
+  return std::make_unique<ProgressReporter>(*progress_to_, terminal_, noun, files, counter, true);
+}
+
 void RunOutputs::writeBox(BoxResults& box) {
   if (!writer_) return;
+  WorkCounter counter;
+  const auto progress = fileProgress(Region::Box, 0, "files of the observer box", counter);
   for (const Declared* d : writingOrder(Region::Box)) {
     const std::optional<std::size_t> i = slotOf(*d, 0);
     if (!i) continue;
@@ -757,6 +771,7 @@ void RunOutputs::writeBox(BoxResults& box) {
     } else {
       files_[*i]->write([&](std::ostream& out) { d->write(out, box); });
     }
+    ++counter.items_done;
   }
 }
 
@@ -765,9 +780,14 @@ void RunOutputs::writePlane(std::size_t index, const PlaneResults& plane) {
   PlaneResults placed = plane;
   placed.site = site_.get();
   placed.plane_name = plane_names_.at(index);
+  WorkCounter counter;
+  const auto progress =
+      fileProgress(Region::Plane, index, "files of plane " + placed.plane_name, counter);
   for (const Declared* d : writingOrder(Region::Plane)) {
-    if (const std::optional<std::size_t> i = slotOf(*d, index))
+    if (const std::optional<std::size_t> i = slotOf(*d, index)) {
       files_[*i]->write([&](std::ostream& out) { d->write(out, placed); });
+      ++counter.items_done;
+    }
   }
 }
 
@@ -792,9 +812,13 @@ void RunOutputs::writeEngagementBox(const EngagementBoxResults& box) {
 
 void RunOutputs::writeFar(const FarResults& far) {
   if (!writer_) return;
+  WorkCounter counter;
+  const auto progress = fileProgress(Region::Far, 0, "files of the far field", counter);
   for (const Declared* d : writingOrder(Region::Far)) {
-    if (const std::optional<std::size_t> i = slotOf(*d, 0))
+    if (const std::optional<std::size_t> i = slotOf(*d, 0)) {
       files_[*i]->write([&](std::ostream& out) { d->write(out, far); });
+      ++counter.items_done;
+    }
   }
 }
 
@@ -802,9 +826,13 @@ void RunOutputs::writeReach(const ReachResults& reach) {
   if (!writer_) return;
   ReachResults placed = reach;
   placed.site = site_.get();
+  WorkCounter counter;
+  const auto progress = fileProgress(Region::Reach, 0, "files of the hazard reach", counter);
   for (const Declared* d : writingOrder(Region::Reach)) {
-    if (const std::optional<std::size_t> i = slotOf(*d, 0))
+    if (const std::optional<std::size_t> i = slotOf(*d, 0)) {
       files_[*i]->write([&](std::ostream& out) { d->write(out, placed); });
+      ++counter.items_done;
+    }
   }
 }
 

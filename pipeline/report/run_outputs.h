@@ -25,6 +25,7 @@
 #include "observers/far_field.h"
 #include "observers/field.h"
 #include "observers/reach.h"
+#include "pipeline/base/progress.h"
 #include "pipeline/setup/reach_footprint.h"
 
 namespace glint {
@@ -141,6 +142,12 @@ class RunOutputs {
   void writeEngagementBox(const EngagementBoxResults& box);
   void writeFar(const FarResults& far);
   void writeReach(const ReachResults& reach);
+  /// @brief Where a region's files show their progress while written (nullptr: nowhere): after
+  /// its first second, "2/5 files of the hazard reach", as the computations do.
+  void showProgress(std::ostream* err, bool terminal) {
+    progress_to_ = err;
+    terminal_ = terminal;
+  }
   /// @brief Where summary.json is written (none unless a writer).
   [[nodiscard]] std::ostream* summary();
 
@@ -156,6 +163,12 @@ class RunOutputs {
   /// The index in names_ of output @p d of plane @p plane (0 but for a plane's), if the scene
   /// has it.
   [[nodiscard]] std::optional<std::size_t> slotOf(const Declared& d, std::size_t plane) const;
+  // The files of @p region (plane @p plane) counted in @p counter while they are written,
+  // shown as @p noun where showProgress() asked for it.
+  [[nodiscard]] std::unique_ptr<ProgressReporter> fileProgress(OutputRegion region,
+                                                               std::size_t plane,
+                                                               const std::string& noun,
+                                                               const WorkCounter& counter) const;
 
   std::filesystem::path dir_;
   bool writer_;
@@ -169,7 +182,9 @@ class RunOutputs {
   std::vector<AtomicFile*> files_;
   std::unique_ptr<StagedAmr> amr_;
   std::vector<std::string> plane_names_;  ///< the scene's planes, by index
-  std::unique_ptr<SiteFrame> site_;       ///< the scene's site, where it has one
+  std::ostream* progress_to_ = nullptr;
+  bool terminal_ = false;
+  std::unique_ptr<SiteFrame> site_;  ///< the scene's site, where it has one
 };
 
 /// @brief The maps one scenario of a study writes into its folder (glint batch): of each of

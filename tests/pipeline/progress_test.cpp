@@ -46,6 +46,9 @@ TEST(Progress, AStepOfABoundedCountSaysAtMostHowManyThereAre) {
   EXPECT_NE(line.find("glint: sphere 4 of at most 13: 727/1454 directions (50%)"),
             std::string::npos)
       << line;
+  EXPECT_EQ(progressLine(counter, "files", 0, 1.0, true).find("left"), std::string::npos)
+      << "items of no like cost estimate no time left: "
+      << progressLine(counter, "files", 0, 1.0, true);
   EXPECT_EQ(line.find("evaluations"), std::string::npos)
       << "work that integrates nothing does not count evaluations: " << line;
   counter.endStages();
