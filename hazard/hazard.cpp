@@ -196,11 +196,13 @@ HazardZone hazardZone(const ObserverField& field, const HazardSpec& h,
 }
 
 FarHazard farHazard(const FarField& field, const HazardSpec& h) {
-  const double mu = h.atmosphere.extinction_per_m;
-  FarHazard f{farReach(field, h.mpe_w_m2, mu), std::nullopt, {}};
-  if (h.aid) f.aided = farReach(field, h.aidedMpeW_m2(), mu);
-  for (const ExposureLevel& l : h.levels)
-    f.levels.push_back(farReach(field, l.thresholdW_m2(), mu));
+  // One pass for every threshold, in thresholdsW_m2()'s order: the MPE, the aided MPE, the levels.
+  const std::vector<FarReach> all =
+      farReaches(field, h.thresholdsW_m2(), h.atmosphere.extinction_per_m);
+  FarHazard f{all.at(0), std::nullopt, {}};
+  std::size_t next = 1;
+  if (h.aid) f.aided = all.at(next++);
+  for (std::size_t k = 0; k < h.levels.size(); ++k) f.levels.push_back(all.at(next++));
   return f;
 }
 

@@ -104,41 +104,52 @@ double hazardDistance(double intensity_w_sr, double threshold_w_m2, double extin
   return hi;  // the upper end: never nearer than the crossing
 }
 
-FarReach farReach(const FarField& field, double mpe_w_m2, double extinction_per_m) {
-  FarReach reach;
-  reach.direction = field.peak().direction;
-  reach.far_radius_m = farRadiusToward(field.spec(), reach.direction);
-  const auto consider = [&](const Vec3& d, double intensity_w_sr) {
-    const double nohd = field.hazardDistanceToward(d, intensity_w_sr, mpe_w_m2, extinction_per_m);
-    if (!(nohd > reach.nohd_m)) return;
-    const double far_m = farRadiusToward(field.spec(), d);
-    if (nohd >= far_m) reach = {nohd, d, far_m};
+std::vector<FarReach> farReaches(const FarField& field, std::span<const double> thresholds_w_m2,
+                                 double extinction_per_m) {
+  const std::size_t count = thresholds_w_m2.size();
+  FarReach none;
+  none.direction = field.peak().direction;
+  none.far_radius_m = farRadiusToward(field.spec(), none.direction);
+  std::vector<FarReach> reach(count, none);
+  // Each direction's upper intensity is read once for every threshold.
+  const auto consider = [&](std::vector<FarReach>& best, std::size_t first, const Vec3& d,
+                            double intensity_w_sr) {
+    for (std::size_t t = 0; t < count; ++t) {
+      FarReach& r = best[first + t];
+      const double nohd =
+          field.hazardDistanceToward(d, intensity_w_sr, thresholds_w_m2[t], extinction_per_m);
+      if (!(nohd > r.nohd_m)) continue;
+      const double far_m = farRadiusToward(field.spec(), d);
+      if (nohd >= far_m) r = {nohd, d, far_m};
+    }
   };
   // The located tops first: a lattice direction beside one, as bright by its allowance, does
   // not take its place.
-  for (const FarField::Peak& p : field.located()) consider(p.direction, p.intensity_w_sr);
-  for (const FarField::Peak& p : field.narrowGlints()) consider(p.direction, p.intensity_w_sr);
+  for (const FarField::Peak& p : field.located()) consider(reach, 0, p.direction, p.intensity_w_sr);
+  for (const FarField::Peak& p : field.narrowGlints())
+    consider(reach, 0, p.direction, p.intensity_w_sr);
   // The lattice's directions, each face's rows in parallel: a row's farthest, then the rows'
   // in order, each replacing only a strictly farther one, as one pass in order would.
   const int n = field.spec().face_pixels;
-  std::vector<FarReach> rows(static_cast<std::size_t>(FarField::kFaces) * (n + 1));
-  tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t r) {
+  const std::size_t row_count = static_cast<std::size_t>(FarField::kFaces) * (n + 1);
+  std::vector<FarReach> rows(row_count * count);
+  tbb::parallel_for(std::size_t{0}, row_count, [&](std::size_t r) {
     const int f = static_cast<int>(r / static_cast<std::size_t>(n + 1));
     const int j = static_cast<int>(r % static_cast<std::size_t>(n + 1));
-    FarReach& row = rows[r];
     for (int i = 0; i <= n; ++i) {
-      const Vec3 d = field.latticeDirection(f, i, j);
-      const double nohd = field.hazardDistanceToward(d, field.latticeUpperIntensity(f, i, j),
-                                                     mpe_w_m2, extinction_per_m);
-      if (!(nohd > row.nohd_m)) continue;
-      const double far_m = farRadiusToward(field.spec(), d);
-      if (nohd >= far_m) row = {nohd, d, far_m};
+      consider(rows, r * count, field.latticeDirection(f, i, j),
+               field.latticeUpperIntensity(f, i, j));
     }
   });
-  for (const FarReach& row : rows) {
-    if (row.nohd_m > reach.nohd_m) reach = row;
-  }
+  for (std::size_t r = 0; r < row_count; ++r)
+    for (std::size_t t = 0; t < count; ++t) {
+      if (rows[r * count + t].nohd_m > reach[t].nohd_m) reach[t] = rows[r * count + t];
+    }
   return reach;
+}
+
+FarReach farReach(const FarField& field, double mpe_w_m2, double extinction_per_m) {
+  return farReaches(field, std::span<const double>(&mpe_w_m2, 1), extinction_per_m).front();
 }
 
 FieldSpec cubeFaceSpec(int face, const Vec3& centre_m, double distance_m,

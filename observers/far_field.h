@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -457,5 +458,8 @@ struct FarReach {
   double far_radius_m = 0.0;  ///< toward that direction
 };
 FarReach farReach(const FarField& field, double mpe_w_m2, double extinction_per_m = 0.0);
+/// @brief farReach() for each of @p thresholds_w_m2, in their order, in one pass over the map.
+std::vector<FarReach> farReaches(const FarField& field, std::span<const double> thresholds_w_m2,
+                                 double extinction_per_m = 0.0);
 
 }  // namespace glint

@@ -711,5 +711,29 @@ TEST(FarField, TheBrightestWindowIsTheSquaresScanAtEveryLatticePoint) {
   EXPECT_EQ(FarField::BrightestWindow(field, 5).at(4, 10, 10), 0.0) << "nothing below 0";
 }
 
+// The far field's hazard distances of every threshold in one pass are those of each threshold
+// in a pass of its own, to the bit: the same directions read in the same order.
+TEST(FarField, OnePassGivesEachThresholdsReachAsItsOwnPassWould) {
+  const Scene s = scene(std::to_string(kBeamRadiusM), 0.02,
+                        R"({"shape": "sphere", "center": [0, 0, 0], "radius": 1.0,
+                            "material": "m"})");
+  // ρ E R² / 4 = 17.9 W/sr everywhere the sphere reflects to: within the far radius at 3 W/m²
+  // and beyond it at the others.
+  const Computed c = compute(s, 1e-2);
+  const std::vector<double> thresholds = {50.0, 1e-2, 3.0, 1e-6};
+  for (const double mu : {0.0, 1e-3}) {
+    const std::vector<FarReach> together = farReaches(c.field, thresholds, mu);
+    ASSERT_EQ(together.size(), thresholds.size());
+    for (std::size_t t = 0; t < thresholds.size(); ++t) {
+      const FarReach alone = farReach(c.field, thresholds[t], mu);
+      EXPECT_EQ(together[t].nohd_m, alone.nohd_m) << "threshold " << thresholds[t] << ", mu " << mu;
+      EXPECT_EQ(together[t].far_radius_m, alone.far_radius_m) << "threshold " << thresholds[t];
+      EXPECT_EQ(together[t].direction, alone.direction) << "threshold " << thresholds[t];
+    }
+  }
+  EXPECT_GT(farReach(c.field, 1e-6).nohd_m, farReach(c.field, 3.0).nohd_m)
+      << "premise: the thresholds reach different distances";
+}
+
 }  // namespace
 }  // namespace glint
