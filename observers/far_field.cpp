@@ -111,13 +111,14 @@ std::vector<FarReach> farReaches(const FarField& field, std::span<const double> 
   none.direction = field.peak().direction;
   none.far_radius_m = farRadiusToward(field.spec(), none.direction);
   std::vector<FarReach> reach(count, none);
-  // Each direction's upper intensity is read once for every threshold.
+  // Each direction's intensity and its allowance are found once for every threshold.
   const auto consider = [&](std::vector<FarReach>& best, std::size_t first, const Vec3& d,
                             double intensity_w_sr) {
+    const double judged_w_sr = field.hazardIntensityToward(d, intensity_w_sr);
     for (std::size_t t = 0; t < count; ++t) {
       FarReach& r = best[first + t];
       const double nohd =
-          field.hazardDistanceToward(d, intensity_w_sr, thresholds_w_m2[t], extinction_per_m);
+          hazardDistance(judged_w_sr, thresholds_w_m2[t], extinction_per_m, field.ball().radius_m);
       if (!(nohd > r.nohd_m)) continue;
       const double far_m = farRadiusToward(field.spec(), d);
       if (nohd >= far_m) r = {nohd, d, far_m};
@@ -585,8 +586,12 @@ double FarField::upperIntensity(const Vec3& direction) const {
 
 double FarField::hazardDistanceToward(const Vec3& direction, double upper_w_sr,
                                       double threshold_w_m2, double extinction_per_m) const {
+  return hazardDistance(hazardIntensityToward(direction, upper_w_sr), threshold_w_m2,
+                        extinction_per_m, ball_.radius_m);
+}
+
+double FarField::hazardIntensityToward(const Vec3& direction, double upper_w_sr) const {
   const double upper = hazardSafe(upper_w_sr);
-  const double a = ball_.radius_m;
   if (!std::isfinite(upper)) return std::numeric_limits<double>::infinity();
   // The brightest lattice direction in the parallax cone at the far radius (where the cone is
   // widest), as the check sought it, one step wider for a direction between lattice points.
@@ -610,7 +615,7 @@ double FarField::hazardDistanceToward(const Vec3& direction, double upper_w_sr,
   const double floor_w_sr = share * spec_.floor_w_sr;
   const double by_brightest = upper + floor_w_sr + tolerance * brightest;
   const double by_threshold = (upper + floor_w_sr) / std::max(1.0 - tolerance, 1e-300);
-  return hazardDistance(std::max(by_brightest, by_threshold), threshold_w_m2, extinction_per_m, a);
+  return std::max(by_brightest, by_threshold);
 }
 
 namespace {

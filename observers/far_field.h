@@ -296,6 +296,9 @@ class FarField {
   /// a non-finite intensity.
   [[nodiscard]] double hazardDistanceToward(const Vec3& direction, double upper_w_sr,
                                             double threshold_w_m2, double extinction_per_m) const;
+  /// @brief The intensity hazardDistanceToward() judges toward unit @p direction, whatever the
+  /// threshold: @p upper_w_sr and its allowance (W/sr; +∞ for a non-finite intensity).
+  [[nodiscard]] double hazardIntensityToward(const Vec3& direction, double upper_w_sr) const;
 
  private:
   friend FarField computeFarField(const FacetIntegrator&, const FarFieldSpec&, WorkCounter*,

@@ -775,20 +775,25 @@ void RunOutputs::writeBox(BoxResults& box) {
   }
 }
 
+template <class Results>
+void RunOutputs::writeRegion(OutputRegion region, std::size_t plane, const Results& results,
+                             const std::string& noun) {
+  WorkCounter counter;
+  const auto progress = noun.empty() ? nullptr : fileProgress(region, plane, noun, counter);
+  for (const Declared* d : writingOrder(region)) {
+    if (const std::optional<std::size_t> i = slotOf(*d, plane)) {
+      files_[*i]->write([&](std::ostream& out) { d->write(out, results); });
+      ++counter.items_done;
+    }
+  }
+}
+
 void RunOutputs::writePlane(std::size_t index, const PlaneResults& plane) {
   if (!writer_) return;
   PlaneResults placed = plane;
   placed.site = site_.get();
   placed.plane_name = plane_names_.at(index);
-  WorkCounter counter;
-  const auto progress =
-      fileProgress(Region::Plane, index, "files of plane " + placed.plane_name, counter);
-  for (const Declared* d : writingOrder(Region::Plane)) {
-    if (const std::optional<std::size_t> i = slotOf(*d, index)) {
-      files_[*i]->write([&](std::ostream& out) { d->write(out, placed); });
-      ++counter.items_done;
-    }
-  }
+  writeRegion(Region::Plane, index, placed, "files of plane " + placed.plane_name);
 }
 
 void RunOutputs::writeEngagementPlane(std::size_t index, const EngagementPlaneResults& plane) {
@@ -796,44 +801,24 @@ void RunOutputs::writeEngagementPlane(std::size_t index, const EngagementPlaneRe
   EngagementPlaneResults placed = plane;
   placed.site = site_.get();
   placed.plane_name = plane_names_.at(index);
-  for (const Declared* d : writingOrder(Region::EngagementPlane)) {
-    if (const std::optional<std::size_t> i = slotOf(*d, index))
-      files_[*i]->write([&](std::ostream& out) { d->write(out, placed); });
-  }
+  writeRegion(Region::EngagementPlane, index, placed, "");
 }
 
 void RunOutputs::writeEngagementBox(const EngagementBoxResults& box) {
   if (!writer_) return;
-  for (const Declared* d : writingOrder(Region::EngagementBox)) {
-    if (const std::optional<std::size_t> i = slotOf(*d, 0))
-      files_[*i]->write([&](std::ostream& out) { d->write(out, box); });
-  }
+  writeRegion(Region::EngagementBox, 0, box, "");
 }
 
 void RunOutputs::writeFar(const FarResults& far) {
   if (!writer_) return;
-  WorkCounter counter;
-  const auto progress = fileProgress(Region::Far, 0, "files of the far field", counter);
-  for (const Declared* d : writingOrder(Region::Far)) {
-    if (const std::optional<std::size_t> i = slotOf(*d, 0)) {
-      files_[*i]->write([&](std::ostream& out) { d->write(out, far); });
-      ++counter.items_done;
-    }
-  }
+  writeRegion(Region::Far, 0, far, "files of the far field");
 }
 
 void RunOutputs::writeReach(const ReachResults& reach) {
   if (!writer_) return;
   ReachResults placed = reach;
   placed.site = site_.get();
-  WorkCounter counter;
-  const auto progress = fileProgress(Region::Reach, 0, "files of the hazard reach", counter);
-  for (const Declared* d : writingOrder(Region::Reach)) {
-    if (const std::optional<std::size_t> i = slotOf(*d, 0)) {
-      files_[*i]->write([&](std::ostream& out) { d->write(out, placed); });
-      ++counter.items_done;
-    }
-  }
+  writeRegion(Region::Reach, 0, placed, "files of the hazard reach");
 }
 
 void RunOutputs::commit(const std::function<void()>& after_first) { set_.commit(after_first); }

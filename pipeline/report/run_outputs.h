@@ -169,6 +169,11 @@ class RunOutputs {
                                                                std::size_t plane,
                                                                const std::string& noun,
                                                                const WorkCounter& counter) const;
+  // Writes every file of @p region (plane @p plane) from @p results, in writing order, showing
+  // their progress as @p noun (none where empty).
+  template <class Results>
+  void writeRegion(OutputRegion region, std::size_t plane, const Results& results,
+                   const std::string& noun);
 
   std::filesystem::path dir_;
   bool writer_;
