@@ -115,6 +115,8 @@ void writeExr(std::ostream& out, const PlaneMap& map, const ExrInfo& info) {
     channels.push_back({"aided_hazard_ratio", &map.aided_hazard_ratio});
   }
   for (const auto& [name, values] : map.level_ratios) channels.push_back({name, &values});
+  if (!map.irradiance_upper_w_m2.empty())
+    channels.push_back({"irradiance_upper_w_m2", &map.irradiance_upper_w_m2});
   channels.push_back({"level", &map.level});
   channels.push_back({"status", &map.status});
   if (!map.observer_z_m.empty()) channels.push_back({"observer_z_m", &map.observer_z_m});

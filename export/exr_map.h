@@ -31,6 +31,9 @@ struct PlaneMap : PlaneGrid {
   /// Per level judged beside the MPE: its channel's name (`<level>_ratio`) and irradiance /
   /// the level's threshold.
   std::vector<std::pair<std::string, std::vector<float>>> level_ratios;
+  /// The most each point may receive (ObserverField::upperLattice()): above the irradiance
+  /// only where the integration stopped short or a narrower glint may pass unseen.
+  std::vector<float> irradiance_upper_w_m2;
   std::vector<float> level;   ///< refinement level (0 = coarsest block)
   std::vector<float> status;  ///< VoxelStatus: why a 0 is 0 (proven below floor, ...)
   /// A plane laid over the terrain: each observer's height, local z (m); empty for a flat one.
@@ -76,7 +79,9 @@ void writeLatLongExr(std::ostream& out, const LatLongGrid& grid,
                      const std::vector<ExrChannel>& channels, const ExrInfo& info);
 
 /// @brief Writes @p map with its channels `irradiance_w_m2`, `hazard_ratio`,
-/// `aided_hazard_ratio` (where the map has one), `level` and `status` (see the overload above).
+/// `aided_hazard_ratio` (where the map has one), each level's ratio, `irradiance_upper_w_m2`
+/// (where the map has one), `level`, `status` and `observer_z_m` (over a surface); see the
+/// overload above.
 void writeExr(std::ostream& out, const PlaneMap& map, const ExrInfo& info);
 
 /// @brief Reads FLOAT channel @p name of an EXR glint wrote, indexed [j × width + i] like the

@@ -284,6 +284,12 @@ void writeVti(std::ostream& out, const ObserverField& field, int stride,
   vtkPointData* data = image->GetPointData();
   data->AddArray(irradiance);
   addScaledArrays(*data, e, count, scaled);
+  {
+    const std::vector<float> most = field.upperLattice(stride);
+    auto upper = namedArray<vtkFloatArray>("irradiance_upper_w_m2", count);
+    std::copy(most.begin(), most.end(), upper->GetPointer(0));
+    data->AddArray(upper);
+  }
   data->AddArray(level);
   data->AddArray(status);
   data->SetActiveScalars("irradiance_w_m2");

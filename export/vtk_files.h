@@ -22,8 +22,9 @@
 namespace glint {
 
 /// @brief VTK ImageData (.vti) of the box: point data `irradiance_w_m2` (Float32, 0 where
-/// not computed), each of @p scaled (Float32: the hazard ratios), `refinement_level` and
-/// `status` (Int32), sampled every @p stride lattice points.
+/// not computed), each of @p scaled (Float32: the hazard ratios), `irradiance_upper_w_m2`
+/// (Float32, ObserverField::upperLattice()), `refinement_level` and `status` (Int32), sampled
+/// every @p stride lattice points.
 /// @throw OutputError when VTK's writer fails.
 void writeVti(std::ostream& out, const ObserverField& field, int stride,
               const std::vector<ScaledArray>& scaled);

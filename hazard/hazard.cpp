@@ -117,6 +117,15 @@ double opticalGain(double aperture_m, double magnification, double transmission,
   return transmission * collected * collected;
 }
 
+double flightZonePulseFactor(const PulseSpec& pulse) {
+  const double window_s = kFlightZoneAveragingS;
+  if (!pulse.repetition_rate_hz) return window_s / std::min(pulse.duration_s, window_s);
+  // A window of T_w, its ends included, touches at most ⌊f T_w⌋ + 1 pulses of the train: the
+  // light it holds is at most that many pulses' exposure E / f.
+  const double per_window = *pulse.repetition_rate_hz * window_s;
+  return per_window / (std::floor(per_window) + 1.0);
+}
+
 void completeHazard(HazardSpec& h) {
   const double wavelength_nm = h.wavelength_nm;
   for (ExposureLevel& l : h.levels) {
@@ -125,6 +134,7 @@ void completeHazard(HazardSpec& h) {
       throw std::out_of_range("a visually corrected level applies from 400 nm to 700 nm only");
     }
     l.visual_correction = l.visually_corrected ? photopicEfficiency(wavelength_nm) : 1.0;
+    l.pulse_factor = l.averaged_over_window && h.pulse ? flightZonePulseFactor(*h.pulse) : 1.0;
   }
   h.train.reset();
   if (!h.pulse) {

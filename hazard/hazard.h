@@ -202,6 +202,13 @@ double defaultExposureS(double wavelength_nm, Tissue tissue = Tissue::Eye);
 /// @throw std::out_of_range where the MPE table does not reach (ocularMpe).
 void completeHazard(HazardSpec& h);
 
+/// @brief For a level averaged over kFlightZoneAveragingS (a flight zone's), the mean irradiance
+/// over the exposure at which @p pulse's brightest averaging window reaches the level, as a
+/// multiple of it: a single pulse of τ ≤ T_w puts its whole exposure in one window, so
+/// T_w / τ; a train at f holds at most ⌊f T_w⌋ + 1 pulses in a window, so f T_w / (⌊f T_w⌋ + 1)
+/// (below 1: a slow train's single flash reaches the level first). docs/hazard.md derives both.
+double flightZonePulseFactor(const PulseSpec& pulse);
+
 /// @brief The lines of the standards the limit came from, as outputs record them.
 std::string hazardCitation(const HazardSpec& h);
 

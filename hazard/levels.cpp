@@ -40,6 +40,7 @@ std::vector<ExposureLevel> flightZoneLevels(bool visual_correction) {
     l.label = label;
     l.level_w_m2 = w_m2;
     l.visually_corrected = visual_correction;
+    l.averaged_over_window = true;
     l.source = kFlightZoneSource;
     return l;
   };

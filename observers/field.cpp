@@ -1,8 +1,10 @@
 #include "observers/field.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "observers/detail/field_common.h"
 #include "observers/field_grids.h"
@@ -156,6 +158,48 @@ std::vector<float> ObserverField::unresolvedBoundLattice() const {
   }
   return out;
 }
+std::vector<float> ObserverField::upperLattice(int stride) const {
+  const auto n = spec_.nodes();
+  std::array<int, 3> m{};
+  for (int a = 0; a < 3; ++a) m[a] = (n[a] - 1) / stride + 1;
+  const auto index = [&](const openvdb::Coord& q) -> std::optional<std::size_t> {
+    for (int a = 0; a < 3; ++a) {
+      if (q[a] < 0 || q[a] % stride != 0 || q[a] / stride >= m[a]) return std::nullopt;
+    }
+    return (static_cast<std::size_t>(q.z() / stride) * static_cast<std::size_t>(m[1]) +
+            static_cast<std::size_t>(q.y() / stride)) *
+               static_cast<std::size_t>(m[0]) +
+           static_cast<std::size_t>(q.x() / stride);
+  };
+  std::vector<float> out(static_cast<std::size_t>(m[0]) * static_cast<std::size_t>(m[1]) *
+                         static_cast<std::size_t>(m[2]));
+  auto irradiance = grids_->irradiance->getConstAccessor();
+  std::size_t p = 0;
+  for (int k = 0; k < m[2]; ++k)
+    for (int j = 0; j < m[1]; ++j)
+      for (int i = 0; i < m[0]; ++i, ++p) {
+        const openvdb::Coord c(i * stride, j * stride, k * stride);
+        out[p] = irradiance.isValueOn(c) ? irradiance.getValue(c) : 0.0f;
+      }
+  const auto raise = [&](const openvdb::Coord& q, float value) {
+    if (const std::optional<std::size_t> at = index(q)) out[*at] = std::max(out[*at], value);
+  };
+  for (auto it = grids_->upper->cbeginValueOn(); it; ++it) raise(it.getCoord(), *it);
+  const field::Lattice lattice{n};
+  auto status = grids_->status->getConstAccessor();
+  for (const FieldBlock& b : blocks_) {
+    if (b.status != VoxelStatus::Unresolved) continue;
+    const float bound = field::boundAsFloat(b.bound_w_m2);
+    const openvdb::CoordBBox box = field::ownedBox(b.origin, b.size, lattice);
+    for (auto it = box.begin(); it; ++it) {
+      // Only the block's points marked Unresolved: the rest are at the thresholds already.
+      if (static_cast<VoxelStatus>(std::lround(status.getValue(*it))) == VoxelStatus::Unresolved)
+        raise(*it, bound);
+    }
+  }
+  return out;
+}
+
 double ObserverField::unconvergedUpper(int i, int j, int k) const {
   return static_cast<double>(grids_->upper->tree().getValue(openvdb::Coord(i, j, k)));
 }

@@ -165,6 +165,14 @@ inline const char* voxelStatusMeanings() {
          "than the lattice may pass here";
 }
 
+/// @brief What the outputs' `irradiance_upper_w_m2` holds (ObserverField::upperLattice()), in
+/// one line for files that carry it.
+inline const char* upperIrradianceMeaning() {
+  return "W/m^2: the most each point may receive: its irradiance, plus its error estimate where "
+         "unconverged (status 5), its block's bound where a narrower glint may pass (status 6; "
+         "3.4e38 where unbounded)";
+}
+
 /// @brief Whether the irradiance of a voxel with status @p s was integrated at that point.
 inline bool integratedHere(VoxelStatus s) {
   return s == VoxelStatus::Evaluated || s == VoxelStatus::Unconverged ||
@@ -277,6 +285,12 @@ class ObserverField {
   /// @brief An Unconverged point's irradiance plus its error estimate (W/m², rounded up to a
   /// float); 0 at every other point.
   [[nodiscard]] double unconvergedUpper(int i, int j, int k) const;
+  /// @brief The most each point of the lattice taken every @p stride points may receive (W/m²):
+  /// its irradiance, an Unconverged point's value plus its error, an Unresolved point's block
+  /// bound (the largest float where unbounded); indexed as irradianceLattice() over that lattice
+  /// ((n − 1) / stride + 1 points along each axis). What the outputs' `irradiance_upper_w_m2`
+  /// holds: where it reaches a threshold and the irradiance does not, the point is in doubt.
+  [[nodiscard]] std::vector<float> upperLattice(int stride = 1) const;
   [[nodiscard]] VoxelStatus status(int i, int j, int k) const;
   [[nodiscard]] int level(int i, int j, int k) const;
 

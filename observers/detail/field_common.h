@@ -60,9 +60,11 @@ inline float statusCode(VoxelStatus s) { return static_cast<float>(static_cast<i
 /// @brief @p bound_w_m2 as the least float not below it (the largest finite float for +∞ or
 /// beyond), so that a bound stored in a float grid stays a bound.
 inline float boundAsFloat(double bound_w_m2) {
-  return std::nextafter(static_cast<float>(std::min(
-                            bound_w_m2, static_cast<double>(std::numeric_limits<float>::max()))),
-                        std::numeric_limits<float>::infinity());
+  constexpr float kLargest = std::numeric_limits<float>::max();
+  // +∞, NaN and whatever a float cannot hold: the largest float, never an ∞ in an output.
+  if (!(bound_w_m2 < static_cast<double>(kLargest))) return kLargest;
+  const float rounded = static_cast<float>(bound_w_m2);
+  return static_cast<double>(rounded) >= bound_w_m2 ? rounded : std::nextafter(rounded, kLargest);
 }
 
 /// @brief Counts an unconverged point at @p x in @p stats and keeps its irradiance plus error

@@ -106,8 +106,8 @@ std::vector<OutputName> outputNames(const Scene& scene) {
 
   // A plane's map (export/exr_map.cpp, report/hazard_report.cpp) and the volumes (the grids
   // of observers/field_common.cpp, the arrays of report/hazard_report.cpp).
-  for (const char* c :
-       {"irradiance_w_m2", "hazard_ratio", "aided_hazard_ratio", "level", "status"}) {
+  for (const char* c : {"irradiance_w_m2", "hazard_ratio", "aided_hazard_ratio",
+                        "irradiance_upper_w_m2", "level", "status"}) {
     own(kPlaneMaps, c, std::string("glint's own channel ") + c);
   }
   levels(kPlaneMaps, output_names::levelRatio, "ratio");

@@ -204,7 +204,7 @@ void readLevels(ObjectReader& r, HazardSpec& h) {
 }
 
 // What the levels ask of the laser: the flight zones are visual levels for a pilot's eye, from
-// 400 nm to 700 nm and for a continuous laser; any visually corrected level is visible only.
+// 400 nm to 700 nm; any visually corrected level is visible only.
 void checkLevels(ObjectReader& r, const HazardSpec& h) {
   if (h.levels.empty()) return;
   ObjectReader hazard = r.object("hazard");
@@ -221,12 +221,6 @@ void checkLevels(ObjectReader& r, const HazardSpec& h) {
     }
     if (h.tissue == Tissue::Skin) {
       hazard.fail("flight_zones", "are levels for a pilot's eye, and hazard.tissue is \"skin\"");
-    }
-    if (h.pulse) {
-      hazard.fail("flight_zones",
-                  "glint gives the flight zones' levels for a continuous laser only: their "
-                  "pulsed form (a radiant exposure per pulse) is not implemented; give the level "
-                  "you apply as hazard.levels, judged on the mean irradiance");
     }
   }
   for (const ExposureLevel& l : h.levels) {

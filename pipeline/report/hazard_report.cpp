@@ -34,6 +34,11 @@ std::string levelLine(const ExposureLevel& l) {
     s += " (" + formatNumber("%.4g", l.level_w_m2) + " W/m² effective, visual correction " +
          formatNumber("%.3g", l.visual_correction) + ")";
   }
+  if (l.pulse_factor != 1.0) {
+    s += "; pulsed: reached where the brightest " + formatNumber("%g", kFlightZoneAveragingS) +
+         " s holds " + formatNumber("%.4g", l.level_w_m2 * kFlightZoneAveragingS) + " J/m²" +
+         (l.visually_corrected ? " effective" : "");
+  }
   return s;
 }
 
@@ -41,6 +46,9 @@ nlohmann::json levelJson(const ExposureLevel& l) {
   return {{"level_w_m2", l.level_w_m2},
           {"visually_corrected", l.visually_corrected},
           {"visual_correction", l.visual_correction},
+          {"averaged_over_s",
+           l.averaged_over_window ? nlohmann::json(kFlightZoneAveragingS) : nlohmann::json()},
+          {"pulse_factor", l.pulse_factor},
           {"threshold_w_m2", l.thresholdW_m2()},
           {"source", l.source}};
 }
@@ -100,8 +108,10 @@ nlohmann::json hazardLimitsJson(const HazardSpec& h) {
     for (const ExposureLevel& l : h.levels) levels[l.name] = levelJson(l);
     j["levels"] = levels;
     j["levels_rule"] =
-        "each level is reached where irradiance x visual_correction >= level_w_m2, i.e. "
-        "irradiance >= threshold_w_m2 (the naked eye's mean irradiance over the exposure)";
+        "each level is reached where irradiance x visual_correction >= level_w_m2 x "
+        "pulse_factor, i.e. irradiance >= threshold_w_m2 (the naked eye's mean irradiance over "
+        "the exposure); a level averaged over averaged_over_s has a pulse_factor other than 1 "
+        "for a pulsed laser: the mean irradiance at which the brightest such window reaches it";
   }
   return j;
 }
@@ -211,6 +221,7 @@ PlaneMap planeMap(const ObserverField& field, const HazardSpec& h) {
   m.v_axis = spec.axes[1];
   m.pixel_m = spec.voxel_m;
   m.irradiance_w_m2 = planeIrradiance(field);
+  m.irradiance_upper_w_m2 = field.upperLattice();
   const std::size_t count = m.irradiance_w_m2.size();
   for (auto* channel : {&m.hazard_ratio, &m.level, &m.status}) channel->reserve(count);
   if (h.aid) m.aided_hazard_ratio.reserve(count);

@@ -103,6 +103,8 @@ void writePlaneGeoTiff(std::ostream& out, const PlaneResults& r) {
     channels.push_back({m.level_ratios[k].first, &m.level_ratios[k].second});
     units.push_back("1 (irradiance / the " + r.hazard.levels[k].name + " level's threshold)");
   }
+  channels.push_back({"irradiance_upper_w_m2", &m.irradiance_upper_w_m2});
+  units.emplace_back(upperIrradianceMeaning());
   channels.push_back({"status", &m.status});
   units.emplace_back(voxelStatusMeanings());
   if (!m.observer_z_m.empty()) {
@@ -267,10 +269,10 @@ double latticePoints(const FieldSpec& spec) {
   return static_cast<double>(n[0]) * n[1] * n[2];
 }
 
-// The channels planeMap() makes of a plane: irradiance, ratio, level and status, the aided
-// ratio with an aid, a ratio per level, each observer's height over a surface.
+// The channels planeMap() makes of a plane: irradiance, ratio, upper irradiance, level and
+// status, the aided ratio with an aid, a ratio per level, each observer's height over a surface.
 double planeMapChannels(const Scene& scene, const FieldSpec& plane) {
-  return 4.0 + (scene.hazard.aid ? 1.0 : 0.0) + static_cast<double>(scene.hazard.levels.size()) +
+  return 5.0 + (scene.hazard.aid ? 1.0 : 0.0) + static_cast<double>(scene.hazard.levels.size()) +
          (plane.surface ? 1.0 : 0.0);
 }
 
@@ -319,13 +321,14 @@ namespace scratch {
 // per coarse block (finer ones grow with the work, which the memory watch covers).
 std::uint64_t none(const Scene&, const FieldSpec*) { return 0; }
 
-// The box resampled at vtiStride(): irradiance, level, status and the hazard's scaled arrays.
+// The box resampled at vtiStride(): irradiance, its upper bound (made, then copied into its
+// array), level, status and the hazard's scaled arrays.
 std::uint64_t vti(const Scene& scene, const FieldSpec* box) {
   const std::array<int, 3> n = box->nodes();
   const int stride = vtiStride(*box);
   double points = 1.0;
   for (int a = 0; a < 3; ++a) points *= (n[a] - 1) / stride + 1;
-  return memory_model::saturated(points * kFloat * (3.0 + hazardThresholds(scene)));
+  return memory_model::saturated(points * kFloat * (5.0 + hazardThresholds(scene)));
 }
 
 // The AMR levels copy the lattice at each level's spacing: the coarsest covers the whole box.

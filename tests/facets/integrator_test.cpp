@@ -638,5 +638,40 @@ TEST(Integrator, AFlatTopBeamSmallerThanAFacetIsSeenWhereverItsEdgeFalls) {
   }
 }
 
+// Seen edge-on, a disk's pieces project to nothing, and the rules' terms that cancel there
+// summed to about -2e-17 W/m² (issue 64): light is never negative, so every such observer reads
+// at least 0, and finite.
+TEST(FacetIntegrator, LightIsNeverNegativeWhereADiskIsSeenEdgeOn) {
+  const Scene scene = parseScene(
+      R"({"laser": {"position": [-100, 0, 0], "direction": [1, 0, 0], "power_w": 200,
+           "wavelength_nm": 532, "beam": {"profile": "flat_top", "radius_m": 0.2}},
+          "materials": {"m": {"specular_reflectance": 0.5, "sigma": 0.02,
+                              "diffuse_reflectance": 0.3}},
+          "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [-1, 0.6, 0.4],
+                       "radius": 0.1, "material": "m", "segments": 8}]})",
+      "edge_on.json");
+  const FacetIntegrator fi = buildIntegrator(scene, scene.accuracy);
+  // Two unit axes in the disk's plane: its normal's round-off is what leaves the cancellation.
+  const Vec3 n = glm::normalize(Vec3(-1.0, 0.6, 0.4));
+  const Vec3 u = glm::normalize(glm::cross(n, Vec3(0.0, 0.0, 1.0)));
+  const Vec3 v = glm::cross(n, u);
+  IntegratorWorkspace ws;
+  int observers = 0, negative = 0;
+  double most_negative = 0.0;
+  for (const double r : {0.15, 1.0, 8.0})
+    for (int a = 0; a < 90; ++a) {
+      const double phi = 2.0 * kPi * a / 90.0;
+      const ObserverResult e = fi.adaptive(r * (std::cos(phi) * u + std::sin(phi) * v), ws);
+      ++observers;
+      ASSERT_TRUE(std::isfinite(e.irradiance_w_m2)) << r << " m at " << 4 * a << "°";
+      if (e.irradiance_w_m2 < 0.0) {
+        ++negative;
+        most_negative = std::min(most_negative, e.irradiance_w_m2);
+      }
+    }
+  EXPECT_EQ(negative, 0) << "of " << observers << " observers in the disk's plane; the most "
+                         << "negative " << most_negative << " W/m²";
+}
+
 }  // namespace
 }  // namespace glint

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "hazard/hazard.h"
+#include "observers/detail/field_common.h"
 #include "observers/far_field.h"
 #include "observers/field_compare.h"
 #include "pipeline/input/scene.h"
@@ -356,6 +358,46 @@ TEST(ObserverField, AnUnconvergedPointCountsInTheZoneByItsValuePlusError) {
   EXPECT_GE(zone.by_error_points, missed_by_value) << "counted by their value plus error";
   EXPECT_GE(zone.points, truth.exceedance(threshold, Vec3(0.0)).points)
       << "the cut-short zone is never smaller than the converged one";
+
+  // The outputs' irradiance_upper_w_m2 (upperLattice()) says the same point by point: it reaches
+  // the threshold exactly where the zone counts a point, and never lies below the value.
+  const std::vector<float> upper = cut.upperLattice();
+  const std::vector<float> value = cut.irradianceLattice();
+  ASSERT_EQ(upper.size(), value.size());
+  std::int64_t upper_counted = 0, below_value = 0;
+  for (std::size_t p = 0; p < upper.size(); ++p) {
+    upper_counted += static_cast<double>(upper[p]) >= threshold ? 1 : 0;
+    below_value += upper[p] < value[p] ? 1 : 0;
+  }
+  EXPECT_EQ(upper_counted, counted) << "the upper channel marks the zone's points, no more";
+  EXPECT_EQ(below_value, 0) << "the most a point may receive is never below its value";
+  // Resampled every other point, as the .vti is: the same values at the points kept.
+  const std::vector<float> coarse = cut.upperLattice(2);
+  std::array<int, 3> m{};
+  for (int a = 0; a < 3; ++a) m[a] = (n[a] - 1) / 2 + 1;
+  ASSERT_EQ(coarse.size(), static_cast<std::size_t>(m[0]) * m[1] * m[2]);
+  for (int k = 0; k < m[2]; ++k)
+    for (int j = 0; j < m[1]; ++j)
+      for (int i = 0; i < m[0]; ++i) {
+        const std::size_t at = (static_cast<std::size_t>(k) * m[1] + j) * m[0] + i;
+        const std::size_t fine = (static_cast<std::size_t>(2 * k) * n[1] + 2 * j) * n[0] +
+                                 static_cast<std::size_t>(2 * i);
+        ASSERT_EQ(coarse[at], upper[fine]) << "point " << i << ", " << j << ", " << k;
+      }
+}
+
+// A bound kept in a float grid (the unresolved blocks', the unconverged points') must stay a
+// bound and must be finite: it is written into the outputs.
+TEST(BoundAsFloat, IsTheLeastFloatNotBelowAndNeverInfinite) {
+  EXPECT_EQ(field::boundAsFloat(1.0), 1.0f) << "a float stays itself";
+  const float tenth = field::boundAsFloat(0.1);
+  EXPECT_GE(static_cast<double>(tenth), 0.1);
+  EXPECT_LT(static_cast<double>(std::nextafter(tenth, 0.0f)), 0.1) << "the least such float";
+  const float largest = std::numeric_limits<float>::max();
+  EXPECT_EQ(field::boundAsFloat(std::numeric_limits<double>::infinity()), largest);
+  EXPECT_EQ(field::boundAsFloat(std::numeric_limits<double>::quiet_NaN()), largest)
+      << "a NaN bound says nothing, so it bounds nothing below the largest float";
+  EXPECT_EQ(field::boundAsFloat(1e300), largest);
 }
 
 // A scene with one plane instead of an observer box.

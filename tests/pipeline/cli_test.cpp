@@ -17,6 +17,7 @@
 #include <sstream>
 #include <vector>
 
+#include "export/exr_map.h"
 #include "facets/vec3.h"
 #include "pipeline/input/scene.h"
 #include "support/cli.h"
@@ -181,6 +182,52 @@ TEST_F(CliTest, PointsCutShortSayWhatTheirBoundReaches) {
   EXPECT_GE(cut[3] + cut[4], truth[3] * (1.0 - 1e-3))
       << "irradiance + error of the cut-short observer against the converged irradiance";
   EXPECT_GT(truth[7], 1.0) << "premise: the observer is in the hazardous fan";
+}
+
+// A plane's map says, point by point, what its zone counts a point by: irradiance_upper_w_m2 is
+// the value where it converged and the value plus error where it was cut short, so that a map
+// whose hazard_ratio reads below 1 everywhere still shows where the hazard may be (issue 64).
+TEST_F(CliTest, APlanesUpperChannelHoldsWhatItsZoneCountsEachPointBy) {
+  nlohmann::json scene = nlohmann::json::parse(std::ifstream(example("cylinder.json")));
+  scene.erase("observers");
+  scene.erase("reach");
+  scene["far_field"] = {{"enabled", false}};
+  scene["accuracy"] = {{"max_evaluations", 16}};
+  scene["planes"] = {{{"name", "fan"},
+                      {"origin", {-4, -2, 0}},
+                      {"u_axis", {1, 0, 0}},
+                      {"v_axis", {0, 1, 0}},
+                      {"size_m", {3.2, 4}},
+                      {"pixel_m", 0.1}}};
+  const Outcome o = glint({"run", write("fan.json", scene.dump()), "-o", path("fan"), "--quiet"});
+  ASSERT_EQ(o.status, 0) << o.err;
+  const auto summary = nlohmann::json::parse(readFile(path("fan/summary.json")));
+  const double mpe = summary.at("hazard").at("mpe_w_m2").get<double>();
+  const std::string exr = path("fan/fan.exr");
+  int w = 0, h = 0;
+  const std::vector<float> e = glint::readExrChannel(exr, "irradiance_w_m2", w, h);
+  const std::vector<float> upper = glint::readExrChannel(exr, "irradiance_upper_w_m2", w, h);
+  const std::vector<float> status = glint::readExrChannel(exr, "status", w, h);
+  ASSERT_EQ(upper.size(), e.size());
+  std::size_t cut = 0, counted = 0, counted_by_error = 0;
+  for (std::size_t k = 0; k < e.size(); ++k) {
+    if (status[k] == 5.0f) {
+      ++cut;
+      EXPECT_GE(upper[k], e[k]) << "pixel " << k << ": value plus error";
+    } else if (status[k] != 6.0f) {
+      EXPECT_EQ(upper[k], e[k]) << "pixel " << k << " (status " << status[k] << ")";
+    }
+    if (static_cast<double>(upper[k]) >= mpe) {
+      ++counted;
+      counted_by_error += static_cast<double>(e[k]) >= mpe ? 0 : 1;
+    }
+  }
+  ASSERT_GT(cut, 0u) << "the premise: points cut short";
+  ASSERT_GT(counted_by_error, 0u) << "the premise: points whose value alone reads safe";
+  const auto& plane = summary.at("planes").at(0);
+  EXPECT_NEAR(plane.at("hazardous_area_m2").get<double>(), 0.01 * static_cast<double>(counted),
+              1e-9)
+      << "the zone is the pixels whose upper irradiance reaches the MPE";
 }
 
 // From a point on a disk, or a nanometre above it, a piece of the disk has no finite bound:

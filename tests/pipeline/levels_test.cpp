@@ -107,13 +107,63 @@ TEST(FlightZones, AreRefusedWhereTheStandardDoesNotApplyThemWithTheReason) {
   j["hazard"] = {{"flight_zones", true}, {"tissue", "skin"}};
   m = refusal(j);
   EXPECT_NE(m.find("pilot's eye"), std::string::npos) << m;
+}
 
-  j = greenScene();
-  j["hazard"] = {{"flight_zones", true}};
+// The most pulses of a train at f that any window of T_w (its ends included) holds, counted by
+// sliding the window over one period in fine steps: an independent count of ⌊f T_w⌋ + 1.
+double mostPulsesInAWindow(double f_hz, double window_s) {
+  const double period_s = 1.0 / f_hz;
+  double most = 0.0;
+  for (int s = 0; s <= 1000; ++s) {
+    const double start = -period_s * s / 1000.0;  // the window starts up to a period early
+    const double end = start + window_s;
+    // Pulses at k / f, k ≥ 0 (start ≤ 0): those with start ≤ k / f ≤ end.
+    double n = 0.0;
+    for (int k = 0; k / f_hz <= end + 1e-12; ++k) n += k / f_hz >= start - 1e-12 ? 1.0 : 0.0;
+    most = std::max(most, n);
+  }
+  return most;
+}
+
+TEST(FlightZones, APulsedLaserReachesEachLevelWhereItsBrightestQuarterSecondDoes) {
+  json j = greenScene();
+  j["hazard"] = {{"flight_zones", true},
+                 {"levels", {{{"name", "site_glare"}, {"irradiance_w_m2", 2.0}}}}};
   j["laser"].erase("power_w");
-  j["laser"]["pulse"] = {{"energy_j", 0.1}, {"duration_s", 1e-8}, {"repetition_rate_hz", 10.0}};
-  m = refusal(j);
-  EXPECT_NE(m.find("continuous laser only"), std::string::npos) << m;
+  j["laser"]["exposure_s"] = 10.0;  // long enough to hold a pulse of the slowest train
+  const double vcf = 0.91485;
+  for (const double f_hz : {0.5, 1.0, 3.0, 4.0, 10.0, 1000.0}) {
+    j["laser"]["pulse"] = {{"energy_j", 0.1}, {"duration_s", 1e-8}, {"repetition_rate_hz", f_hz}};
+    const Scene s = parseScene(j.dump(), "scene.json");
+    ASSERT_EQ(s.hazard.levels.size(), 4u);
+    const ExposureLevel& sensitive = s.hazard.levels[0];
+    // At the threshold, the brightest window's mean effective irradiance is the level itself:
+    // the most pulses it holds, each E / f, over T_w.
+    const double e = sensitive.thresholdW_m2();
+    const double brightest_w_m2 = mostPulsesInAWindow(f_hz, 0.25) * (e / f_hz) / 0.25;
+    EXPECT_NEAR(brightest_w_m2 * vcf, 1.0, 1e-9)
+        << f_hz << " Hz: the sensitive zone's 100 µW/cm² over its 0.25 s";
+    EXPECT_LE(sensitive.pulse_factor, 1.0)
+        << f_hz << " Hz: never above the mean-irradiance reading, which a fast train approaches";
+    if (f_hz <= 1.0) {
+      // One flash per window: the Z136.6 pulsed form, 25 µJ/cm² = 0.25 J/m² per pulse.
+      EXPECT_NEAR(s.hazard.pulseRadiantExposureJ_m2(e) * vcf, 0.25, 1e-12) << f_hz << " Hz";
+    }
+    EXPECT_DOUBLE_EQ(s.hazard.levels[3].thresholdW_m2(), 2.0)
+        << "a site's own level is judged on the mean irradiance over the exposure";
+  }
+  // A single pulse puts all its light in one window: 25 µJ/cm² effective per pulse, whatever
+  // its duration up to the window; a longer one is a steady light over every window it fills.
+  j["laser"].erase("exposure_s");  // a single pulse's exposure is its duration
+  j["laser"]["pulse"] = {{"energy_j", 0.1}, {"duration_s", 1e-8}};
+  Scene s = parseScene(j.dump(), "scene.json");
+  const double single_e = s.hazard.levels[0].thresholdW_m2();
+  EXPECT_NEAR(s.hazard.pulseRadiantExposureJ_m2(single_e) * vcf, 0.25, 1e-12);
+  EXPECT_DOUBLE_EQ(s.hazard.levels[0].pulse_factor, 0.25 / 1e-8);
+  j["laser"]["pulse"] = {{"energy_j", 0.1}, {"duration_s", 1.0}};
+  s = parseScene(j.dump(), "scene.json");
+  EXPECT_DOUBLE_EQ(s.hazard.levels[0].pulse_factor, 1.0);
+  EXPECT_DOUBLE_EQ(s.hazard.levels[0].thresholdW_m2(), 1.0 / vcf);
 }
 
 TEST(Levels, AnAnalystsOwnLevelIsPlainIrradianceUnlessCorrected) {
