@@ -3,6 +3,8 @@
 #include <charconv>
 #include <cmath>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "export/atomic_file.h"
 
@@ -36,15 +38,17 @@ void requireFiniteColumns(std::span<const CsvColumn> columns, std::size_t rows) 
   }
 }
 
-}  // namespace
-
-void writeColumnsCsv(std::ostream& out, std::span<const Vec3> points_m,
-                     std::span<const CsvColumn> columns) {
-  requireFiniteColumns(columns, points_m.size());
+// Writes the header x,y,z and @p names, then per row its point and what @p append_row(line, i)
+// appends (each value led by a comma). Rows go out a megabyte at a time, not as one text of the
+// whole table: a table of millions of rows would otherwise hold its size again in memory.
+template <class AppendRow>
+void writeRows(std::ostream& out, std::span<const Vec3> points_m,
+               const std::vector<std::string>& names, AppendRow append_row) {
+  constexpr std::size_t kChunkBytes = std::size_t{1} << 20;
   std::string text = "x,y,z";
-  for (const CsvColumn& c : columns) text += "," + c.name;
+  for (const std::string& name : names) text += "," + name;
   text += '\n';
-  text.reserve(text.size() + (72 + 24 * columns.size()) * points_m.size());
+  text.reserve(kChunkBytes + 4096);
   for (std::size_t i = 0; i < points_m.size(); ++i) {
     const Vec3& p = points_m[i];
     appendNumber(text, p.x);
@@ -52,30 +56,67 @@ void writeColumnsCsv(std::ostream& out, std::span<const Vec3> points_m,
       text += ',';
       appendNumber(text, v);
     }
-    for (const CsvColumn& c : columns) {
-      text += ',';
-      appendValue(text, c, i);
-    }
+    append_row(text, i);
     text += '\n';
+    if (text.size() >= kChunkBytes) {
+      out << text;
+      text.clear();
+    }
   }
   out << text;
+}
+
+std::vector<std::string> namesOf(std::span<const CsvColumn> columns) {
+  std::vector<std::string> names;
+  for (const CsvColumn& c : columns) names.push_back(c.name);
+  return names;
+}
+
+}  // namespace
+
+void writeColumnsCsv(std::ostream& out, std::span<const Vec3> points_m,
+                     std::span<const CsvColumn> columns) {
+  requireFiniteColumns(columns, points_m.size());
+  writeRows(out, points_m, namesOf(columns), [&](std::string& line, std::size_t i) {
+    for (const CsvColumn& c : columns) {
+      line += ',';
+      appendValue(line, c, i);
+    }
+  });
 }
 
 void writePointsCsv(std::ostream& out, std::span<const Vec3> points_m,
                     std::span<const ObserverResult> results, std::span<const CsvColumn> extra) {
   if (points_m.size() != results.size()) throw OutputError("points and results differ in count");
-  std::vector<CsvColumn> columns{{"irradiance_w_m2", {}},
-                                 {"error_estimate_w_m2", {}},
-                                 {"evaluations", {}, true},
-                                 {"converged", {}, true}};
-  for (const ObserverResult& r : results) {
-    columns[0].values.push_back(r.irradiance_w_m2);
-    columns[1].values.push_back(r.error_estimate_w_m2);
-    columns[2].values.push_back(static_cast<double>(r.evaluations));
-    columns[3].values.push_back(r.converged ? 1.0 : 0.0);
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const ObserverResult& r = results[i];
+    for (const auto& [name, value] : {std::pair{"irradiance_w_m2", r.irradiance_w_m2},
+                                      std::pair{"error_estimate_w_m2", r.error_estimate_w_m2}}) {
+      if (!std::isfinite(value)) {
+        throw OutputError("observer " + std::to_string(i + 1) + ": " + name +
+                          " is not finite; nothing was written");
+      }
+    }
   }
-  columns.insert(columns.end(), extra.begin(), extra.end());
-  writeColumnsCsv(out, points_m, columns);
+  requireFiniteColumns(extra, points_m.size());
+  std::vector<std::string> names = {"irradiance_w_m2", "error_estimate_w_m2", "evaluations",
+                                    "converged"};
+  for (const CsvColumn& c : extra) names.push_back(c.name);
+  // The results written as they are, not copied into columns first.
+  writeRows(out, points_m, names, [&](std::string& line, std::size_t i) {
+    const ObserverResult& r = results[i];
+    line += ',';
+    appendNumber(line, r.irradiance_w_m2);
+    line += ',';
+    appendNumber(line, r.error_estimate_w_m2);
+    line += ',';
+    line += std::to_string(static_cast<long long>(r.evaluations));
+    line += r.converged ? ",1" : ",0";
+    for (const CsvColumn& c : extra) {
+      line += ',';
+      appendValue(line, c, i);
+    }
+  });
 }
 
 }  // namespace glint

@@ -140,24 +140,6 @@ std::vector<float> ObserverField::irradianceLattice() const {
   std::size_t outside = 0;
   return activeOnLattice(*grids_->irradiance, spec_.nodes(), outside);
 }
-std::vector<float> ObserverField::unresolvedBoundLattice() const {
-  const field::Lattice lattice{spec_.nodes()};
-  const auto& n = lattice.n;
-  std::vector<float> out(static_cast<std::size_t>(lattice.count()), 0.0f);
-  for (const FieldBlock& b : blocks_) {
-    if (b.status != VoxelStatus::Unresolved) continue;
-    const float bound = field::boundAsFloat(b.bound_w_m2);
-    const openvdb::CoordBBox box = field::ownedBox(b.origin, b.size, lattice);
-    for (auto it = box.begin(); it; ++it) {
-      const openvdb::Coord& q = *it;
-      out[(static_cast<std::size_t>(q.z()) * static_cast<std::size_t>(n[1]) +
-           static_cast<std::size_t>(q.y())) *
-              static_cast<std::size_t>(n[0]) +
-          static_cast<std::size_t>(q.x())] = bound;
-    }
-  }
-  return out;
-}
 std::vector<float> ObserverField::upperLattice(int stride) const {
   const auto n = spec_.nodes();
   std::array<int, 3> m{};

@@ -277,11 +277,6 @@ class ObserverField {
   /// @brief The irradiance of every lattice point (W/m²), as stored (float), 0 where not
   /// computed; indexed [(k · nodes[1] + j) · nodes[0] + i].
   [[nodiscard]] std::vector<float> irradianceLattice() const;
-  /// @brief What each lattice point of an Unresolved block may receive at most
-  /// (FieldBlock::bound_w_m2, W/m²; +∞ where unbounded), 0 at the points of every other
-  /// block; indexed as irradianceLattice(). Only the points whose status() is Unresolved need
-  /// it: the others' values say it all.
-  [[nodiscard]] std::vector<float> unresolvedBoundLattice() const;
   /// @brief An Unconverged point's irradiance plus its error estimate (W/m², rounded up to a
   /// float); 0 at every other point.
   [[nodiscard]] double unconvergedUpper(int i, int j, int k) const;

@@ -26,6 +26,9 @@ struct WorkCounter {
   /// Raised by whoever watches the run (pipeline/base/memory_budget.h); the work then stops at its
   /// next item and throws WorkStopped from outside its parallel loops.
   const std::atomic<bool>* stop = nullptr;
+  /// Asked before a step allocates this many bytes at once (a face's lattice read into arrays):
+  /// false where the budget cannot hold them, and `stop` raised; none: every step admitted.
+  std::function<bool(std::uint64_t)> admit_bytes;
 
   /// Work done in steps whose items are known only as each begins (a field's levels, the far
   /// radius's spheres): the step under way (from 1; 0: none), at most how many there are (0:
@@ -69,6 +72,11 @@ struct WorkCounter {
     step_items.store(items);
     steps_at_most.store(at_most);
     step.store(k);
+  }
+
+  /// @brief Whether a step may allocate @p bytes at once (admit_bytes).
+  [[nodiscard]] bool admits(std::uint64_t bytes) const {
+    return !admit_bytes || admit_bytes(bytes);
   }
 
   [[nodiscard]] bool stopRequested() const {

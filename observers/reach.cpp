@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "observers/detail/cube_faces.h"
+#include "observers/detail/field_common.h"
 #include "observers/far_field.h"
 
 namespace glint {
@@ -345,6 +346,19 @@ std::int64_t NearReach::betweenPoints() const {
   return n;
 }
 
+std::uint64_t nearReachScratchBytes(const ReachSpec& spec) {
+  const FieldSpec face = reachFaceSpec(0, spec);
+  const double rays = std::pow(spec.face_cells + 1.0, 2.0);
+  const double points = rays * (face.radial->layers + 1.0);
+  const double thresholds = static_cast<double>(spec.thresholds_w_m2.size());
+  // One face at a time: each point's value (float) and hazard bits (a byte). Kept for all six:
+  // each threshold's reach per ray and between the rays per cell, and each ray's peak.
+  const double per_face = points * (sizeof(float) + sizeof(std::uint8_t));
+  const double kept = 6.0 * (rays * sizeof(float) * (thresholds + 1.0) +
+                             std::pow(spec.face_cells, 2.0) * sizeof(float) * thresholds);
+  return static_cast<std::uint64_t>(std::min(per_face + kept, 1.8e19));
+}
+
 NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& spec,
                            const ExcludedFn& excluded, WorkCounter* counter,
                            PointExchange* exchange) {
@@ -376,26 +390,19 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
     out.reach_m.assign(thresholds, std::vector<float>(rays, 0.0f));
     out.peak_w_m2.assign(rays, 0.0f);
     // Each lattice point read once: bit t says whether it counts as hazardous for threshold t.
-    // An Unresolved point may have a glint beside it that its lattice cannot see, up to its
-    // block's bound: it counts for each threshold that bound reaches (the lowest threshold's
-    // bound says nothing of the MPE's); an Unconverged one may be short of its value by its
-    // error (ObserverField::unconvergedUpper); the target's inside is no place.
-    const std::vector<float> unresolved_bound = field.unresolvedBoundLattice();
-    const auto boundAt = [&](int i, int j, int k) {
-      return static_cast<double>(
-          unresolved_bound[(static_cast<std::size_t>(k) * static_cast<std::size_t>(n + 1) +
-                            static_cast<std::size_t>(j)) *
-                               static_cast<std::size_t>(n + 1) +
-                           static_cast<std::size_t>(i)]);
-    };
+    // An Unconverged point may be short of its value by its error
+    // (ObserverField::unconvergedUpper); the target's inside is no place. (nearReachScratchBytes()
+    // counts these arrays.)
     const int layers = r.layers + 1;
     const auto at = [&](int i, int j, int k) {
       return (rayIndex(i, j, n) * static_cast<std::size_t>(layers)) + static_cast<std::size_t>(k);
     };
-    std::vector<std::uint8_t> hazard_bits(rays * static_cast<std::size_t>(layers), 0);
+    const std::size_t points = rays * static_cast<std::size_t>(layers);
+    if (counter != nullptr && !counter->admits(points * (sizeof(float) + sizeof(std::uint8_t))))
+      throw WorkStopped();
+    std::vector<std::uint8_t> hazard_bits(points, 0);
     // Each point's value as the squares between the rays read it: NaN inside the target.
-    std::vector<float> value(rays * static_cast<std::size_t>(layers),
-                             std::numeric_limits<float>::quiet_NaN());
+    std::vector<float> value(points, std::numeric_limits<float>::quiet_NaN());
     for (int j = 0; j <= n; ++j)
       for (int i = 0; i <= n; ++i) {
         double peak = 0.0;
@@ -405,19 +412,36 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
           const double e = field.irradiance(i, j, k);
           value[at(i, j, k)] = static_cast<float>(e);
           peak = std::max(peak, e);
-          const double bound = s == VoxelStatus::Unresolved ? boundAt(i, j, k) : 0.0;
           const double upper = field.unconvergedUpper(i, j, k);
           std::uint8_t bits = 0;
           for (std::size_t t = 0; t < thresholds; ++t) {
-            const bool hazardous = e >= hazardous_w_m2[t] ||
-                                   (s == VoxelStatus::Unresolved && !(bound < hazardous_w_m2[t])) ||
-                                   upper >= hazardous_w_m2[t];
+            const bool hazardous = e >= hazardous_w_m2[t] || upper >= hazardous_w_m2[t];
             bits = static_cast<std::uint8_t>(bits | (hazardous ? 1u << t : 0u));
           }
           hazard_bits[at(i, j, k)] = bits;
         }
         out.peak_w_m2[rayIndex(i, j, n)] = static_cast<float>(peak);
       }
+    // An Unresolved point may have a glint beside it that its lattice cannot see, up to its
+    // block's bound: it counts for each threshold that bound reaches (the lowest threshold's
+    // bound says nothing of the MPE's). Read from the few such blocks, not from a lattice of
+    // bounds as large as the face's.
+    const field::Lattice lattice{out.spec.nodes()};
+    for (const FieldBlock& b : field.blocks()) {
+      if (b.status != VoxelStatus::Unresolved) continue;
+      const double bound = static_cast<double>(field::boundAsFloat(b.bound_w_m2));
+      std::uint8_t bits = 0;
+      for (std::size_t t = 0; t < thresholds; ++t)
+        bits = static_cast<std::uint8_t>(bits | (!(bound < hazardous_w_m2[t]) ? 1u << t : 0u));
+      if (bits == 0) continue;
+      const openvdb::CoordBBox box = field::ownedBox(b.origin, b.size, lattice);
+      for (auto it = box.begin(); it; ++it) {
+        const openvdb::Coord& p = *it;
+        if (field.status(p.x(), p.y(), p.z()) != VoxelStatus::Unresolved) continue;
+        std::uint8_t& cell = hazard_bits[at(p.x(), p.y(), p.z())];
+        cell = static_cast<std::uint8_t>(cell | bits);
+      }
+    }
     const auto hazardous = [&](int i, int j, int k, std::size_t t) {
       return ((hazard_bits[at(i, j, k)] >> t) & 1u) != 0;
     };

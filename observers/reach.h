@@ -125,6 +125,11 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
                            const ExcludedFn& excluded, WorkCounter* counter = nullptr,
                            PointExchange* exchange = nullptr);
 
+/// @brief What computeNearReach() holds beside each face's field (bytes): a face's points read
+/// into a value and hazard bits, and what it keeps of all six (each threshold's reach per ray
+/// and between the rays). fieldMemoryFloorBytes() of reachFaceSpec() counts the field itself.
+std::uint64_t nearReachScratchBytes(const ReachSpec& spec);
+
 /// @brief The reach for one threshold, from the lattices and the far field.
 struct ReachSummary {
   double threshold_w_m2 = 0.0;

@@ -123,6 +123,14 @@ void MemoryWatch::sample() {
   samples_.fetch_add(1);
 }
 
+bool MemoryWatch::admit(std::uint64_t bytes) const {
+  const std::uint64_t would = residentBytes() + bytes;
+  if (would <= budget_bytes_) return true;
+  if (would > refused_at_bytes_.load()) refused_at_bytes_.store(would);
+  exceeded_.store(true);
+  return false;
+}
+
 MemoryWatch::~MemoryWatch() {
   stopping_.store(true);
   thread_.join();
@@ -140,8 +148,14 @@ void MemoryWatch::check(const std::string& what, std::string_view advice) const 
     held += " Of that, " + h.what + " holds about " + formatBytes(static_cast<double>(h.bytes)) +
             " from the start: " + h.advice + ".";
   }
-  throw InputError(what + ": stopped when the resident memory reached " +
-                   formatBytes(static_cast<double>(peakBytes())) + ", beyond the budget of " +
+  const std::uint64_t refused = refused_at_bytes_.load();
+  const std::string reached =
+      refused > peakBytes()
+          ? "stopped where its next step would have taken the resident memory to " +
+                formatBytes(static_cast<double>(refused))
+          : "stopped when the resident memory reached " +
+                formatBytes(static_cast<double>(peakBytes()));
+  throw InputError(what + ": " + reached + ", beyond the budget of " +
                    formatBytes(static_cast<double>(budget_bytes_)) +
                    " (--memory); nothing was written." + held + " " + std::string(advice));
 }

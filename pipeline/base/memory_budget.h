@@ -52,6 +52,10 @@ class MemoryWatch {
   [[nodiscard]] bool exceeded() const { return exceeded_.load(); }
   [[nodiscard]] std::uint64_t budgetBytes() const { return budget_bytes_; }
   [[nodiscard]] std::uint64_t peakBytes() const { return peak_bytes_.load(); }
+  /// @brief Asked before one step allocates @p bytes at once: false, and stopFlag() true, where
+  /// the resident memory now plus them passes the budget. An allocation filled faster than one
+  /// sample every 20 ms would pass the budget by its whole size before the watch could see it.
+  [[nodiscard]] bool admit(std::uint64_t bytes) const;
   /// @brief How many samples have been taken (the constructor's first among them).
   [[nodiscard]] std::uint64_t samples() const { return samples_.load(); }
   /// @brief Names something the command holds throughout (the terrain) and its estimate: a stop
@@ -68,7 +72,9 @@ class MemoryWatch {
   void sample();
 
   std::uint64_t budget_bytes_;
-  std::atomic<bool> exceeded_{false};
+  // Observations, raised by admit() as by the sampling thread.
+  mutable std::atomic<bool> exceeded_{false};
+  mutable std::atomic<std::uint64_t> refused_at_bytes_{0};  ///< resident + what admit() refused
   std::atomic<bool> stopping_{false};
   std::atomic<std::uint64_t> peak_bytes_{0};
   std::atomic<std::uint64_t> samples_{0};

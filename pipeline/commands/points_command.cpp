@@ -198,8 +198,15 @@ std::vector<Vec3> loadObserverPoints(const std::string& path, std::uint64_t budg
   // The text, its points (24 bytes each) and their results (about 40) take about three times
   // the file's size at ~30 bytes a row: a quarter of the budget for the file keeps them in it.
   std::vector<Vec3> points = loadPoints(path, budget_bytes / 4);
-  requireWithinBudget(std::to_string(points.size()) + " observer points", pointsBytes(points),
-                      budget_bytes, "split the points file or raise --memory");
+  // The points are resident now, beside the program itself (its libraries take over 100 MB);
+  // their results are yet to come.
+  const std::uint64_t resident = residentBytes();
+  requireWithinBudget(std::to_string(points.size()) +
+                          " observer points and their results, beside "
+                          "the " +
+                          formatBytes(static_cast<double>(resident)) + " the program holds,",
+                      resident + points.size() * sizeof(ObserverResult), budget_bytes,
+                      "split the points file or raise --memory");
   return points;
 }
 
@@ -380,6 +387,8 @@ void runPoints(const PointsArgs& requested, std::ostream& out, std::ostream& err
   // them (and whatever the estimate leaves out), stopping the points before their next one.
   MemoryWatch watch(budget);
   noteTerrain(watch, scene);
+  watch.noteHeld(std::to_string(points.size()) + " observer points and their results",
+                 pointsBytes(points), "split the points file");
   const FacetIntegrator integrator =
       buildIntegrator(scene, options,
                       {budget, held_bytes + terrainMemoryBytes(scene),
@@ -401,6 +410,9 @@ void runPoints(const PointsArgs& requested, std::ostream& out, std::ostream& err
   const Evaluated evaluated = evaluateObservers(integrator, points, args, watch, err, exchange);
   if (!writer) return;
   writeTable(file, out, points, evaluated.results, scene.hazard);
+  // The table's columns of ratios took memory too: a budget passed while writing leaves the
+  // folder as it was.
+  watch.check("writing the table", "Split the points file or raise --memory");
   commit();
   if (!args.quiet) report(err, args, scene, integrator, points, evaluated, threads);
   // Even when quiet: an empty result that is not a safe one must not pass unremarked.

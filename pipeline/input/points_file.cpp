@@ -1,5 +1,6 @@
 #include "pipeline/input/points_file.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -36,6 +37,8 @@ std::vector<std::string_view> splitFields(std::string_view line) {
 std::vector<Vec3> parsePoints(std::string_view text, const std::string& source) {
   if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
   std::vector<Vec3> points;
+  // One point per line at most: held once, not grown by doubling past what the budget counts.
+  points.reserve(static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')) + 1);
   std::size_t line_no = 0;
   bool header_seen = false;
   std::size_t pos = 0;

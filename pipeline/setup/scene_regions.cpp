@@ -108,7 +108,7 @@ SceneReach sceneReach(const SceneTarget& target, const Scene& scene, const FarFi
   const ReachSpec spec = reachSpec(scene, far);
   const FieldSpec face = reachFaceSpec(0, spec);
   const std::uint64_t far_bytes = farFieldMemoryFloorBytes(far.spec());
-  const std::uint64_t face_bytes = fieldMemoryFloorBytes(face, false);
+  const std::uint64_t face_bytes = fieldMemoryFloorBytes(face, false) + nearReachScratchBytes(spec);
   const std::string lattice = "6 × " + std::to_string(spec.face_cells + 1) + "² rays × " +
                               std::to_string(face.radial->layers + 1) + " layers from " +
                               formatNumber("%.3g", reachStartM(spec)) + " to " +
@@ -118,6 +118,7 @@ SceneReach sceneReach(const SceneTarget& target, const Scene& scene, const FarFi
                       "lower reach.face_cells, raise reach.layer_ratio, or raise --memory");
   WorkCounter counter;
   counter.stop = &w.watch.stopFlag();
+  counter.admit_bytes = [&watch = w.watch](std::uint64_t bytes) { return watch.admit(bytes); };
   std::unique_ptr<ProgressReporter> progress;
   if (w.progress_to != nullptr) {
     *w.progress_to << "glint run: " << w.what << ", " << lattice << "; memory: at least "

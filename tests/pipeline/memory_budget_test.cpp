@@ -111,6 +111,56 @@ TEST(MemoryBudget, TheWatchSeesMemoryTakenAfterItStarted) {
   EXPECT_EQ(taken[4096], 1) << "the pages stayed in use";
 }
 
+// Issue 64: memory taken faster than the watch samples it (a reach face's 72 M points read into
+// arrays: 630 MB reached under a 400 MB budget) passes the budget by its whole size. A step that
+// asks before it allocates is refused while the process is still within the budget, and the
+// stop says what the step would have taken.
+TEST(MemoryBudget, AStepAskingBeforeItAllocatesIsRefusedWithinTheBudget) {
+  constexpr std::uint64_t kMiB = std::uint64_t{1} << 20;
+  const MemoryWatch watch(residentBytes() + 64 * kMiB);
+  ASSERT_FALSE(watch.exceeded()) << "premise: within the budget at the start";
+  EXPECT_TRUE(watch.admit(kMiB)) << "a mebibyte fits in the 64 MiB to spare";
+  EXPECT_FALSE(watch.exceeded());
+  EXPECT_FALSE(watch.admit(256 * kMiB)) << "256 MiB do not";
+  EXPECT_TRUE(watch.exceeded()) << "the work stops as for a budget passed";
+  EXPECT_LT(watch.peakBytes(), watch.budgetBytes()) << "nothing was taken";
+  std::string message;
+  try {
+    watch.check("the hazard reach", "lower reach.face_cells");
+  } catch (const InputError& e) {
+    message = e.what();
+  }
+  EXPECT_NE(message.find("the hazard reach: stopped where its next step would have taken the "
+                         "resident memory to "),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("lower reach.face_cells"), std::string::npos) << message;
+}
+
+// Issue 64: a reach of 6 × 513² rays ran to 277 MB under a 200 MB budget before the watch
+// stopped it, blaming nothing it had counted: each face's points read into a value and hazard
+// bits (9 bytes each then, 5 now) were in no estimate. They are counted before the work.
+TEST(WriterMemory, AReachWhoseFacesWouldNotFitIsRefusedBeforeTheRun) {
+  const std::filesystem::path dir = test::freshTestFolder("glint_reach_memory_");
+  std::ofstream(dir / "scene.json") << R"({"laser": {"position": [-100, 0, 0],
+      "direction": [1, 0, 0], "power_w": 200.0, "wavelength_nm": 532,
+      "beam": {"profile": "flat_top", "radius_m": 0.2}},
+      "materials": {"m": {"specular_reflectance": 0.5, "sigma": 0.02}},
+      "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [-1, 0.6, 0.4], "radius": 0.1,
+                   "material": "m", "segments": 8}],
+      "reach": {"face_cells": 512}})";
+  const test::Outcome r = test::glint({"run", (dir / "scene.json").string(), "-o",
+                                       (dir / "out").string(), "--quiet", "--memory", "200M"});
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("glint: error: the hazard reach (6 × 513² rays × 273 layers"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("needs at least"), std::string::npos) << "refused before: " << r.err;
+  EXPECT_NE(r.err.find("lower reach.face_cells"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out")) << "nothing is written";
+  std::filesystem::remove_all(dir);
+}
+
 // issue 50 (6.1): a stop blamed what was being computed (the meshes) when the terrain, read
 // with the scene, held most of the memory. What the command holds throughout is named where it
 // is a quarter or more of the resident memory, and not where it is less.
