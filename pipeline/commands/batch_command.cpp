@@ -23,6 +23,7 @@
 #include "pipeline/base/memory_budget.h"
 #include "pipeline/base/number_format.h"
 #include "pipeline/base/output_names.h"
+#include "pipeline/base/phase_clock.h"
 #include "pipeline/base/test_pause.h"
 #include "pipeline/commands/cluster.h"
 #include "pipeline/input/input_files.h"
@@ -641,8 +642,8 @@ bool studyMayStop(const Study& study, const std::vector<StudyLattice>& lattices,
 // summary on the terminal unless quiet.
 void writeStudy(const BatchArgs& args, const Study& study,
                 const std::vector<StudyLattice>& lattices, const StudyResults& results,
-                const fs::path& out_dir, int ranks, Clock::time_point wall_start,
-                std::ostream& err) {
+                const fs::path& out_dir, int ranks, PhaseClock& clock, std::ostream& err) {
+  PhaseClock::Scope writing = clock.phase("writing the study's files");
   OutputSet outputs;
   outputs.open(out_dir / output_names::kScenariosCsv).write([&](std::ostream& out) {
     out << scenariosCsv(lattices, results.records, study.base.far_field.enabled,
@@ -650,9 +651,12 @@ void writeStudy(const BatchArgs& args, const Study& study,
   });
   for (const StudyLattice& r : lattices)
     writeStudyMap(outputs, out_dir / r.studyFile(), r, study, results.records.size());
-  const double wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
-  const nlohmann::json summary =
+  writing.stop();
+  const nlohmann::json timing = timingJson(clock);
+  const double wall_s = timing.at("wall_seconds").get<double>();
+  nlohmann::json summary =
       batchSummaryJson(study, lattices, results.records, results.resumed, ranks, wall_s);
+  summary["timing"] = timing;
   outputs.open(out_dir / output_names::kSummary, true).write([&](std::ostream& out) {
     out << summary.dump(2) << "\n";
   });
@@ -669,7 +673,8 @@ void writeStudy(const BatchArgs& args, const Study& study,
 }  // namespace
 
 void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
-  const auto wall_start = Clock::now();
+  PhaseClock clock;  // summary.json's `timing`
+  PhaseClock::Scope reading = clock.phase("reading the study and checking its memory");
   const bool root = cluster.rank() == 0;
   const bool talk = root && !args.quiet;
   const std::uint64_t budget =
@@ -688,6 +693,7 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   for (StudyLattice& r : lattices) r.combinations = jitterSharingCombinations(study);
   checkStudyMemory(study, lattices, budget);
   for (StudyLattice& r : lattices) r.allocate();
+  reading.stop();
   MemoryWatch watch(budget);
   noteTerrain(watch, study.base);
   // Rank 0 holds the folder for the whole run (the other ranks write only the scenarios it hands
@@ -709,16 +715,20 @@ void runBatch(const BatchArgs& args, Cluster& cluster, std::ostream& err) {
   std::size_t begin = 0;
   for (std::size_t round = 0; round < rounds.size(); ++round) {
     if (root) {
+      const PhaseClock::Scope resuming = clock.phase("reading the scenarios already done");
       resumeRound(args, study, lattices, out_dir, begin, rounds[round], results, err);
       if (talk && round == 0) printStart(err, study, results, out_dir, cluster.size());
     }
-    runScenarios(args, study, lattices, out_dir, watch, cluster, results, talk, err);
+    {
+      const PhaseClock::Scope scenarios = clock.phase("the scenarios");
+      runScenarios(args, study, lattices, out_dir, watch, cluster, results, talk, err);
+    }
     begin = rounds[round];
     if (round + 1 < rounds.size() && studyMayStop(study, lattices, begin, cluster, talk, err))
       break;
   }
   if (!root) return;
-  writeStudy(args, study, lattices, results, out_dir, cluster.size(), wall_start, err);
+  writeStudy(args, study, lattices, results, out_dir, cluster.size(), clock, err);
 }
 
 }  // namespace glint

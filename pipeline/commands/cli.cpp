@@ -3,14 +3,17 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "export/atomic_file.h"
 #include "facets/integrator.h"
 #include "glint/version.h"
+#include "pipeline/base/edit_distance.h"
 #include "pipeline/base/input_error.h"
 #include "pipeline/base/memory_budget.h"
 #include "pipeline/base/number_format.h"
@@ -168,9 +171,10 @@ struct RunOptions {
 
 void addRunCommand(CLI::App& app, RunOptions& o) {
   o.cmd = app.add_subcommand(
-      "run", "The hazard volume over the scene's observer box: VDB, VTK files and a summary");
-  o.cmd->add_option("scene", o.args.scene_path, "Scene file (JSON) with an `observers` section")
-      ->required();
+      "run",
+      "The scene's hazard: its reach in every direction, and its box and planes where it has "
+      "them (summary.json, maps, VDB and VTK files)");
+  o.cmd->add_option("scene", o.args.scene_path, "Scene file (JSON)")->required();
   o.cmd->add_option("-o,--out", o.args.out_dir,
                     "Output folder (default: out/<scene name>, out/<scene name>_uniform)");
   o.cmd->add_flag("--uniform", o.args.uniform,
@@ -280,6 +284,24 @@ void addFitCommand(CLI::App& app, CLI::App*& cmd, FitArgs& args, bool& no_abg, b
   cmd->add_flag("--no-diffuse", no_diffuse, "Fit no Lambertian part");
 }
 
+// A first word that is no command ("glint rn x.json"): CLI11 would read it as a stray argument
+// and say only that a subcommand is required. Empty where the word is an option or a command.
+std::string unknownCommand(const CLI::App& app, int argc, const char* const* argv) {
+  if (argc < 2 || argv[1][0] == '-') return {};
+  const std::string word = argv[1];
+  std::string names, nearest;
+  const std::vector<const CLI::App*> commands = app.get_subcommands({});
+  for (std::size_t k = 0; k < commands.size(); ++k) {
+    const std::string& name = commands[k]->get_name();
+    if (name == word) return {};
+    names += (k == 0 ? "" : k + 1 == commands.size() ? " or " : ", ") + name;
+    if (nearest.empty() && likelyMisspelling(word, name)) nearest = name;
+  }
+  return "unknown command \"" + word + "\"" +
+         (nearest.empty() ? std::string() : " (did you mean \"" + nearest + "\"?)") +
+         "; the commands are " + names + " (glint --help)";
+}
+
 }  // namespace
 
 int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
@@ -300,6 +322,10 @@ int runGlint(int argc, const char* const* argv, std::ostream& out, std::ostream&
   bool no_abg = false, no_diffuse = false;
   addFitCommand(app, fit_cmd, fit, no_abg, no_diffuse);
 
+  if (const std::string unknown = unknownCommand(app, argc, argv); !unknown.empty()) {
+    err << "glint: error: " << unknown << "\n";
+    return kExitBadInput;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -18,6 +18,7 @@
 
 #include "facets/vec3.h"
 #include "observers/motion.h"
+#include "pipeline/base/edit_distance.h"
 #include "pipeline/base/input_error.h"
 #include "pipeline/base/limits.h"
 
@@ -73,7 +74,16 @@ class ObjectReader {
   }
 
   const json& require(const std::string& key) {
-    if (!has(key)) fail(key, "missing (required)");
+    if (!has(key)) {
+      // A key given but misspelt is what is missing most often: name it.
+      for (const auto& item : j_.items()) {
+        if (likelyMisspelling(item.key(), key)) {
+          fail(key, "missing (required); \"" + item.key() + "\" is given: a misspelling of \"" +
+                        key + "\"?");
+        }
+      }
+      fail(key, "missing (required)");
+    }
     return j_.at(key);
   }
 

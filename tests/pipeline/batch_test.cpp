@@ -165,6 +165,24 @@ TEST_F(Batch, TableHasOneRowPerScenarioAndTheSummaryItsQuantiles) {
   EXPECT_DOUBLE_EQ(ground.at("peak_hazard_ratio").at("max").get<double>(), peaks[3]);
   EXPECT_DOUBLE_EQ(ground.at("peak_hazard_ratio").at("p25").get<double>(),
                    peaks[0] + 0.75 * (peaks[1] - peaks[0]));
+
+  // Issue 65: the study's time accounted for by phase, as a run's is.
+  const nlohmann::json& timing = summary.at("timing");
+  std::vector<std::string> phases;
+  double within_s = 0.0;
+  for (const nlohmann::json& p : timing.at("phases")) {
+    phases.push_back(p.at("phase").get<std::string>());
+    within_s += p.at("seconds").get<double>();
+  }
+  EXPECT_EQ(phases, (std::vector<std::string>{"reading the study and checking its memory",
+                                              "reading the scenarios already done", "the scenarios",
+                                              "writing the study's files"}))
+      << timing.dump();
+  const double wall_s = timing.at("wall_seconds").get<double>();
+  EXPECT_GE(within_s, 0.95 * wall_s)
+      << "the phases account for the study's time: " << timing.dump();
+  EXPECT_LE(within_s, wall_s * (1.0 + 1e-9)) << timing.dump();
+  EXPECT_NEAR(summary.at("wall_seconds").get<double>(), wall_s, 1e-6) << timing.dump();
 }
 
 // The test study sweeps two pitches beside its jitter: the summary says its intervals keep the

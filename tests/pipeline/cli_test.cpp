@@ -257,6 +257,15 @@ TEST_F(CliTest, PointsOnTheTargetsSurfaceAreRefusedWithTheirPosition) {
 TEST_F(CliTest, UsageErrorsExitWithStatusTwo) {
   EXPECT_EQ(glint({}).status, 2) << "no command";
   EXPECT_EQ(glint({"paint"}).status, 2) << "unknown command";
+  // A misspelt command is named, with the command it is nearest (issue 67: "glint rn x.json"
+  // said only that a subcommand is required).
+  const Outcome misspelt = glint({"rn", "x.json"});
+  EXPECT_EQ(misspelt.status, 2) << misspelt.err;
+  EXPECT_NE(misspelt.err.find("glint: error: unknown command \"rn\" (did you mean \"run\"?); the "
+                              "commands are points, run, batch or fit"),
+            std::string::npos)
+      << misspelt.err;
+  EXPECT_EQ(glint({"--version"}).status, 0) << "an option is no command";
   EXPECT_EQ(glint({"points", example("cylinder.json")}).status, 2) << "--points missing";
   EXPECT_EQ(glint({"points", example("cylinder.json"), "--points", example("cylinder_186.csv"),
                    "--tolerance", "5"})

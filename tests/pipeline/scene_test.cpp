@@ -337,6 +337,13 @@ TEST(Scene, RefusesEachInvalidInputNamingFileAndPath) {
        "scene.json: /engagement/time/initial_intervals: must be from 1 to 4096"},
       {[](json& j) { j["laser"].erase("power_w"); },
        "scene.json: /laser/power_w: missing (required)"},
+      // Issue 67: a required key misspelt was reported as missing, the misspelling unnamed.
+      {[](json& j) {
+         j["laser"]["wavelenght_nm"] = j["laser"]["wavelength_nm"];
+         j["laser"].erase("wavelength_nm");
+       },
+       "scene.json: /laser/wavelength_nm: missing (required); \"wavelenght_nm\" is given: a "
+       "misspelling of \"wavelength_nm\"?"},
       {[](json& j) {
          j["far_field"] = {{"face_pixels", 1000}};
        },
