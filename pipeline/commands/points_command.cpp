@@ -132,6 +132,7 @@ void printSummary(std::ostream& err, const PointsArgs& args, const Scene& scene,
                                        ", floor " + formatNumber("%.3g", opt.floor_w_m2) + " W/m²";
   err << "glint points: " << points.size() << " observers, " << scheme << ", " << threads
       << (threads == 1 ? " thread\n" : " threads\n");
+  err << "  laser: " << laserLine(scene.laser, scene.hazard) << "\n";
   printTarget(err, integrator.cullStats());
   err << "  evaluations: " << formatNumber("%.4g", static_cast<double>(t.total))
       << " in all; per observer "

@@ -442,6 +442,7 @@ std::string writingAdvice(const Scene& scene) {
 void finishRun(const RunContext& c, const std::filesystem::path& dir,
                const std::vector<std::string>& stale, RunSummary& s) {
   s.j["scene_path"] = sceneIdentity(c.args.scene_path);
+  s.j["laser"] = laserJson(c.scene.laser, c.scene.hazard);
   s.j["materials"] = materialsJson(c.scene);
   if (c.scene.site) s.j["site"] = siteJson(SiteFrame(*c.scene.site));
   s.j["files"] = c.outputs.names();
@@ -523,6 +524,11 @@ void runScene(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   }
   const RunInfo info = runInfo(scene, args.scene_path, readUserFile(args.scene_path, "scene file"),
                                args.uniform ? "uniform" : "adaptive");
+  // The laser and its limits as read, before the work: a slip of units shows at once.
+  if (!args.quiet) {
+    err << "glint run: laser " << laserLine(scene.laser, scene.hazard) << "\n"
+        << "glint run: limits " << hazardLine(scene.hazard) << "\n";
+  }
   const TargetBudget target_budget = checkRunMemory(scene, args, budget, writer, err);
   MemoryWatch watch(budget);
   noteTerrain(watch, scene);

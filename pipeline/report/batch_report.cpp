@@ -586,6 +586,8 @@ nlohmann::json batchSummaryJson(const Study& study, const std::vector<StudyLatti
       {"scenarios", {{"count", n}, {"computed", n - resumed}, {"resumed", resumed}}},
       {"ranks", ranks},
       {"wall_seconds", wall_s},
+      // The base scene's laser: a scenario may turn or move it (its result.json says where).
+      {"laser", laserJson(study.base.laser, h)},
       {"hazard", hazardLimitsJson(h)},
       // As the scene gives them; a sweep of sigma or specular_reflectance changes the first lobe,
       // and a surface_state sweep puts one of them in the swept material's place.

@@ -9,6 +9,80 @@
 
 namespace glint {
 
+namespace {
+// Appended piece by piece: GCC 12 warns (-Wrestrict, falsely) on a literal + string chain here.
+std::string pointLine(const Vec3& p) {
+  std::string s = "(";
+  s += formatNumber("%.6g", p.x);
+  s += ", ";
+  s += formatNumber("%.6g", p.y);
+  s += ", ";
+  s += formatNumber("%.6g", p.z);
+  s += ")";
+  return s;
+}
+}  // namespace
+
+std::string laserLine(const Beam& laser, const HazardSpec& h) {
+  std::string s;
+  if (h.pulse) {
+    const PulseSpec& p = *h.pulse;
+    s += formatNumber("%.4g", p.energy_j);
+    s += " J pulses of ";
+    s += formatNumber("%.3g", p.duration_s);
+    s += " s";
+    if (p.repetition_rate_hz) {
+      s += " at ";
+      s += formatNumber("%.4g", *p.repetition_rate_hz);
+      s += " Hz (";
+      s += formatNumber("%.4g", laser.power_w);
+      s += " W mean)";
+    } else {
+      s += " (a single pulse)";
+    }
+  } else {
+    s += formatNumber("%.4g", laser.power_w);
+    s += " W";
+  }
+  s += " at ";
+  s += formatNumber("%.10g", h.wavelength_nm);
+  s += " nm; ";
+  s += laser.profile == BeamProfile::Gaussian ? "Gaussian beam, w " : "flat-top beam, radius ";
+  s += formatNumber("%.4g", laser.radius_m);
+  s += " m, ";
+  if (laser.divergence_rad > 0.0) {
+    s += "divergence ";
+    s += formatNumber("%.4g", 1e3 * laser.divergence_rad);
+    s += " mrad";
+  } else {
+    s += "collimated";
+  }
+  s += "; from ";
+  s += pointLine(laser.origin_m);
+  s += " m toward ";
+  s += pointLine(laser.direction);
+  return s;
+}
+
+nlohmann::json laserJson(const Beam& laser, const HazardSpec& h) {
+  nlohmann::json beam = {
+      {"profile", laser.profile == BeamProfile::Gaussian ? "gaussian" : "flat_top"},
+      {laser.profile == BeamProfile::Gaussian ? "w_m" : "radius_m", laser.radius_m},
+      {"divergence_rad", laser.divergence_rad}};
+  nlohmann::json j = {{"position_m", {laser.origin_m.x, laser.origin_m.y, laser.origin_m.z}},
+                      {"direction", {laser.direction.x, laser.direction.y, laser.direction.z}},
+                      {"power_w", laser.power_w},
+                      {"wavelength_nm", h.wavelength_nm},
+                      {"exposure_s", h.exposure_s},
+                      {"beam", beam}};
+  if (h.pulse) {
+    nlohmann::json pulse = {{"energy_j", h.pulse->energy_j}, {"duration_s", h.pulse->duration_s}};
+    if (h.pulse->repetition_rate_hz) pulse["repetition_rate_hz"] = *h.pulse->repetition_rate_hz;
+    j["pulse"] = pulse;
+  }
+  return j;
+}
+
 std::string hazardLine(const HazardSpec& h) {
   std::string s = std::string(clauses(h.standard).name) + ", " + toString(h.tissue) + ": MPE " +
                   formatNumber("%.4g", h.mpe_w_m2) + " W/m² for " +

@@ -10,9 +10,19 @@
 
 #include "export/exr_map.h"      // PlaneMap
 #include "export/field_files.h"  // ScaledArray
+#include "facets/beam.h"
 #include "hazard/hazard.h"
 
 namespace glint {
+
+/// @brief The laser as read, in one line for the terminal, so that a slip of units shows: its
+/// mean power (a pulse's energy, duration and rate), wavelength, beam, position and direction,
+/// e.g. "5 W at 532 nm; Gaussian beam, w 0.001 m, divergence 1 mrad; from (-300, 0, 0) m
+/// toward (1, 0, 0)".
+std::string laserLine(const Beam& laser, const HazardSpec& h);
+
+/// @brief The laser as `summary.json` records it (`laser`): the same quantities, in SI units.
+nlohmann::json laserJson(const Beam& laser, const HazardSpec& h);
 
 /// @brief The limits in one line for the terminal, e.g. "MPE 50 W/m² for 10 s (default,
 /// thermal)", with the pulse's MPE, the air and the aid where the scene has them.

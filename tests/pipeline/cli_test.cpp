@@ -184,6 +184,42 @@ TEST_F(CliTest, PointsCutShortSayWhatTheirBoundReaches) {
   EXPECT_GT(truth[7], 1.0) << "premise: the observer is in the hazardous fan";
 }
 
+// Issue 67: nothing echoed the laser, so a 5 mW laser written as "power_w": 5 ran without a
+// word. The terminal states the laser and its limits before the work, summary.json the laser as
+// read, glint points the same line in its summary.
+TEST_F(CliTest, TheLaserAsReadIsEchoedBeforeTheWorkAndRecorded) {
+  const std::string scene = write("echo.json", R"({
+    "laser": {"position": [-100, 0, 0], "direction": [2, 0, 0], "power_w": 5,
+              "wavelength_nm": 532, "beam": {"profile": "gaussian", "w_m": 0.001,
+                                              "divergence_rad": 0.001}},
+    "materials": {"mirror": {"specular_reflectance": 0.9, "sigma": 0.01}},
+    "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [-1, 1, 0], "radius": 0.1,
+                 "material": "mirror", "segments": 8}],
+    "far_field": {"enabled": false},
+    "planes": [{"name": "floor", "origin": [-2, -2, -1], "u_axis": [1, 0, 0],
+                "v_axis": [0, 1, 0], "size_m": [4, 4], "pixel_m": 0.5}]})");
+  const std::string line =
+      "5 W at 532 nm; Gaussian beam, w 0.001 m, divergence 1 mrad; from (-100, 0, 0) m toward "
+      "(1, 0, 0)";
+  const Outcome r = glint({"run", scene, "-o", path("echo")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::size_t laser_at = r.err.find("glint run: laser " + line + "\n");
+  EXPECT_NE(laser_at, std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("glint run: limits ANSI Z136.1-2014, eye: MPE "), std::string::npos)
+      << r.err;
+  EXPECT_LT(laser_at, r.err.find("plane floor")) << "before the work: " << r.err;
+  const auto laser = nlohmann::json::parse(readFile(path("echo/summary.json"))).at("laser");
+  EXPECT_EQ(laser.at("power_w").get<double>(), 5.0);
+  EXPECT_EQ(laser.at("wavelength_nm").get<double>(), 532.0);
+  EXPECT_EQ(laser.at("beam").at("profile"), "gaussian");
+  EXPECT_EQ(laser.at("beam").at("w_m").get<double>(), 0.001);
+  EXPECT_EQ(laser.at("direction"), nlohmann::json::parse("[1.0, 0.0, 0.0]"));
+  const Outcome p = glint({"points", scene, "--points", write("one.csv", "x,y,z\n-1,1,0\n"),
+                           "--out", path("one_out.csv")});
+  ASSERT_EQ(p.status, 0) << p.err;
+  EXPECT_NE(p.err.find("  laser: " + line + "\n"), std::string::npos) << p.err;
+}
+
 // A plane's map says, point by point, what its zone counts a point by: irradiance_upper_w_m2 is
 // the value where it converged and the value plus error where it was cut short, so that a map
 // whose hazard_ratio reads below 1 everywhere still shows where the hazard may be (issue 64).
