@@ -35,13 +35,13 @@ std::string laserLine(const Beam& laser, const HazardSpec& h) {
       s += " at ";
       s += formatNumber("%.4g", *p.repetition_rate_hz);
       s += " Hz (";
-      s += formatNumber("%.4g", laser.power_w);
+      s += formatNumber("%.6g", laser.power_w);
       s += " W mean)";
     } else {
       s += " (a single pulse)";
     }
   } else {
-    s += formatNumber("%.4g", laser.power_w);
+    s += formatNumber("%.6g", laser.power_w);
     s += " W";
   }
   s += " at ";

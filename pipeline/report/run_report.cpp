@@ -403,6 +403,13 @@ void printPlane(std::ostream& err, const PlaneSpec& plane, const ObserverField& 
       << formatDuration(s.seconds) << "; peak hazard ratio "
       << formatNumber("%.3g", zone.peak_ratio) << ", hazardous area "
       << formatNumber("%.4g", hazardousArea(field, zone.above_mpe)) << " m²\n";
+  // The aided verdict beside the naked eye's: through binoculars it may be the only hazard.
+  if (zone.aided_above_mpe) {
+    err << "  through the optical aid (gain " << formatNumber("%.3g", h.aidGain())
+        << "): peak hazard ratio " << formatNumber("%.3g", zone.aided_peak_ratio)
+        << ", hazardous area " << formatNumber("%.4g", hazardousArea(field, *zone.aided_above_mpe))
+        << " m²\n";
+  }
   printLevelZones(err, h, zone, "m²", field.spec().voxel_m * field.spec().voxel_m);
   printUnconverged(err, s, zone, "  ");
   printNarrowGlints(err, s, zone, "pixel_m");

@@ -19,6 +19,7 @@
 
 #include "export/exr_map.h"
 #include "facets/vec3.h"
+#include "pipeline/base/number_format.h"
 #include "pipeline/input/scene.h"
 #include "support/cli.h"
 #include "support/files.h"
@@ -196,6 +197,7 @@ TEST_F(CliTest, TheLaserAsReadIsEchoedBeforeTheWorkAndRecorded) {
     "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [-1, 1, 0], "radius": 0.1,
                  "material": "mirror", "segments": 8}],
     "far_field": {"enabled": false},
+    "optical_aid": {"aperture_m": 0.05, "magnification": 7, "transmission": 0.7},
     "planes": [{"name": "floor", "origin": [-2, -2, -1], "u_axis": [1, 0, 0],
                 "v_axis": [0, 1, 0], "size_m": [4, 4], "pixel_m": 0.5}]})");
   const std::string line =
@@ -208,7 +210,18 @@ TEST_F(CliTest, TheLaserAsReadIsEchoedBeforeTheWorkAndRecorded) {
   EXPECT_NE(r.err.find("glint run: limits ANSI Z136.1-2014, eye: MPE "), std::string::npos)
       << r.err;
   EXPECT_LT(laser_at, r.err.find("plane floor")) << "before the work: " << r.err;
-  const auto laser = nlohmann::json::parse(readFile(path("echo/summary.json"))).at("laser");
+  const auto summary = nlohmann::json::parse(readFile(path("echo/summary.json")));
+  // The aided verdict beside the naked eye's on the terminal (issue 67: only summary.json had
+  // it): 0.7 × 7² = 34.3.
+  const auto& floor = summary.at("planes").at(0);
+  EXPECT_NE(
+      r.err.find("  through the optical aid (gain 34.3): peak hazard ratio " +
+                 formatNumber("%.3g", floor.at("aided_peak_hazard_ratio").get<double>()) +
+                 ", hazardous area " +
+                 formatNumber("%.4g", floor.at("aided_hazardous_area_m2").get<double>()) + " m²\n"),
+      std::string::npos)
+      << r.err;
+  const auto& laser = summary.at("laser");
   EXPECT_EQ(laser.at("power_w").get<double>(), 5.0);
   EXPECT_EQ(laser.at("wavelength_nm").get<double>(), 532.0);
   EXPECT_EQ(laser.at("beam").at("profile"), "gaussian");
