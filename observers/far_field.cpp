@@ -201,32 +201,11 @@ FarField::FarField(LitBall ball, FarFieldSpec spec, double map_distance_m, std::
       faces_(std::move(faces)),
       located_(std::move(located)) {
   for (const Face& face : faces_) {
-    const FieldStats& s = face.stats;
-    stats_.lattice_points += s.lattice_points;
-    stats_.evaluated_points += s.evaluated_points;
-    stats_.interpolated_points += s.interpolated_points;
-    stats_.below_floor_points += s.below_floor_points;
-    stats_.excluded_points += s.excluded_points;
-    stats_.unconverged_points += s.unconverged_points;
-    stats_.non_finite_points += s.non_finite_points;
-    if (s.non_finite_points > 0) stats_.non_finite_at_m = s.non_finite_at_m;
+    FieldStats counts = face.stats.countsOnly();
     // In intensity: no point of a face is farther than √3 × the distance.
-    stats_.unconverged_max_upper_w_m2 =
-        std::max(stats_.unconverged_max_upper_w_m2,
-                 hazardSafe(s.unconverged_max_upper_w_m2) * 3.0 * map_distance_m * map_distance_m);
-    stats_.blocks_skipped += s.blocks_skipped;
-    stats_.blocks_accepted += s.blocks_accepted;
-    stats_.blocks_accepted_spread += s.blocks_accepted_spread;
-    stats_.blocks_refined += s.blocks_refined;
-    stats_.blocks_finest += s.blocks_finest;
-    stats_.unresolved_blocks += s.unresolved_blocks;
-    stats_.unresolved_points += s.unresolved_points;
-    stats_.evaluations += s.evaluations;
-    stats_.bound_evaluations += s.bound_evaluations;
-    stats_.levels = std::max(stats_.levels, s.levels);
-    stats_.seconds += s.seconds;
-    stats_.active_voxels += s.active_voxels;
-    stats_.grid_bytes += s.grid_bytes;
+    counts.unconverged_max_upper_w_m2 =
+        hazardSafe(counts.unconverged_max_upper_w_m2) * 3.0 * map_distance_m * map_distance_m;
+    stats_ += counts;
   }
   lattice_peak_.intensity_w_sr = 0.0;
   forEachDirection([&](const Vec3& d, double intensity_w_sr) {

@@ -81,6 +81,22 @@ std::array<int, 3> FieldSpec::nodes() const {
   return n;
 }
 
+FieldStats FieldStats::countsOnly() const {
+  FieldStats c = *this;
+  const FieldStats none;
+  c.unconverged_min_m = none.unconverged_min_m;
+  c.unconverged_max_m = none.unconverged_max_m;
+  c.unresolved_max_bound_w_m2 = none.unresolved_max_bound_w_m2;
+  c.unresolved_bound_at_m = none.unresolved_bound_at_m;
+  c.unresolved_unbounded_blocks = none.unresolved_unbounded_blocks;
+  c.unresolved_min_m = none.unresolved_min_m;
+  c.unresolved_max_m = none.unresolved_max_m;
+  c.unresolved_resolving_voxel_m = none.unresolved_resolving_voxel_m;
+  c.peak_w_m2 = none.peak_w_m2;
+  c.peak_at_m = none.peak_at_m;
+  return c;
+}
+
 FieldStats& FieldStats::operator+=(const FieldStats& o) {
   lattice_points += o.lattice_points;
   evaluated_points += o.evaluated_points;

@@ -235,6 +235,13 @@ struct FieldStats {
   /// its place. On a tie the first kept wins, and the first non-finite point stays the one
   /// named, so a merge in a fixed order gives the same statistics every run. `nodes` stays.
   FieldStats& operator+=(const FieldStats& other);
+
+  /// @brief These statistics without what belongs to the field's own positions and units (the
+  /// boxes, the peak, the unresolved blocks' bounds and their resolving voxel): the counts, the
+  /// work, the time, the memory, the unconverged points' largest value plus error and where the
+  /// first non-finite point lies. What adds up across fields of another kind (a far field's
+  /// faces, whose values become intensities).
+  [[nodiscard]] FieldStats countsOnly() const;
 };
 
 /// @brief A block of the tree as it ended: lattice points origin .. origin + size[a] along

@@ -386,6 +386,38 @@ TEST(ObserverField, AnUnconvergedPointCountsInTheZoneByItsValuePlusError) {
       }
 }
 
+// A far field sums its faces' work as any fields' (operator+=), but not what belongs to a face's
+// own positions and units: countsOnly() keeps the counts and drops the boxes, peak and bounds.
+TEST(FieldStats, CountsOnlyKeepTheWorkAndDropWhatBelongsToTheFieldsPositions) {
+  FieldStats s;
+  s.evaluated_points = 7;
+  s.unconverged_points = 2;
+  s.unconverged_max_upper_w_m2 = 3.0;
+  s.unconverged_min_m = Vec3(-1.0);
+  s.unconverged_max_m = Vec3(1.0);
+  s.unresolved_blocks = 4;
+  s.unresolved_max_bound_w_m2 = 9.0;
+  s.unresolved_min_m = Vec3(-2.0);
+  s.peak_w_m2 = 5.0;
+  s.peak_at_m = Vec3(0.5);
+  s.evaluations = 100;
+  s.seconds = 0.25;
+  FieldStats sum;
+  sum += s.countsOnly();
+  sum += s.countsOnly();
+  EXPECT_EQ(sum.evaluated_points, 14);
+  EXPECT_EQ(sum.unconverged_points, 4);
+  EXPECT_EQ(sum.unresolved_blocks, 8);
+  EXPECT_EQ(sum.evaluations, 200);
+  EXPECT_DOUBLE_EQ(sum.seconds, 0.5);
+  EXPECT_DOUBLE_EQ(sum.unconverged_max_upper_w_m2, 3.0) << "a maximum, kept";
+  const FieldStats none;
+  EXPECT_EQ(sum.peak_w_m2, none.peak_w_m2) << "a face's irradiance is not an intensity";
+  EXPECT_EQ(sum.unresolved_max_bound_w_m2, none.unresolved_max_bound_w_m2);
+  EXPECT_TRUE(std::isinf(sum.unconverged_min_m.x) && std::isinf(sum.unresolved_min_m.x))
+      << "no box of positions on a face";
+}
+
 // A bound kept in a float grid (the unresolved blocks', the unconverged points') must stay a
 // bound and must be finite: it is written into the outputs.
 TEST(BoundAsFloat, IsTheLeastFloatNotBelowAndNeverInfinite) {
