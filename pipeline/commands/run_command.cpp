@@ -370,7 +370,10 @@ void runReach(const RunContext& c, const FarResult& far, RunSummary& s) {
   c.clock.add("the hazard reach: its lattice", reach.seconds);
   c.clock.add("the hazard reach: each threshold's distance and volume", reach.summary_seconds);
   s.j["hazard_reach"] = reachJson(reach.near, reach.summaries, reach.seconds, c.scene.hazard);
-  if (!c.args.quiet) printReach(c.err, reach.near, reach.summaries, reach.seconds, c.scene.hazard);
+  if (!c.args.quiet) {
+    const bool lit = unlitTargetWarnings(c.scene, c.target.integrator.cullStats()).empty();
+    printReach(c.err, reach.near, reach.summaries, reach.seconds, c.scene.hazard, lit);
+  }
   std::optional<ReachFootprint> footprint;
   if (const std::optional<FootprintSpec>& spec = c.scene.reach.footprint) {
     const PhaseClock::Scope phase = c.clock.phase("the hazard reach: its footprint on the ground");

@@ -695,7 +695,7 @@ nlohmann::json reachJson(const NearReach& near, const std::vector<ReachSummary>&
 }
 
 void printReach(std::ostream& err, const NearReach& near, const std::vector<ReachSummary>& reach,
-                double seconds, const HazardSpec& h) {
+                double seconds, const HazardSpec& h, bool lit) {
   const auto line = [&](const ReachSummary& r, const char* who) {
     err << who;
     if (!std::isfinite(r.distance_m)) {
@@ -706,6 +706,11 @@ void printReach(std::ostream& err, const NearReach& near, const std::vector<Reac
                                      " m³ cube within " +
                                      formatNumber("%.3g", r.unclassified_half_edge_m) +
                                      " m of the lit centre not classified, counted hazardous";
+    if (!(r.distance_m > 0.0) && !lit) {
+      err << "no verdict: the beam lights no facet of the target, so this empty reach is not a "
+             "safe one (see the warning)\n";
+      return;
+    }
     if (!(r.distance_m > 0.0)) {
       err << "nothing is hazardous outside the target (" << unclassified << ")"
           << (r.closed ? ", closed" : ", NOT closed") << "\n";

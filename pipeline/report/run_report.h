@@ -83,9 +83,11 @@ nlohmann::json reachSummaryJson(const std::vector<ReachSummary>& reach, const Ha
 nlohmann::json reachJson(const NearReach& near, const std::vector<ReachSummary>& reach,
                          double seconds, const HazardSpec& h);
 
-/// @brief The reach's line on the terminal (and the aided reach's and each level's).
+/// @brief The reach's line on the terminal (and the aided reach's and each level's). Where the
+/// beam lights no facet (@p lit false) an empty reach is no verdict, and says so instead of
+/// "nothing is hazardous".
 void printReach(std::ostream& err, const NearReach& near, const std::vector<ReachSummary>& reach,
-                double seconds, const HazardSpec& h);
+                double seconds, const HazardSpec& h, bool lit = true);
 
 /// @brief summary.json's `timing`: the run's wall time until summary.json is written, each
 /// phase's seconds in order, and what no phase holds.

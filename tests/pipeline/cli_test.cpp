@@ -720,6 +720,27 @@ TEST_F(CliTest, PointsThatOutgrowTheBudgetStopAndWriteNothing) {
   EXPECT_EQ(filesInDir(), 2u) << "the scene and err.txt; no output, no temporary";
 }
 
+// Issue 67: with a laser that lights nothing, the reach's line read "nothing is hazardous outside
+// the target … closed", a verdict of safety where there is none. The warning comes before any
+// verdict, and the reach says it has none.
+TEST_F(CliTest, AReachOfATargetTheBeamDoesNotLightGivesNoVerdict) {
+  const std::string scene = write("miss.json", R"({
+    "laser": {"position": [-100, 5, 0], "direction": [1, 0, 0], "power_w": 200.0,
+              "wavelength_nm": 532, "beam": {"profile": "flat_top", "radius_m": 0.2}},
+    "materials": {"m": {"specular_reflectance": 0.5, "sigma": 0.02}},
+    "objects": [{"shape": "disk", "center": [0, 0, 0], "normal": [-1, 0.6, 0.4], "radius": 0.1,
+                 "material": "m", "segments": 8}]})");
+  const Outcome r = glint({"run", scene, "-o", path("miss")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::size_t warning = r.err.find("glint run: warning: no facet of the target is lit");
+  const std::size_t verdict = r.err.find(
+      "hazard reach: no verdict: the beam lights no facet of the target, so this empty reach is "
+      "not a safe one (see the warning)\n");
+  EXPECT_NE(verdict, std::string::npos) << r.err;
+  EXPECT_LT(warning, verdict) << "the warning first: " << r.err;
+  EXPECT_EQ(r.err.find("nothing is hazardous"), std::string::npos) << r.err;
+}
+
 // issue 50 (6.4): a target the beam does not light reflects nothing, and its empty result read
 // "nothing is hazardous" with no word that nothing was lit. Now run, points and batch warn on
 // the terminal (even with --quiet), run in summary.json's `warnings`, batch in each scenario's
