@@ -3,7 +3,6 @@
 #include <charconv>
 #include <cmath>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "export/atomic_file.h"
@@ -25,16 +24,19 @@ void appendValue(std::string& line, const CsvColumn& c, std::size_t i) {
   }
 }
 
+// Observer @p row's @p name is finite, or nothing is written.
+void requireFinite(double value, std::size_t row, const std::string& name) {
+  if (!std::isfinite(value)) {
+    throw OutputError("observer " + std::to_string(row + 1) + ": " + name +
+                      " is not finite; nothing was written");
+  }
+}
+
 // Every column has one finite value per row.
 void requireFiniteColumns(std::span<const CsvColumn> columns, std::size_t rows) {
   for (const CsvColumn& c : columns) {
     if (c.values.size() != rows) throw OutputError(c.name + ": one value per observer");
-    for (std::size_t i = 0; i < c.values.size(); ++i) {
-      if (!std::isfinite(c.values[i])) {
-        throw OutputError("observer " + std::to_string(i + 1) + ": " + c.name +
-                          " is not finite; nothing was written");
-      }
-    }
+    for (std::size_t i = 0; i < c.values.size(); ++i) requireFinite(c.values[i], i, c.name);
   }
 }
 
@@ -89,14 +91,8 @@ void writePointsCsv(std::ostream& out, std::span<const Vec3> points_m,
                     std::span<const ObserverResult> results, std::span<const CsvColumn> extra) {
   if (points_m.size() != results.size()) throw OutputError("points and results differ in count");
   for (std::size_t i = 0; i < results.size(); ++i) {
-    const ObserverResult& r = results[i];
-    for (const auto& [name, value] : {std::pair{"irradiance_w_m2", r.irradiance_w_m2},
-                                      std::pair{"error_estimate_w_m2", r.error_estimate_w_m2}}) {
-      if (!std::isfinite(value)) {
-        throw OutputError("observer " + std::to_string(i + 1) + ": " + name +
-                          " is not finite; nothing was written");
-      }
-    }
+    requireFinite(results[i].irradiance_w_m2, i, "irradiance_w_m2");
+    requireFinite(results[i].error_estimate_w_m2, i, "error_estimate_w_m2");
   }
   requireFiniteColumns(extra, points_m.size());
   std::vector<std::string> names = {"irradiance_w_m2", "error_estimate_w_m2", "evaluations",

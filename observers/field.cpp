@@ -183,19 +183,26 @@ std::vector<float> ObserverField::upperLattice(int stride) const {
     if (const std::optional<std::size_t> at = index(q)) out[*at] = std::max(out[*at], value);
   };
   for (auto it = grids_->upper->cbeginValueOn(); it; ++it) raise(it.getCoord(), *it);
-  const field::Lattice lattice{n};
+  forEachUnresolvedPoint(
+      [&](int i, int j, int k, float bound) { raise(openvdb::Coord(i, j, k), bound); });
+  return out;
+}
+
+void ObserverField::forEachUnresolvedPoint(
+    const std::function<void(int, int, int, float)>& visit) const {
+  const field::Lattice lattice{spec_.nodes()};
   auto status = grids_->status->getConstAccessor();
   for (const FieldBlock& b : blocks_) {
     if (b.status != VoxelStatus::Unresolved) continue;
     const float bound = field::boundAsFloat(b.bound_w_m2);
     const openvdb::CoordBBox box = field::ownedBox(b.origin, b.size, lattice);
     for (auto it = box.begin(); it; ++it) {
+      const openvdb::Coord& q = *it;
       // Only the block's points marked Unresolved: the rest are at the thresholds already.
-      if (static_cast<VoxelStatus>(std::lround(status.getValue(*it))) == VoxelStatus::Unresolved)
-        raise(*it, bound);
+      if (static_cast<VoxelStatus>(std::lround(status.getValue(q))) == VoxelStatus::Unresolved)
+        visit(q.x(), q.y(), q.z(), bound);
     }
   }
-  return out;
 }
 
 double ObserverField::unconvergedUpper(int i, int j, int k) const {

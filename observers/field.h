@@ -293,6 +293,10 @@ class ObserverField {
   /// ((n − 1) / stride + 1 points along each axis). What the outputs' `irradiance_upper_w_m2`
   /// holds: where it reaches a threshold and the irradiance does not, the point is in doubt.
   [[nodiscard]] std::vector<float> upperLattice(int stride = 1) const;
+  /// @brief Calls @p visit(i, j, k, bound_w_m2) at each point whose status() is Unresolved, with
+  /// its block's bound (FieldBlock::bound_w_m2 rounded up to a float; the largest float where
+  /// unbounded): what a glint beside the point that its lattice cannot see may reach.
+  void forEachUnresolvedPoint(const std::function<void(int, int, int, float)>& visit) const;
   [[nodiscard]] VoxelStatus status(int i, int j, int k) const;
   [[nodiscard]] int level(int i, int j, int k) const;
 

@@ -14,7 +14,6 @@
 #include <vector>
 
 #include "observers/detail/cube_faces.h"
-#include "observers/detail/field_common.h"
 #include "observers/far_field.h"
 
 namespace glint {
@@ -424,24 +423,15 @@ NearReach computeNearReach(const FacetIntegrator& integrator, const ReachSpec& s
       }
     // An Unresolved point may have a glint beside it that its lattice cannot see, up to its
     // block's bound: it counts for each threshold that bound reaches (the lowest threshold's
-    // bound says nothing of the MPE's). Read from the few such blocks, not from a lattice of
+    // bound says nothing of the MPE's). Read from the few such points, not from a lattice of
     // bounds as large as the face's.
-    const field::Lattice lattice{out.spec.nodes()};
-    for (const FieldBlock& b : field.blocks()) {
-      if (b.status != VoxelStatus::Unresolved) continue;
-      const double bound = static_cast<double>(field::boundAsFloat(b.bound_w_m2));
-      std::uint8_t bits = 0;
-      for (std::size_t t = 0; t < thresholds; ++t)
-        bits = static_cast<std::uint8_t>(bits | (!(bound < hazardous_w_m2[t]) ? 1u << t : 0u));
-      if (bits == 0) continue;
-      const openvdb::CoordBBox box = field::ownedBox(b.origin, b.size, lattice);
-      for (auto it = box.begin(); it; ++it) {
-        const openvdb::Coord& p = *it;
-        if (field.status(p.x(), p.y(), p.z()) != VoxelStatus::Unresolved) continue;
-        std::uint8_t& cell = hazard_bits[at(p.x(), p.y(), p.z())];
-        cell = static_cast<std::uint8_t>(cell | bits);
+    field.forEachUnresolvedPoint([&](int i, int j, int k, float bound) {
+      std::uint8_t& cell = hazard_bits[at(i, j, k)];
+      for (std::size_t t = 0; t < thresholds; ++t) {
+        if (!(static_cast<double>(bound) < hazardous_w_m2[t]))
+          cell = static_cast<std::uint8_t>(cell | (1u << t));
       }
-    }
+    });
     const auto hazardous = [&](int i, int j, int k, std::size_t t) {
       return ((hazard_bits[at(i, j, k)] >> t) & 1u) != 0;
     };

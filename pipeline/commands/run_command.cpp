@@ -207,6 +207,7 @@ struct RunSummary {
   nlohmann::json j;
   std::vector<std::pair<std::string, Vec3>> probes;
   std::vector<std::string> warnings;  // summary.json's, said again on the terminal at the end
+  bool unlit = false;                 // the beam lights no facet: an empty result is no verdict
 
   // The target as the first region's problem describes it (all share the same one).
   void describeTarget(const Scene& scene, const FieldProblem& problem) {
@@ -370,10 +371,8 @@ void runReach(const RunContext& c, const FarResult& far, RunSummary& s) {
   c.clock.add("the hazard reach: its lattice", reach.seconds);
   c.clock.add("the hazard reach: each threshold's distance and volume", reach.summary_seconds);
   s.j["hazard_reach"] = reachJson(reach.near, reach.summaries, reach.seconds, c.scene.hazard);
-  if (!c.args.quiet) {
-    const bool lit = unlitTargetWarnings(c.scene, c.target.integrator.cullStats()).empty();
-    printReach(c.err, reach.near, reach.summaries, reach.seconds, c.scene.hazard, lit);
-  }
+  if (!c.args.quiet)
+    printReach(c.err, reach.near, reach.summaries, reach.seconds, c.scene.hazard, !s.unlit);
   std::optional<ReachFootprint> footprint;
   if (const std::optional<FootprintSpec>& spec = c.scene.reach.footprint) {
     const PhaseClock::Scope phase = c.clock.phase("the hazard reach: its footprint on the ground");
@@ -556,6 +555,7 @@ void runScene(const RunArgs& requested, std::ostream& err, PointExchange* exchan
   // Over an engagement the target moves through the beam: its pose at the start says nothing.
   if (!scene.engagement)
     summary.warnings = unlitTargetWarnings(scene, target.integrator.cullStats());
+  summary.unlit = !summary.warnings.empty();
   if (!args.quiet) {
     for (const std::string& w : summary.warnings) err << "glint run: warning: " << w << "\n";
   }
